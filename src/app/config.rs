@@ -1,0 +1,331 @@
+//! The configuration file (TOML), validated as a whole at start.
+//!
+//! Every key is documented in `config/marionette.toml`. An unknown key, a
+//! value of the wrong type or out of range is a [`ConfigError`] that names
+//! the file, the key and what is allowed; the binary exits with
+//! [`exit::CONFIG`](super::exit::CONFIG) (78) on it.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::input::calibration::{Matrix, Rotation};
+use crate::input::device::{DeviceDescription, InputId};
+
+/// Where `run` looks for its configuration when none is given.
+pub const DEFAULT_PATH: &str = "/etc/marionette/marionette.toml";
+
+/// Errors loading the configuration.
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("cannot read configuration {path}: {source}")]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// Not TOML, an unknown key or a wrong type (the message shows where).
+    #[error("configuration {path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    /// A value out of its allowed range.
+    #[error("configuration {path}: `{key}` {message}")]
+    Invalid {
+        path: PathBuf,
+        key: String,
+        message: String,
+    },
+}
+
+/// The whole configuration.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    pub display: DisplayConfig,
+    pub input: InputConfig,
+    pub log: LogConfig,
+}
+
+/// `[display]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DisplayConfig {
+    /// Picture width in pixels for headless output (the demo, replays); on
+    /// KMS the output's mode decides.
+    pub width: u32,
+    /// Picture height in pixels, as `width`.
+    pub height: u32,
+    /// Clockwise turn of the picture on the panel: 0, 90, 180 or 270.
+    pub rotation: u32,
+}
+
+impl Default for DisplayConfig {
+    fn default() -> Self {
+        Self {
+            width: 1280,
+            height: 720,
+            rotation: 0,
+        }
+    }
+}
+
+impl DisplayConfig {
+    #[must_use]
+    pub fn rotation(&self) -> Rotation {
+        Rotation::from_degrees(i64::from(self.rotation)).unwrap_or_default()
+    }
+
+    /// Picture size in pixels.
+    #[must_use]
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+}
+
+/// `[input]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InputConfig {
+    /// Where the event devices are.
+    pub dev_dir: PathBuf,
+    /// Grab touchscreens (EVIOCGRAB) so no other program sees their touches.
+    pub grab: bool,
+    /// How often to look for panels that appeared, in milliseconds.
+    pub rescan_interval_ms: u64,
+    /// Per-device settings; the first entry that matches a device applies.
+    pub device: Vec<DeviceConfig>,
+}
+
+impl Default for InputConfig {
+    fn default() -> Self {
+        Self {
+            dev_dir: PathBuf::from("/dev/input"),
+            grab: true,
+            rescan_interval_ms: 1000,
+            device: Vec::new(),
+        }
+    }
+}
+
+/// `[[input.device]]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceConfig {
+    /// Match the device's name exactly.
+    #[serde(default)]
+    pub match_name: Option<String>,
+    /// Match the device's `vendor:product` (hex, as `lsusb` prints it).
+    #[serde(default)]
+    pub match_usb: Option<String>,
+    /// libinput calibration matrix `[a, b, c, d, e, f]`.
+    #[serde(default = "identity")]
+    pub calibration: [f64; 6],
+    /// Do not read this device at all.
+    #[serde(default)]
+    pub ignore: bool,
+}
+
+fn identity() -> [f64; 6] {
+    Matrix::IDENTITY.0
+}
+
+impl DeviceConfig {
+    /// Whether this entry applies to a device.
+    #[must_use]
+    pub fn matches(&self, d: &DeviceDescription) -> bool {
+        let name_ok = self.match_name.as_ref().is_none_or(|n| *n == d.name);
+        let usb_ok = self
+            .match_usb
+            .as_ref()
+            .is_none_or(|u| parse_usb_id(u).is_some_and(|(v, p)| v == d.id.vendor && p == d.id.product));
+        name_ok && usb_ok
+    }
+
+    #[must_use]
+    pub fn matrix(&self) -> Matrix {
+        Matrix(self.calibration)
+    }
+}
+
+/// `vendor:product` in hex, as `lsusb` prints it.
+#[must_use]
+pub fn parse_usb_id(s: &str) -> Option<(u16, u16)> {
+    let (v, p) = s.split_once(':')?;
+    Some((u16::from_str_radix(v, 16).ok()?, u16::from_str_radix(p, 16).ok()?))
+}
+
+/// `[log]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LogConfig {
+    /// Default level: error, warn, info, debug or trace (`RUST_LOG`
+    /// overrides it).
+    pub level: String,
+}
+
+impl Default for LogConfig {
+    fn default() -> Self {
+        Self {
+            level: "info".to_owned(),
+        }
+    }
+}
+
+impl Config {
+    /// Read and validate a configuration file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse and validate configuration text; `path` is for messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: path.to_owned(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        config.validate(path)?;
+        Ok(config)
+    }
+
+    fn validate(&self, path: &Path) -> Result<(), ConfigError> {
+        let invalid = |key: &str, message: String| ConfigError::Invalid {
+            path: path.to_owned(),
+            key: key.to_owned(),
+            message,
+        };
+        let d = &self.display;
+        for (key, v) in [("display.width", d.width), ("display.height", d.height)] {
+            if !(16..=16384).contains(&v) {
+                return Err(invalid(key, format!("must be between 16 and 16384 pixels, found {v}")));
+            }
+        }
+        if Rotation::from_degrees(i64::from(d.rotation)).is_none() {
+            return Err(invalid(
+                "display.rotation",
+                format!("must be one of 0, 90, 180, 270 (degrees clockwise), found {}", d.rotation),
+            ));
+        }
+        if !(50..=60_000).contains(&self.input.rescan_interval_ms) {
+            return Err(invalid(
+                "input.rescan_interval_ms",
+                format!("must be between 50 and 60000, found {}", self.input.rescan_interval_ms),
+            ));
+        }
+        for (i, dev) in self.input.device.iter().enumerate() {
+            let key = |k: &str| format!("input.device[{i}].{k}");
+            if dev.match_name.is_none() && dev.match_usb.is_none() {
+                return Err(invalid(
+                    &format!("input.device[{i}]"),
+                    "needs `match_name` (the device name, see `marionette list-devices`) or `match_usb` (\"vendor:product\" in hex)".to_owned(),
+                ));
+            }
+            if let Some(u) = &dev.match_usb {
+                if parse_usb_id(u).is_none() {
+                    return Err(invalid(
+                        &key("match_usb"),
+                        format!("must be \"vendor:product\" in hex, like \"0eef:72a1\", found \"{u}\""),
+                    ));
+                }
+            }
+            if !dev.matrix().is_usable() {
+                return Err(invalid(
+                    &key("calibration"),
+                    format!(
+                        "must be 6 finite numbers [a, b, c, d, e, f] with a·e − b·d ≠ 0 (identity is [1, 0, 0, 0, 1, 0]), found {:?}",
+                        dev.calibration
+                    ),
+                ));
+            }
+        }
+        if !["error", "warn", "info", "debug", "trace"].contains(&self.log.level.as_str()) {
+            return Err(invalid(
+                "log.level",
+                format!("must be one of error, warn, info, debug, trace, found \"{}\"", self.log.level),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The settings for a device: the first matching `[[input.device]]`.
+    #[must_use]
+    pub fn device_for(&self, d: &DeviceDescription) -> Option<&DeviceConfig> {
+        self.input.device.iter().find(|c| c.matches(d))
+    }
+}
+
+/// A short label for a device in logs: name and vendor:product.
+#[must_use]
+pub fn device_label(name: &str, id: InputId) -> String {
+    format!("\"{name}\" ({id})")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Config, ConfigError> {
+        Config::parse(s, Path::new("/etc/marionette/marionette.toml"))
+    }
+
+    #[test]
+    fn empty_file_gives_defaults() {
+        assert_eq!(parse("").unwrap(), Config::default());
+    }
+
+    #[test]
+    fn shipped_example_is_valid_and_complete() {
+        let text = include_str!("../../config/marionette.toml");
+        let c = parse(text).unwrap();
+        assert_eq!(c.input.device.len(), 1);
+    }
+
+    #[test]
+    fn unknown_key_names_file_key_and_allowed_keys() {
+        let e = parse("[display]\nwidht = 3\n").unwrap_err().to_string();
+        assert!(e.contains("/etc/marionette/marionette.toml"), "{e}");
+        assert!(e.contains("widht"), "{e}");
+        assert!(e.contains("width"), "{e}");
+        assert!(e.contains("line 2"), "{e}");
+    }
+
+    #[test]
+    fn wrong_type_is_an_error() {
+        let e = parse("[display]\nwidth = \"wide\"\n").unwrap_err().to_string();
+        assert!(e.contains("width") && e.contains("line 2"), "{e}");
+    }
+
+    #[test]
+    fn out_of_range_values_name_the_key_and_range() {
+        let e = parse("[display]\nrotation = 45\n").unwrap_err().to_string();
+        assert!(e.contains("`display.rotation`") && e.contains("0, 90, 180, 270"), "{e}");
+        let e = parse("[[input.device]]\nmatch_name = \"x\"\ncalibration = [0, 0, 0, 0, 0, 0]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("input.device[0].calibration"), "{e}");
+        let e = parse("[[input.device]]\ncalibration = [1, 0, 0, 0, 1, 0]\n").unwrap_err().to_string();
+        assert!(e.contains("match_name"), "{e}");
+        let e = parse("[[input.device]]\nmatch_usb = \"zz\"\n").unwrap_err().to_string();
+        assert!(e.contains("vendor:product"), "{e}");
+        let e = parse("[log]\nlevel = \"loud\"\n").unwrap_err().to_string();
+        assert!(e.contains("log.level"), "{e}");
+    }
+
+    #[test]
+    fn devices_match_by_name_or_usb_id() {
+        let c = parse("[[input.device]]\nmatch_usb = \"0eef:72A1\"\ncalibration = [2, 0, 0, 0, 2, 0]\n").unwrap();
+        let mut d = DeviceDescription {
+            name: "eGalax".into(),
+            ..DeviceDescription::default()
+        };
+        d.id.vendor = 0x0eef;
+        d.id.product = 0x72a1;
+        assert_eq!(c.device_for(&d).unwrap().calibration[0], 2.0);
+        d.id.product = 1;
+        assert!(c.device_for(&d).is_none());
+    }
+}

@@ -1,0 +1,5 @@
+//! The application edge: configuration, exit codes, logging.
+
+pub mod config;
+pub mod exit;
+pub mod logging;

@@ -1,0 +1,621 @@
+//! evemu recordings: the text format of the evemu tools (`# EVEMU 1.x`),
+//! read and written.
+//!
+//! A recording is a device description (`N:`, `I:`, `P:`, `B:`, `A:`, `L:`,
+//! `S:` lines) followed by `E: sec.usec type code value` events. The reader
+//! takes every version from 1.0 (and the older description-plus-events files
+//! joined together) to 1.3: `A:` lines with or without the resolution field,
+//! `#` comments on their own lines or after an event, values written as
+//! `-001` or `0904`, absolute or rebased timestamps. It never panics: a
+//! malformed file is an [`EvemuError`] that names the line and what was
+//! expected. A recording whose last frame has no `SYN_REPORT` keeps only the
+//! complete frames and says how many events it dropped.
+//!
+//! The writer produces version 1.3, which `evemu-play` reads.
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+use super::device::{AbsInfo, BitSet, DeviceDescription, InputId};
+use super::event::{
+    ABS_CNT, EV_ABS, EV_CNT, EV_KEY, EV_SYN, INPUT_PROP_CNT, RawEvent, SYN_MT_REPORT, code_count,
+    code_name, type_name,
+};
+
+/// Errors reading an evemu recording.
+#[derive(Debug, Error)]
+pub enum EvemuError {
+    /// The file could not be read at all.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+    /// A line does not have the form the format requires.
+    #[error("{path}:{line}: {message}")]
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// The file has events but no device description.
+    #[error("{path}: no device description (N:/I:/B:/A: lines) before the events")]
+    NoDescription { path: PathBuf },
+}
+
+impl EvemuError {
+    /// The line the error is on, where there is one.
+    #[must_use]
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            EvemuError::Syntax { line, .. } => Some(*line),
+            _ => None,
+        }
+    }
+}
+
+/// A parsed recording: the device and the events of its complete frames.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Recording {
+    /// `(major, minor)` from the `# EVEMU x.y` line; `(1, 0)` when absent.
+    pub version: (u16, u16),
+    pub device: DeviceDescription,
+    /// Events up to and including the last `SYN_REPORT`.
+    pub events: Vec<RawEvent>,
+    /// Events after the last `SYN_REPORT` that were dropped (an unfinished
+    /// last frame).
+    pub dropped_trailing_events: usize,
+}
+
+impl Recording {
+    /// Number of complete frames (`SYN_REPORT` events).
+    #[must_use]
+    pub fn frame_count(&self) -> usize {
+        self.events.iter().filter(|e| e.is_syn_report()).count()
+    }
+
+    /// Time from the first to the last event, in seconds.
+    #[must_use]
+    pub fn duration_s(&self) -> f64 {
+        match (self.events.first(), self.events.last()) {
+            (Some(a), Some(b)) => (b.time_us - a.time_us) as f64 / 1e6,
+            _ => 0.0,
+        }
+    }
+
+    /// Read a recording from a file.
+    pub fn read_file(path: &Path) -> Result<Self, EvemuError> {
+        let bytes = std::fs::read(path).map_err(|source| EvemuError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let text = String::from_utf8_lossy(&bytes);
+        Self::parse(&text, path)
+    }
+
+    /// Parse recording text; `path` is used only in messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, EvemuError> {
+        let mut p = Parser {
+            path,
+            rec: Recording {
+                version: (1, 0),
+                ..Recording::default()
+            },
+            prop_bytes: 0,
+            mask_bytes: [0; EV_CNT],
+            seen_description: false,
+        };
+        for (i, raw_line) in text.lines().enumerate() {
+            p.line(i + 1, raw_line)?;
+        }
+        p.finish()
+    }
+
+    /// Write this recording in evemu 1.3 format.
+    pub fn write(&self, w: &mut impl Write) -> io::Result<()> {
+        write_description(w, &self.device)?;
+        for e in &self.events {
+            write_event(w, e)?;
+        }
+        Ok(())
+    }
+}
+
+struct Parser<'a> {
+    path: &'a Path,
+    rec: Recording,
+    prop_bytes: usize,
+    mask_bytes: [usize; EV_CNT],
+    seen_description: bool,
+}
+
+impl Parser<'_> {
+    fn err(&self, line: usize, message: impl Into<String>) -> EvemuError {
+        EvemuError::Syntax {
+            path: self.path.to_owned(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    fn line(&mut self, n: usize, raw: &str) -> Result<(), EvemuError> {
+        let line = raw.trim_end_matches(['\r', '\n']);
+        let trimmed = line.trim_start();
+        if trimmed.is_empty() {
+            return Ok(());
+        }
+        if let Some(comment) = trimmed.strip_prefix('#') {
+            if let Some(v) = comment.trim().strip_prefix("EVEMU ") {
+                self.rec.version = parse_version(v.trim())
+                    .ok_or_else(|| self.err(n, format!("expected `# EVEMU major.minor`, found `{line}`")))?;
+            }
+            return Ok(());
+        }
+        let Some((tag, rest)) = trimmed.split_once(':') else {
+            return Err(self.err(
+                n,
+                format!("expected a line starting with N:, I:, P:, B:, A:, L:, S:, E: or #, found `{}`", excerpt(line)),
+            ));
+        };
+        // Everything after a `#` on a data line is a comment (evemu writes
+        // one after each event). Device names may not contain `#` then, as in
+        // evemu itself, except on the N: line which takes the whole rest.
+        let data = if tag == "N" {
+            rest
+        } else {
+            rest.split('#').next().unwrap_or("")
+        };
+        let fields: Vec<&str> = data.split_whitespace().collect();
+        if tag != "E" {
+            if !self.rec.events.is_empty() {
+                return Err(self.err(
+                    n,
+                    format!("device description line `{tag}:` after the first event; one recording describes one device"),
+                ));
+            }
+            self.seen_description = true;
+        }
+        match tag {
+            "N" => {
+                if self.rec.device.name.is_empty() {
+                    self.rec.device.name = rest.trim().to_owned();
+                }
+                Ok(())
+            }
+            "I" => self.id_line(n, &fields),
+            "P" => self.prop_line(n, &fields),
+            "B" => self.mask_line(n, &fields),
+            "A" => self.abs_line(n, &fields),
+            "L" | "S" => self.state_line(n, tag, &fields),
+            "E" => self.event_line(n, &fields),
+            other => Err(self.err(
+                n,
+                format!("unknown line type `{other}:`; expected N:, I:, P:, B:, A:, L:, S: or E:"),
+            )),
+        }
+    }
+
+    fn id_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
+        if f.len() != 4 {
+            return Err(self.err(n, format!("I: needs 4 hex numbers (bus vendor product version), found {}", f.len())));
+        }
+        let mut v = [0u16; 4];
+        for (slot, s) in v.iter_mut().zip(f) {
+            *slot = u16::from_str_radix(s, 16)
+                .map_err(|_| self.err(n, format!("I: expected a 16-bit hex number, found `{s}`")))?;
+        }
+        self.rec.device.id = InputId {
+            bustype: v[0],
+            vendor: v[1],
+            product: v[2],
+            version: v[3],
+        };
+        Ok(())
+    }
+
+    fn hex_bytes(&self, n: usize, tag: &str, f: &[&str]) -> Result<Vec<u8>, EvemuError> {
+        f.iter()
+            .map(|s| {
+                u8::from_str_radix(s, 16)
+                    .map_err(|_| self.err(n, format!("{tag}: expected a hex byte, found `{s}`")))
+            })
+            .collect()
+    }
+
+    fn prop_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
+        if f.len() != 8 {
+            return Err(self.err(n, format!("P: needs 8 hex bytes, found {}", f.len())));
+        }
+        let bytes = self.hex_bytes(n, "P", f)?;
+        for (i, b) in bytes.iter().enumerate() {
+            for bit in 0..8 {
+                let prop = (self.prop_bytes + i) * 8 + bit;
+                if b & (1 << bit) != 0 && prop < INPUT_PROP_CNT {
+                    self.rec.device.properties.insert(prop as u16);
+                }
+            }
+        }
+        self.prop_bytes += 8;
+        Ok(())
+    }
+
+    fn mask_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
+        if f.len() != 9 {
+            return Err(self.err(n, format!("B: needs an event type and 8 hex bytes, found {} fields", f.len())));
+        }
+        let bytes = self.hex_bytes(n, "B", f)?;
+        let kind = usize::from(bytes[0]);
+        if kind >= EV_CNT {
+            return Err(self.err(n, format!("B: event type {kind:#04x} is beyond EV_MAX (0x1f)")));
+        }
+        let limit = if kind == 0 { EV_CNT } else { code_count(kind as u16) };
+        for (i, b) in bytes[1..].iter().enumerate() {
+            for bit in 0..8 {
+                let code = (self.mask_bytes[kind] + i) * 8 + bit;
+                if b & (1 << bit) != 0 && code < limit {
+                    if kind == 0 {
+                        // The supported types: the per-type lines set them too.
+                        if self.rec.device.bits.len() < EV_CNT {
+                            self.rec.device.bits.resize(EV_CNT, BitSet::default());
+                        }
+                        self.rec.device.bits[0].insert(code as u16);
+                    } else {
+                        self.rec.device.set_bit(kind as u16, code as u16);
+                    }
+                }
+            }
+        }
+        self.mask_bytes[kind] += 8;
+        Ok(())
+    }
+
+    fn abs_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
+        if f.len() != 5 && f.len() != 6 {
+            return Err(self.err(
+                n,
+                format!("A: needs code, min, max, fuzz, flat and optionally resolution (5 or 6 fields), found {}", f.len()),
+            ));
+        }
+        let code = u16::from_str_radix(f[0], 16)
+            .map_err(|_| self.err(n, format!("A: expected a hex axis code, found `{}`", f[0])))?;
+        if usize::from(code) >= ABS_CNT {
+            return Err(self.err(n, format!("A: axis code {code:#04x} is beyond ABS_MAX (0x3f)")));
+        }
+        let mut v = [0i32; 5];
+        for (slot, s) in v.iter_mut().zip(&f[1..]) {
+            *slot = parse_int(s)
+                .ok_or_else(|| self.err(n, format!("A: expected a decimal integer, found `{s}`")))?;
+        }
+        self.rec.device.set_abs(
+            code,
+            AbsInfo {
+                value: 0,
+                minimum: v[0],
+                maximum: v[1],
+                fuzz: v[2],
+                flat: v[3],
+                resolution: v[4],
+            },
+        );
+        Ok(())
+    }
+
+    fn state_line(&mut self, n: usize, tag: &str, f: &[&str]) -> Result<(), EvemuError> {
+        if f.len() != 2 {
+            return Err(self.err(n, format!("{tag}: needs a hex code and a state, found {} fields", f.len())));
+        }
+        let code = u16::from_str_radix(f[0], 16)
+            .map_err(|_| self.err(n, format!("{tag}: expected a hex code, found `{}`", f[0])))?;
+        let state = parse_int(f[1])
+            .ok_or_else(|| self.err(n, format!("{tag}: expected a decimal state, found `{}`", f[1])))?;
+        if tag == "L" {
+            self.rec.device.leds.push((code, state));
+        } else {
+            self.rec.device.switches.push((code, state));
+        }
+        Ok(())
+    }
+
+    fn event_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
+        if !self.seen_description {
+            return Err(EvemuError::NoDescription {
+                path: self.path.to_owned(),
+            });
+        }
+        if f.len() != 4 {
+            return Err(self.err(n, format!("E: needs `sec.usec type code value`, found {} fields", f.len())));
+        }
+        let time_us = parse_time(f[0])
+            .ok_or_else(|| self.err(n, format!("E: expected a timestamp `sec.usec`, found `{}`", f[0])))?;
+        let kind = u16::from_str_radix(f[1], 16)
+            .map_err(|_| self.err(n, format!("E: expected a hex event type, found `{}`", f[1])))?;
+        if kind > super::event::EV_MAX {
+            return Err(self.err(n, format!("E: event type {kind:#x} is beyond EV_MAX (0x1f)")));
+        }
+        let code = u16::from_str_radix(f[2], 16)
+            .map_err(|_| self.err(n, format!("E: expected a hex event code, found `{}`", f[2])))?;
+        if usize::from(code) >= code_count(kind) {
+            return Err(self.err(
+                n,
+                format!("E: code {code:#x} is beyond the largest code of {} ({:#x})", type_name(kind), code_count(kind) - 1),
+            ));
+        }
+        let value = parse_int(f[3])
+            .ok_or_else(|| self.err(n, format!("E: expected a decimal 32-bit value, found `{}`", f[3])))?;
+        self.rec.events.push(RawEvent::new(time_us, kind, code, value));
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<Recording, EvemuError> {
+        if !self.seen_description {
+            return Err(EvemuError::NoDescription {
+                path: self.path.to_owned(),
+            });
+        }
+        let complete = self
+            .rec
+            .events
+            .iter()
+            .rposition(RawEvent::is_syn_report)
+            .map_or(0, |i| i + 1);
+        let dropped = self.rec.events.len() - complete;
+        if dropped > 0 {
+            tracing::warn!(
+                path = %self.path.display(),
+                dropped_events = dropped,
+                "recording ends in the middle of a frame; dropping its unfinished last frame"
+            );
+            self.rec.events.truncate(complete);
+        }
+        self.rec.dropped_trailing_events = dropped;
+        Ok(self.rec)
+    }
+}
+
+fn excerpt(line: &str) -> String {
+    let mut s: String = line.chars().take(60).collect();
+    if line.chars().count() > 60 {
+        s.push('…');
+    }
+    s
+}
+
+fn parse_version(s: &str) -> Option<(u16, u16)> {
+    let (a, b) = s.split_once('.')?;
+    Some((a.parse().ok()?, b.trim().parse().ok()?))
+}
+
+/// A decimal integer as evemu writes it (`%04d`: `-001`, `0904`).
+fn parse_int(s: &str) -> Option<i32> {
+    let (neg, digits) = match s.strip_prefix('-') {
+        Some(d) => (true, d),
+        None => (false, s.strip_prefix('+').unwrap_or(s)),
+    };
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let v: i64 = digits.parse().ok()?;
+    i32::try_from(if neg { -v } else { v }).ok()
+}
+
+/// `sec.usec` as evemu writes it (`%lu.%06u`): microseconds are the integer
+/// after the dot, as evemu's own reader takes them.
+fn parse_time(s: &str) -> Option<i64> {
+    let (sec, usec) = s.split_once('.')?;
+    if sec.is_empty() || usec.is_empty() || usec.len() > 6 {
+        return None;
+    }
+    if !sec.bytes().all(|b| b.is_ascii_digit()) || !usec.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let sec: i64 = sec.parse().ok()?;
+    let usec: i64 = usec.parse().ok()?;
+    sec.checked_mul(1_000_000)?.checked_add(usec)
+}
+
+/// Write the `# EVEMU 1.3` header and device description.
+pub fn write_description(w: &mut impl Write, d: &DeviceDescription) -> io::Result<()> {
+    writeln!(w, "# EVEMU 1.3")?;
+    writeln!(w, "# Input device name: \"{}\"", d.name)?;
+    writeln!(
+        w,
+        "# Input device ID: bus {:#04x} vendor {:#04x} product {:#04x} version {:#04x}",
+        d.id.bustype, d.id.vendor, d.id.product, d.id.version
+    )?;
+    writeln!(w, "# Written by marionette: {} ({})", d.kind(), d.protocol().map_or("no position axes".to_owned(), |p| format!("protocol {p}")))?;
+    for (code, a) in &d.abs {
+        writeln!(
+            w,
+            "#   {:<20} min {} max {} fuzz {} flat {} resolution {}",
+            code_name(EV_ABS, *code),
+            a.minimum,
+            a.maximum,
+            a.fuzz,
+            a.flat,
+            a.resolution
+        )?;
+    }
+    // N: takes the rest of the line; a newline in a name would break it.
+    let name: String = d.name.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+    writeln!(w, "N: {name}")?;
+    writeln!(
+        w,
+        "I: {:04x} {:04x} {:04x} {:04x}",
+        d.id.bustype, d.id.vendor, d.id.product, d.id.version
+    )?;
+    write_bytes(w, "P: ", &d.properties.0, INPUT_PROP_CNT.div_ceil(8))?;
+    writeln!(w, "B: 00 0b 00 00 00 00 00 00 00")?;
+    for kind in 1..EV_CNT as u16 {
+        let set = d.codes(kind);
+        if !d.codes(0).contains(kind) && set.0.iter().all(|b| *b == 0) {
+            continue;
+        }
+        write_bytes(w, &format!("B: {kind:02x} "), &set.0, code_count(kind).div_ceil(8))?;
+    }
+    for (code, a) in &d.abs {
+        writeln!(
+            w,
+            "A: {:02x} {} {} {} {} {}",
+            code, a.minimum, a.maximum, a.fuzz, a.flat, a.resolution
+        )?;
+    }
+    for (code, state) in &d.leds {
+        writeln!(w, "L: {code:02x} {state}")?;
+    }
+    for (code, state) in &d.switches {
+        writeln!(w, "S: {code:02x} {state}")?;
+    }
+    Ok(())
+}
+
+/// Bytes as lines of 8, padded with zeros to at least `min_len` bytes.
+fn write_bytes(w: &mut impl Write, prefix: &str, bytes: &[u8], min_len: usize) -> io::Result<()> {
+    let len = bytes.len().max(min_len).div_ceil(8) * 8;
+    for chunk in 0..len / 8 {
+        write!(w, "{prefix}")?;
+        for i in 0..8 {
+            let b = bytes.get(chunk * 8 + i).copied().unwrap_or(0);
+            write!(w, "{}{b:02x}", if i == 0 { "" } else { " " })?;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
+}
+
+/// Write one `E:` line with evemu's comment.
+pub fn write_event(w: &mut impl Write, e: &RawEvent) -> io::Result<()> {
+    let sec = e.time_us.div_euclid(1_000_000);
+    let usec = e.time_us.rem_euclid(1_000_000);
+    write!(w, "E: {sec}.{usec:06} {:04x} {:04x} {:04}\t", e.kind, e.code, e.value)?;
+    if e.kind == EV_SYN {
+        let sep = if e.code == SYN_MT_REPORT { "++++++++++++" } else { "------------" };
+        let tail = if e.code == SYN_MT_REPORT { "++++++++++" } else { "----------" };
+        writeln!(w, "# {sep} {} ({}) {tail}", code_name(e.kind, e.code), e.value)
+    } else {
+        writeln!(
+            w,
+            "# {} / {:<20} {}",
+            type_name(e.kind),
+            code_name(e.kind, e.code),
+            e.value
+        )
+    }
+}
+
+/// Whether a description has the key bits a touch device needs to be
+/// recreated by uinput (used by `play` to warn early).
+#[must_use]
+pub fn has_keys(d: &DeviceDescription) -> bool {
+    d.codes(EV_KEY).iter().next().is_some()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SMALL: &str = "# EVEMU 1.3\n\
+N: Test Panel\n\
+I: 0003 1234 5678 0001\n\
+P: 02 00 00 00 00 00 00 00\n\
+B: 00 0b 00 00 00 00 00 00 00\n\
+B: 01 00 00 00 00 00 00 00 00\n\
+B: 01 00 00 00 00 00 00 00 00\n\
+B: 01 00 00 00 00 00 00 00 00\n\
+B: 01 00 00 00 00 00 00 00 00\n\
+B: 01 00 00 00 00 00 00 00 00\n\
+B: 01 00 04 00 00 00 00 00 00\n\
+B: 03 03 00 00 00 00 80 60 02\n\
+A: 00 0 4095 0 0 12\n\
+A: 01 0 4095 0 0 12\n\
+A: 2f 0 9 0 0 0\n\
+A: 35 0 4095 0 0 12\n\
+A: 36 0 4095 0 0 12\n\
+A: 39 0 65535 0 0 0\n\
+E: 0.000000 0003 0039 0001\t# EV_ABS / ABS_MT_TRACKING_ID 1\n\
+E: 0.000000 0003 0035 0904\n\
+E: 0.000000 0003 0036 100\n\
+E: 0.000000 0001 014a 0001\n\
+E: 0.000000 0000 0000 0000\n\
+E: 0.016000 0003 0039 -001\n\
+E: 0.016000 0000 0000 0000\n";
+
+    #[test]
+    fn parses_description_and_events() {
+        let r = Recording::parse(SMALL, Path::new("small")).unwrap();
+        assert_eq!(r.version, (1, 3));
+        assert_eq!(r.device.name, "Test Panel");
+        assert_eq!(r.device.id.vendor, 0x1234);
+        assert!(r.device.has(EV_KEY, super::super::event::BTN_TOUCH));
+        assert_eq!(r.device.abs[&0x35].maximum, 4095);
+        assert_eq!(r.device.abs[&0x35].resolution, 12);
+        assert_eq!(r.events.len(), 7);
+        assert_eq!(r.events[1].value, 904, "leading zeros are decimal, not octal");
+        assert_eq!(r.events[5].value, -1);
+        assert_eq!(r.events[5].time_us, 16_000);
+        assert_eq!(r.frame_count(), 2);
+    }
+
+    #[test]
+    fn round_trips_through_the_writer() {
+        let r = Recording::parse(SMALL, Path::new("small")).unwrap();
+        let mut out = Vec::new();
+        r.write(&mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("E: 0.016000 0003 0039 -001\t"), "{text}");
+        let again = Recording::parse(&text, Path::new("again")).unwrap();
+        assert_eq!(again.device, r.device);
+        assert_eq!(again.events, r.events);
+    }
+
+    #[test]
+    fn unfinished_last_frame_is_dropped() {
+        let text = format!("{SMALL}E: 0.020000 0003 0039 0002\nE: 0.020000 0003 0035 5\n");
+        let r = Recording::parse(&text, Path::new("t")).unwrap();
+        assert_eq!(r.dropped_trailing_events, 2);
+        assert_eq!(r.frame_count(), 2);
+    }
+
+    #[test]
+    fn errors_name_the_line_and_what_was_expected() {
+        let bad = SMALL.replace("E: 0.000000 0003 0036 100", "E: 0.000000 0003 zz 100");
+        let e = Recording::parse(&bad, Path::new("f.evemu")).unwrap_err();
+        assert_eq!(e.line(), Some(21), "{e}");
+        assert!(e.to_string().contains("f.evemu:21"), "{e}");
+        assert!(e.to_string().contains("hex event code"), "{e}");
+
+        let bad = SMALL.replace("A: 2f 0 9 0 0 0", "A: 2f 0 9");
+        let e = Recording::parse(&bad, Path::new("f")).unwrap_err();
+        assert_eq!(e.line(), Some(15));
+
+        let bad = SMALL.replace("E: 0.016000 0000 0000 0000", "E: 0.016000 0000 0000 99999999999");
+        assert!(Recording::parse(&bad, Path::new("f")).unwrap_err().to_string().contains("32-bit"));
+
+        let e = Recording::parse("E: 0.0 0 0 0\n", Path::new("f")).unwrap_err();
+        assert!(matches!(e, EvemuError::NoDescription { .. }));
+        let e = Recording::parse("hello\n", Path::new("f")).unwrap_err();
+        assert_eq!(e.line(), Some(1));
+    }
+
+    #[test]
+    fn five_field_abs_lines_and_crlf_are_accepted() {
+        let text = SMALL.replace(" 0 0 12\n", " 0 0\n").replace('\n', "\r\n");
+        let r = Recording::parse(&text, Path::new("t")).unwrap();
+        assert_eq!(r.device.abs[&0].maximum, 4095);
+        assert_eq!(r.device.abs[&0].resolution, 0);
+        assert_eq!(r.frame_count(), 2);
+    }
+
+    #[test]
+    fn time_and_int_forms() {
+        assert_eq!(parse_time("1284881103.697884"), Some(1_284_881_103_697_884));
+        assert_eq!(parse_time("0.5"), Some(5));
+        assert_eq!(parse_time("-1.0"), None);
+        assert_eq!(parse_int("-001"), Some(-1));
+        assert_eq!(parse_int("0904"), Some(904));
+        assert_eq!(parse_int("2147483648"), None);
+        assert_eq!(parse_int("-"), None);
+    }
+}

@@ -1,0 +1,27 @@
+//! Input: from touch panels (or recordings of them) to "these fingers are at
+//! these screen pixels".
+//!
+//! ```text
+//! evdev device ─┐
+//!               ├─> RawEvent ─> ContactTracker ─> TouchFrame ─> Calibration ─> ScreenTouch
+//! evemu file ───┘   (event)     (tracker)         (raw units)   (calibration)  (pixels)
+//! ```
+//!
+//! - [`event`]: kernel event numbers and [`event::RawEvent`].
+//! - [`device`]: what a device is and how marionette classifies it.
+//! - [`evemu`]: recordings, read and written.
+//! - [`tracker`]: protocol A/B/single-touch state machine, SYN_DROPPED.
+//! - [`calibration`]: typed coordinate spaces and the calibration solver.
+//! - [`live`]: real devices (evdev, hotplug, resync ioctls) behind an
+//!   injected opener; [`uinput`]: virtual devices for `play`.
+//!
+//! Everything but `live` and `uinput` is pure and runs without devices.
+
+pub mod calibration;
+pub mod device;
+pub mod evemu;
+pub mod event;
+pub mod live;
+pub mod pipeline;
+pub mod tracker;
+pub mod uinput;

@@ -1,0 +1,865 @@
+//! The contact tracker: kernel event frames in, touch frames out.
+//!
+//! One [`ContactTracker`] per device turns the device's `EV_ABS`/`EV_KEY`
+//! events into [`TouchFrame`]s at each `SYN_REPORT`: every contact that is
+//! down, with a marionette-wide [`ContactId`], its raw position and a
+//! [`Phase`]. It speaks multitouch protocol B (slots, tracking id −1 lifts),
+//! protocol A (`SYN_MT_REPORT`; contacts matched frame to frame by
+//! proximity) and single-touch (`ABS_X`/`ABS_Y` + `BTN_TOUCH`).
+//!
+//! Invariants, whatever the input:
+//! - it never panics and never allocates without bound (slots are capped,
+//!   protocol A contacts per frame are capped);
+//! - positions are inside the device's absinfo range (out-of-range values
+//!   are clamped and counted, as libinput does);
+//! - every contact that goes down ends with `Up` or `Cancel`: when all
+//!   slots are lifted no contact stays down, and after `SYN_DROPPED` the
+//!   tracker resynchronises from the kernel's state ([`KernelState`], live
+//!   devices) or, for recordings, cancels what it can no longer vouch for.
+//!
+//! Time comes from the events only, so a replay is deterministic.
+
+use serde::Serialize;
+
+use super::calibration::RawPoint;
+use super::device::{AbsInfo, DeviceDescription, DeviceKind, Protocol};
+use super::event::{
+    ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
+    ABS_Y, BTN_TOOL_PEN, BTN_TOOL_RUBBER, BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, MT_TOOL_PALM,
+    MT_TOOL_PEN, RawEvent, SYN_DROPPED, SYN_MT_REPORT, SYN_REPORT,
+};
+
+/// Most slots a protocol B device may have here; a description that
+/// declares more is capped (slots beyond are ignored like any slot beyond
+/// the declared maximum).
+pub const MAX_SLOTS: usize = 256;
+/// Most anonymous contacts a protocol A frame may carry; more are ignored.
+pub const MAX_A_CONTACTS: usize = 32;
+
+/// Identifies one contact from down to up, unique across devices: the high
+/// 32 bits name the device instance, the low 32 bits count its contacts.
+pub type ContactId = u64;
+
+/// What happened to a contact in this frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// Went down in this frame.
+    Down,
+    /// Moved in this frame.
+    Move,
+    /// Still down, unchanged.
+    Hold,
+    /// Lifted in this frame.
+    Up,
+    /// Ended without a lift: the device went away, events were lost, or the
+    /// contact turned out to be a palm. Consumers undo what it started.
+    Cancel,
+}
+
+impl Phase {
+    /// Whether the contact is still down after this frame.
+    #[must_use]
+    pub fn is_down(self) -> bool {
+        matches!(self, Phase::Down | Phase::Move | Phase::Hold)
+    }
+}
+
+/// What touches the panel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Tool {
+    Finger,
+    Pen,
+}
+
+/// One contact in a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Contact {
+    pub id: ContactId,
+    pub phase: Phase,
+    pub tool: Tool,
+    pub raw: RawPoint,
+}
+
+/// The contacts of one device after one `SYN_REPORT`: every contact that is
+/// down, plus those that ended in this frame.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TouchFrame {
+    pub time_us: i64,
+    pub contacts: Vec<Contact>,
+}
+
+/// The kernel's own view of the device, read after `SYN_DROPPED`
+/// (`EVIOCGMTSLOTS`, `EVIOCGABS`, `EVIOCGKEY`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct KernelState {
+    /// `ABS_MT_SLOT`'s current value.
+    pub current_slot: i32,
+    /// Per slot: tracking id, x, y, tool type.
+    pub slots: Vec<SlotState>,
+    /// `BTN_TOUCH`, where the device has it.
+    pub touch: Option<bool>,
+    /// `ABS_X` / `ABS_Y`.
+    pub x: i32,
+    pub y: i32,
+}
+
+/// One slot of [`KernelState`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SlotState {
+    pub tracking_id: i32,
+    pub x: i32,
+    pub y: i32,
+    pub tool_type: i32,
+}
+
+/// Where the tracker gets the truth from after `SYN_DROPPED`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResyncSource {
+    /// A live device: the caller reads [`KernelState`] and calls
+    /// [`ContactTracker::resync`] when [`ContactTracker::needs_resync`].
+    Kernel,
+    /// A recording: contacts that may have lifted unseen are cancelled, and
+    /// come back as new contacts if the device goes on reporting them.
+    Reconcile,
+}
+
+/// Counters of what the tracker saw, for `inspect`, tests and logs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct TrackerStats {
+    /// Completed frames (`SYN_REPORT`s), dropped ones included.
+    pub frames: u64,
+    /// Most finger contacts down at once.
+    pub max_fingers: usize,
+    /// Finger contacts that went down.
+    pub finger_sequences: u64,
+    /// Pen contacts that went down.
+    pub pen_sequences: u64,
+    /// `SYN_DROPPED` events.
+    pub dropped: u64,
+    /// Values outside the absinfo range, clamped.
+    pub clamped: u64,
+    /// `ABS_MT_SLOT` values beyond the declared slots (their events ignored).
+    pub bad_slots: u64,
+    /// Tracking ids set again on a slot that already had them.
+    pub repeated_ids: u64,
+    /// Lifts of slots that had no contact.
+    pub spurious_lifts: u64,
+    /// Contacts cancelled (palm, lost events, device gone).
+    pub cancelled: u64,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Active {
+    id: ContactId,
+    tool: Tool,
+    pos: RawPoint,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    tracking_id: i32,
+    x: i32,
+    y: i32,
+    tool_type: i32,
+    contact: Option<Active>,
+    begin: bool,
+    end: bool,
+    moved: bool,
+    /// Cancelled after lost events; resumes if the device keeps reporting.
+    suspended: bool,
+}
+
+impl Default for Slot {
+    fn default() -> Self {
+        Self {
+            tracking_id: -1,
+            x: 0,
+            y: 0,
+            tool_type: 0,
+            contact: None,
+            begin: false,
+            end: false,
+            moved: false,
+            suspended: false,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Partial {
+    x: Option<i32>,
+    y: Option<i32>,
+    tracking_id: Option<i32>,
+    tool_type: i32,
+}
+
+/// Logs a kind of problem at most a few times per minute of event time.
+#[derive(Clone, Copy, Debug, Default)]
+struct RateLimit {
+    window_start_us: i64,
+    count: u32,
+}
+
+impl RateLimit {
+    const PER_WINDOW: u32 = 5;
+    const WINDOW_US: i64 = 60_000_000;
+
+    /// `Some(true)` log it, `Some(false)` log that further ones are
+    /// suppressed, `None` stay quiet.
+    fn check(&mut self, now_us: i64) -> Option<bool> {
+        if now_us - self.window_start_us >= Self::WINDOW_US || now_us < self.window_start_us {
+            self.window_start_us = now_us;
+            self.count = 0;
+        }
+        self.count = self.count.saturating_add(1);
+        match self.count {
+            c if c <= Self::PER_WINDOW => Some(true),
+            c if c == Self::PER_WINDOW + 1 => Some(false),
+            _ => None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Limits {
+    clamp: RateLimit,
+    slot: RateLimit,
+    id: RateLimit,
+    dropped: RateLimit,
+}
+
+/// Turns one device's events into touch frames. See the module docs.
+#[derive(Clone, Debug)]
+pub struct ContactTracker {
+    device_name: String,
+    protocol: Protocol,
+    pen_device: bool,
+    x_axis: AbsInfo,
+    y_axis: AbsInfo,
+    resync_source: ResyncSource,
+    id_base: u64,
+    next_seq: u32,
+    slots: Vec<Slot>,
+    current_slot: Option<usize>,
+    a_partial: Partial,
+    a_pending: Vec<Partial>,
+    a_active: Vec<Active>,
+    a_seen_mt: bool,
+    touch_key: bool,
+    has_touch_key: bool,
+    pen_in_range: bool,
+    single_x: i32,
+    single_y: i32,
+    single: Option<Active>,
+    single_changed: bool,
+    single_suspended: bool,
+    dropping: bool,
+    awaiting_resync: bool,
+    ended: Vec<Contact>,
+    stats: TrackerStats,
+    limits: Limits,
+}
+
+/// Why a device cannot be tracked.
+#[derive(Debug, thiserror::Error)]
+pub enum TrackerError {
+    /// The device has no position axes at all.
+    #[error("device \"{0}\" reports no positions (no ABS_X/ABS_Y or ABS_MT_POSITION_X/Y axes)")]
+    NoPositionAxes(String),
+}
+
+impl ContactTracker {
+    /// A tracker for `device`. `id_base` is put in the high 32 bits of every
+    /// contact id so that ids are unique across devices.
+    pub fn new(
+        device: &DeviceDescription,
+        resync_source: ResyncSource,
+        id_base: u32,
+    ) -> Result<Self, TrackerError> {
+        let protocol = device
+            .protocol()
+            .ok_or_else(|| TrackerError::NoPositionAxes(device.name.clone()))?;
+        let (x_axis, y_axis) = device
+            .position_axes()
+            .ok_or_else(|| TrackerError::NoPositionAxes(device.name.clone()))?;
+        let declared = device.slot_count();
+        if protocol == Protocol::B && declared > MAX_SLOTS {
+            tracing::warn!(
+                device = %device.name,
+                declared,
+                cap = MAX_SLOTS,
+                "device declares more multitouch slots than marionette tracks; the rest are ignored"
+            );
+        }
+        let slots = if protocol == Protocol::B {
+            declared.min(MAX_SLOTS)
+        } else {
+            0
+        };
+        let first_slot = device.abs.get(&ABS_MT_SLOT).map_or(0, |a| a.value);
+        Ok(Self {
+            device_name: device.name.clone(),
+            protocol,
+            pen_device: device.kind() == DeviceKind::Pen,
+            x_axis,
+            y_axis,
+            resync_source,
+            id_base: u64::from(id_base) << 32,
+            next_seq: 0,
+            slots: vec![Slot::default(); slots],
+            current_slot: usize::try_from(first_slot).ok().filter(|s| *s < slots),
+            a_partial: Partial::default(),
+            a_pending: Vec::new(),
+            a_active: Vec::new(),
+            a_seen_mt: false,
+            touch_key: false,
+            has_touch_key: device.has(EV_KEY, BTN_TOUCH),
+            pen_in_range: false,
+            single_x: x_axis.minimum,
+            single_y: y_axis.minimum,
+            single: None,
+            single_changed: false,
+            single_suspended: false,
+            dropping: false,
+            awaiting_resync: false,
+            ended: Vec::new(),
+            stats: TrackerStats::default(),
+            limits: Limits::default(),
+        })
+    }
+
+    #[must_use]
+    pub fn protocol(&self) -> Protocol {
+        self.protocol
+    }
+
+    #[must_use]
+    pub fn stats(&self) -> TrackerStats {
+        self.stats
+    }
+
+    /// Whether a live caller must read the kernel state and call
+    /// [`Self::resync`] before pushing more events.
+    #[must_use]
+    pub fn needs_resync(&self) -> bool {
+        self.awaiting_resync
+    }
+
+    /// Number of contacts down now.
+    #[must_use]
+    pub fn active_count(&self) -> usize {
+        match self.protocol {
+            Protocol::B => self.slots.iter().filter(|s| s.contact.is_some()).count(),
+            Protocol::A => self.a_active.len(),
+            Protocol::Single => usize::from(self.single.is_some()),
+        }
+    }
+
+    fn new_id(&mut self) -> ContactId {
+        self.next_seq = self.next_seq.wrapping_add(1);
+        self.id_base | u64::from(self.next_seq)
+    }
+
+    fn begin(&mut self, tool: Tool, pos: RawPoint) -> Active {
+        match tool {
+            Tool::Finger => self.stats.finger_sequences += 1,
+            Tool::Pen => self.stats.pen_sequences += 1,
+        }
+        Active {
+            id: self.new_id(),
+            tool,
+            pos,
+        }
+    }
+
+    fn end(&mut self, a: Active, phase: Phase) {
+        if phase == Phase::Cancel {
+            self.stats.cancelled += 1;
+        }
+        self.ended.push(Contact {
+            id: a.id,
+            phase,
+            tool: a.tool,
+            raw: a.pos,
+        });
+    }
+
+    fn clamp_axis(&mut self, horizontal: bool, v: i32, time_us: i64) -> i32 {
+        let axis = if horizontal { self.x_axis } else { self.y_axis };
+        if axis.contains(v) || axis.minimum > axis.maximum {
+            return v;
+        }
+        self.stats.clamped += 1;
+        let clamped = axis.clamp(v);
+        match self.limits.clamp.check(time_us) {
+            Some(true) => tracing::warn!(
+                device = %self.device_name,
+                axis = if horizontal { "x" } else { "y" },
+                value = v,
+                min = axis.minimum,
+                max = axis.maximum,
+                "kernel bug: value outside the axis range; clamped"
+            ),
+            Some(false) => tracing::warn!(device = %self.device_name, "further out-of-range values this minute are clamped silently"),
+            None => {}
+        }
+        clamped
+    }
+
+    fn tool_of(&self, tool_type: i32) -> Tool {
+        if self.pen_device || tool_type == MT_TOOL_PEN {
+            Tool::Pen
+        } else {
+            Tool::Finger
+        }
+    }
+
+    /// Feed one event; a completed frame with any change is appended to
+    /// `out`.
+    pub fn push(&mut self, e: &RawEvent, out: &mut Vec<TouchFrame>) {
+        if e.kind == EV_SYN && e.code == SYN_DROPPED {
+            self.stats.dropped += 1;
+            self.dropping = true;
+            match self.limits.dropped.check(e.time_us) {
+                Some(true) => tracing::warn!(device = %self.device_name, "SYN_DROPPED: events were lost; resynchronising"),
+                Some(false) => tracing::warn!(device = %self.device_name, "further SYN_DROPPED this minute are handled silently"),
+                None => {}
+            }
+            return;
+        }
+        if self.dropping {
+            if e.is_syn_report() {
+                self.dropping = false;
+                self.stats.frames += 1;
+                self.after_drop(e.time_us, out);
+            }
+            return;
+        }
+        match (e.kind, e.code) {
+            (EV_SYN, SYN_REPORT) => {
+                self.stats.frames += 1;
+                self.flush(e.time_us, out);
+            }
+            (EV_SYN, SYN_MT_REPORT) if self.protocol == Protocol::A => {
+                self.a_seen_mt = true;
+                let p = std::mem::take(&mut self.a_partial);
+                if p.x.is_some() && p.y.is_some() && p.tracking_id != Some(-1) {
+                    if self.a_pending.len() < MAX_A_CONTACTS {
+                        self.a_pending.push(p);
+                    }
+                }
+            }
+            (EV_KEY, BTN_TOUCH) => {
+                self.touch_key = e.value != 0;
+                self.single_changed = true;
+            }
+            (EV_KEY, BTN_TOOL_PEN | BTN_TOOL_RUBBER) => self.pen_in_range = e.value != 0,
+            (EV_ABS, code) => self.abs(code, e.value, e.time_us),
+            _ => {}
+        }
+    }
+
+    fn abs(&mut self, code: u16, value: i32, time_us: i64) {
+        match self.protocol {
+            Protocol::B => self.abs_b(code, value, time_us),
+            Protocol::A => match code {
+                ABS_MT_POSITION_X => self.a_partial.x = Some(self.clamp_axis(true, value, time_us)),
+                ABS_MT_POSITION_Y => self.a_partial.y = Some(self.clamp_axis(false, value, time_us)),
+                ABS_MT_TRACKING_ID => self.a_partial.tracking_id = Some(value),
+                ABS_MT_TOOL_TYPE => self.a_partial.tool_type = value,
+                _ => {}
+            },
+            Protocol::Single => match code {
+                ABS_X => {
+                    self.single_x = self.clamp_axis(true, value, time_us);
+                    self.single_changed = true;
+                }
+                ABS_Y => {
+                    self.single_y = self.clamp_axis(false, value, time_us);
+                    self.single_changed = true;
+                }
+                _ => {}
+            },
+        }
+    }
+
+    fn abs_b(&mut self, code: u16, value: i32, time_us: i64) {
+        if code == ABS_MT_SLOT {
+            self.current_slot = usize::try_from(value).ok().filter(|s| *s < self.slots.len());
+            if self.current_slot.is_none() {
+                self.stats.bad_slots += 1;
+                match self.limits.slot.check(time_us) {
+                    Some(true) => tracing::warn!(
+                        device = %self.device_name,
+                        slot = value,
+                        slots = self.slots.len(),
+                        "kernel bug: slot beyond the declared maximum; its events are ignored"
+                    ),
+                    Some(false) => tracing::warn!(device = %self.device_name, "further invalid slots this minute are ignored silently"),
+                    None => {}
+                }
+            }
+            return;
+        }
+        let Some(i) = self.current_slot else {
+            return;
+        };
+        match code {
+            ABS_MT_TRACKING_ID => {
+                let slot = &mut self.slots[i];
+                if value < 0 {
+                    if slot.tracking_id < 0 && slot.contact.is_none() {
+                        self.stats.spurious_lifts += 1;
+                    }
+                    slot.tracking_id = -1;
+                    slot.end = true;
+                    slot.begin = false;
+                    slot.suspended = false;
+                } else if value == slot.tracking_id && !slot.end {
+                    self.stats.repeated_ids += 1;
+                    if self.limits.id.check(time_us) == Some(true) {
+                        tracing::debug!(
+                            device = %self.device_name,
+                            slot = i,
+                            tracking_id = value,
+                            "tracking id set again on its own slot; ignored"
+                        );
+                    }
+                } else {
+                    // A new touch; if the slot still had one (a lift lost by
+                    // the device) that one ends first.
+                    slot.tracking_id = value;
+                    slot.begin = true;
+                    slot.suspended = false;
+                }
+            }
+            ABS_MT_POSITION_X => {
+                let v = self.clamp_axis(true, value, time_us);
+                let slot = &mut self.slots[i];
+                slot.moved |= slot.x != v;
+                slot.x = v;
+            }
+            ABS_MT_POSITION_Y => {
+                let v = self.clamp_axis(false, value, time_us);
+                let slot = &mut self.slots[i];
+                slot.moved |= slot.y != v;
+                slot.y = v;
+            }
+            ABS_MT_TOOL_TYPE => self.slots[i].tool_type = value,
+            _ => {}
+        }
+    }
+
+    fn flush(&mut self, time_us: i64, out: &mut Vec<TouchFrame>) {
+        let mut changed: Vec<(ContactId, Phase)> = Vec::new();
+        match self.protocol {
+            Protocol::B => self.flush_b(&mut changed),
+            Protocol::A => self.flush_a(&mut changed),
+            Protocol::Single => self.flush_single(&mut changed),
+        }
+        self.emit(time_us, &changed, out);
+    }
+
+    fn flush_b(&mut self, changed: &mut Vec<(ContactId, Phase)>) {
+        for i in 0..self.slots.len() {
+            let s = self.slots[i];
+            let pos = RawPoint::new(s.x, s.y);
+            let palm = s.tool_type == MT_TOOL_PALM;
+            if s.end || s.begin {
+                if let Some(a) = self.slots[i].contact.take() {
+                    self.end(Active { pos, ..a }, Phase::Up);
+                }
+            }
+            if s.begin && !palm {
+                let a = self.begin(self.tool_of(s.tool_type), pos);
+                changed.push((a.id, Phase::Down));
+                self.slots[i].contact = Some(a);
+            } else if let Some(mut a) = self.slots[i].contact {
+                if palm {
+                    self.slots[i].contact = None;
+                    self.end(a, Phase::Cancel);
+                } else if s.moved {
+                    a.pos = pos;
+                    self.slots[i].contact = Some(a);
+                    changed.push((a.id, Phase::Move));
+                }
+            } else if s.suspended && s.moved && s.tracking_id >= 0 && !palm {
+                // Reported again after lost events: it is still down.
+                let a = self.begin(self.tool_of(s.tool_type), pos);
+                changed.push((a.id, Phase::Down));
+                self.slots[i].contact = Some(a);
+                self.slots[i].suspended = false;
+            }
+            let slot = &mut self.slots[i];
+            slot.begin = false;
+            slot.end = false;
+            slot.moved = false;
+        }
+    }
+
+    fn flush_a(&mut self, changed: &mut Vec<(ContactId, Phase)>) {
+        // A contact left without its SYN_MT_REPORT still counts.
+        let p = std::mem::take(&mut self.a_partial);
+        if p.x.is_some() && p.y.is_some() && self.a_pending.len() < MAX_A_CONTACTS {
+            self.a_pending.push(p);
+            self.a_seen_mt = true;
+        }
+        let pending = std::mem::take(&mut self.a_pending);
+        let seen_mt = std::mem::replace(&mut self.a_seen_mt, false);
+        if !seen_mt && (!self.has_touch_key || self.touch_key) {
+            // A frame without multitouch data (a key or timestamp only)
+            // while the touch is still down: nothing changed.
+            return;
+        }
+        let points: Vec<(RawPoint, Option<i32>, i32)> = pending
+            .iter()
+            .filter_map(|p| Some((RawPoint::new(p.x?, p.y?), p.tracking_id, p.tool_type)))
+            .filter(|(_, _, tool)| *tool != MT_TOOL_PALM)
+            .collect();
+        let old = std::mem::take(&mut self.a_active);
+        let assignment = match_by_proximity(&old, &points);
+        let mut next = Vec::with_capacity(points.len());
+        for (j, (pos, _, tool)) in points.iter().enumerate() {
+            match assignment[j] {
+                Some(i) => {
+                    let mut a = old[i];
+                    if a.pos != *pos {
+                        a.pos = *pos;
+                        changed.push((a.id, Phase::Move));
+                    }
+                    next.push(a);
+                }
+                None => {
+                    let a = self.begin(self.tool_of(*tool), *pos);
+                    changed.push((a.id, Phase::Down));
+                    next.push(a);
+                }
+            }
+        }
+        for (i, a) in old.iter().enumerate() {
+            if !assignment.contains(&Some(i)) {
+                self.end(*a, Phase::Up);
+            }
+        }
+        self.a_active = next;
+    }
+
+    fn flush_single(&mut self, changed: &mut Vec<(ContactId, Phase)>) {
+        let pos = RawPoint::new(self.single_x, self.single_y);
+        let down = if self.has_touch_key {
+            self.touch_key
+        } else {
+            self.pen_in_range
+        };
+        let moved_only = std::mem::replace(&mut self.single_changed, false);
+        match (self.single, down) {
+            (None, true) if !self.single_suspended || moved_only => {
+                let tool = if self.pen_device { Tool::Pen } else { Tool::Finger };
+                let a = self.begin(tool, pos);
+                changed.push((a.id, Phase::Down));
+                self.single = Some(a);
+                self.single_suspended = false;
+            }
+            (Some(a), false) => {
+                self.single = None;
+                self.end(Active { pos, ..a }, Phase::Up);
+            }
+            (Some(mut a), true) if a.pos != pos => {
+                a.pos = pos;
+                self.single = Some(a);
+                changed.push((a.id, Phase::Move));
+            }
+            (None, false) => self.single_suspended = false,
+            _ => {}
+        }
+    }
+
+    fn after_drop(&mut self, time_us: i64, out: &mut Vec<TouchFrame>) {
+        // Whatever was half-collected belongs to a frame that was cut.
+        self.a_partial = Partial::default();
+        self.a_pending.clear();
+        self.a_seen_mt = false;
+        for s in &mut self.slots {
+            s.begin = false;
+            s.end = false;
+            s.moved = false;
+        }
+        match self.resync_source {
+            ResyncSource::Kernel => self.awaiting_resync = true,
+            ResyncSource::Reconcile => {
+                for i in 0..self.slots.len() {
+                    if let Some(a) = self.slots[i].contact.take() {
+                        self.slots[i].suspended = true;
+                        self.end(a, Phase::Cancel);
+                    }
+                }
+                for a in std::mem::take(&mut self.a_active) {
+                    self.end(a, Phase::Cancel);
+                }
+                if let Some(a) = self.single.take() {
+                    self.single_suspended = true;
+                    self.end(a, Phase::Cancel);
+                }
+                self.single_changed = false;
+                self.emit(time_us, &[], out);
+            }
+        }
+    }
+
+    /// Bring the tracker in line with the kernel's state after
+    /// `SYN_DROPPED`; contacts that changed are reported in a frame at
+    /// `time_us`.
+    pub fn resync(&mut self, state: &KernelState, time_us: i64, out: &mut Vec<TouchFrame>) {
+        self.awaiting_resync = false;
+        let mut changed = Vec::new();
+        match self.protocol {
+            Protocol::B => {
+                self.current_slot = usize::try_from(state.current_slot)
+                    .ok()
+                    .filter(|s| *s < self.slots.len());
+                for i in 0..self.slots.len() {
+                    let k = state.slots.get(i).copied().unwrap_or(SlotState {
+                        tracking_id: -1,
+                        ..SlotState::default()
+                    });
+                    let x = self.x_axis.clamp(k.x);
+                    let y = self.y_axis.clamp(k.y);
+                    let same = self.slots[i].tracking_id == k.tracking_id && k.tracking_id >= 0;
+                    let slot = &mut self.slots[i];
+                    slot.x = x;
+                    slot.y = y;
+                    slot.tool_type = k.tool_type;
+                    slot.suspended = false;
+                    if same {
+                        if let Some(mut a) = slot.contact {
+                            if a.pos != RawPoint::new(x, y) {
+                                a.pos = RawPoint::new(x, y);
+                                slot.contact = Some(a);
+                                changed.push((a.id, Phase::Move));
+                            }
+                            continue;
+                        }
+                    }
+                    slot.tracking_id = k.tracking_id;
+                    if let Some(a) = self.slots[i].contact.take() {
+                        self.end(a, Phase::Up);
+                    }
+                    if k.tracking_id >= 0 && k.tool_type != MT_TOOL_PALM {
+                        let a = self.begin(self.tool_of(k.tool_type), RawPoint::new(x, y));
+                        changed.push((a.id, Phase::Down));
+                        self.slots[i].contact = Some(a);
+                    }
+                }
+            }
+            Protocol::A => {
+                // No per-contact state in the kernel: if the touch is up, all
+                // contacts are; otherwise the next frame lists them all.
+                if state.touch == Some(false) {
+                    for a in std::mem::take(&mut self.a_active) {
+                        self.end(a, Phase::Up);
+                    }
+                }
+            }
+            Protocol::Single => {
+                self.single_x = self.x_axis.clamp(state.x);
+                self.single_y = self.y_axis.clamp(state.y);
+                self.touch_key = state.touch.unwrap_or(self.touch_key);
+                self.single_changed = true;
+                self.flush_single(&mut changed);
+            }
+        }
+        self.emit(time_us, &changed, out);
+    }
+
+    /// Cancel every contact (the device went away). Returns the frame, if
+    /// any contact was down.
+    pub fn cancel_all(&mut self, time_us: i64) -> Option<TouchFrame> {
+        for i in 0..self.slots.len() {
+            if let Some(a) = self.slots[i].contact.take() {
+                self.end(a, Phase::Cancel);
+            }
+            self.slots[i].tracking_id = -1;
+        }
+        for a in std::mem::take(&mut self.a_active) {
+            self.end(a, Phase::Cancel);
+        }
+        if let Some(a) = self.single.take() {
+            self.end(a, Phase::Cancel);
+        }
+        let mut out = Vec::new();
+        self.emit(time_us, &[], &mut out);
+        out.pop()
+    }
+
+    fn active(&self) -> Vec<Active> {
+        match self.protocol {
+            Protocol::B => self.slots.iter().filter_map(|s| s.contact).collect(),
+            Protocol::A => self.a_active.clone(),
+            Protocol::Single => self.single.into_iter().collect(),
+        }
+    }
+
+    fn emit(&mut self, time_us: i64, changed: &[(ContactId, Phase)], out: &mut Vec<TouchFrame>) {
+        if changed.is_empty() && self.ended.is_empty() {
+            return;
+        }
+        let mut contacts = std::mem::take(&mut self.ended);
+        let mut fingers = 0;
+        for a in self.active() {
+            if a.tool == Tool::Finger {
+                fingers += 1;
+            }
+            let phase = changed
+                .iter()
+                .find(|(id, _)| *id == a.id)
+                .map_or(Phase::Hold, |(_, p)| *p);
+            contacts.push(Contact {
+                id: a.id,
+                phase,
+                tool: a.tool,
+                raw: a.pos,
+            });
+        }
+        self.stats.max_fingers = self.stats.max_fingers.max(fingers);
+        out.push(TouchFrame { time_us, contacts });
+    }
+}
+
+/// Assign each new point to at most one old contact: by tracking id where
+/// the device gives one, else greedily by nearest distance (protocol A).
+fn match_by_proximity(old: &[Active], points: &[(RawPoint, Option<i32>, i32)]) -> Vec<Option<usize>> {
+    let mut pairs: Vec<(i64, usize, usize)> = Vec::with_capacity(old.len() * points.len());
+    for (j, (p, _, _)) in points.iter().enumerate() {
+        for (i, a) in old.iter().enumerate() {
+            let dx = i64::from(p.x) - i64::from(a.pos.x);
+            let dy = i64::from(p.y) - i64::from(a.pos.y);
+            pairs.push((dx * dx + dy * dy, j, i));
+        }
+    }
+    pairs.sort_unstable();
+    let mut assignment = vec![None; points.len()];
+    let mut taken = vec![false; old.len()];
+    for (_, j, i) in pairs {
+        if assignment[j].is_none() && !taken[i] {
+            assignment[j] = Some(i);
+            taken[i] = true;
+        }
+    }
+    assignment
+}
+
+/// Run a whole recording through a tracker (recordings reconcile after
+/// `SYN_DROPPED`). Returns the frames and the tracker's counters.
+pub fn track_events(
+    device: &DeviceDescription,
+    events: &[RawEvent],
+) -> Result<(Vec<TouchFrame>, TrackerStats), TrackerError> {
+    let mut t = ContactTracker::new(device, ResyncSource::Reconcile, 0)?;
+    let mut frames = Vec::new();
+    for e in events {
+        t.push(e, &mut frames);
+    }
+    Ok((frames, t.stats()))
+}

@@ -1,0 +1,24 @@
+//! marionette: a kiosk program for touch tables. Visitors drag a 3-D
+//! character's body parts with their fingers; it takes natural poses and
+//! performs whole actions, following Oshita's example-based posture
+//! synthesis.
+//!
+//! # How the pieces fit
+//!
+//! ```text
+//! input ─────────────> character ───────────> physics ──────> render ──────> display
+//! evdev / evemu        posing | action        tracking        wgpu           KMS | headless
+//! tracker, calibration  (learned models)      (PD + ragdoll)
+//! ```
+//!
+//! - [`input`] turns panels (live evdev devices or evemu recordings) into
+//!   touch frames in screen pixels. Pure except [`input::live`] and
+//!   [`input::uinput`], which touch devices.
+//! - [`app`] is the application edge: configuration, exit codes, logging.
+//!
+//! Conventions, stated once: time is in microseconds from the events' own
+//! clock (never `Instant::now()` in core code); screen pixels have their
+//! origin top left with y down.
+
+pub mod app;
+pub mod input;
