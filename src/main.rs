@@ -1,1 +1,272 @@
-fn main(){}
+//! The `marionette` command line. Output meant for people or scripts goes to
+//! stdout; logs go to stderr (the journal under systemd). Exit codes follow
+//! sysexits.h, see `app::exit`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use marionette::app::config::{self, Config, ConfigError};
+use marionette::app::{exit, logging};
+use marionette::input::evemu::{EvemuError, Recording};
+use marionette::input::{live, pipeline, uinput};
+
+#[derive(Parser)]
+#[command(
+    name = "marionette",
+    version,
+    about = "Touch-table character puppeteering kiosk"
+)]
+struct Cli {
+    /// Configuration file [default: /etc/marionette/marionette.toml if it
+    /// exists, else built-in defaults]
+    #[arg(long, global = true, value_name = "PATH")]
+    config: Option<PathBuf>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Replay the bundled demo recording through the input stack and print
+    /// what it does
+    Demo {
+        /// Folder for the demo's output files
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+    },
+    /// Describe a recording as one JSON object
+    Inspect {
+        /// An evemu recording
+        file: PathBuf,
+    },
+    /// Replay a recording through the input stack
+    Replay {
+        /// An evemu recording
+        file: PathBuf,
+        /// Print the touch frames as JSON lines (time, contacts with id,
+        /// raw and screen position)
+        #[arg(long)]
+        contacts: bool,
+    },
+    /// Record a device's events to an evemu file (stop with Ctrl-C)
+    Record {
+        /// Device node [default: the first touchscreen found]
+        #[arg(long)]
+        device: Option<PathBuf>,
+        /// Output file
+        #[arg(long)]
+        out: PathBuf,
+        /// Stop after this many seconds
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// Replay a recording through a virtual (uinput) device with its timing
+    Play {
+        /// An evemu recording
+        file: PathBuf,
+        /// Wait this long after creating the device before the first event,
+        /// so that readers can open it
+        #[arg(long, default_value_t = 500)]
+        settle_ms: u64,
+    },
+    /// List the input devices and what marionette makes of each
+    ListDevices {
+        /// One JSON object per line instead of a table
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// An error with the exit code it deserves.
+struct Failure {
+    code: u8,
+    message: String,
+}
+
+impl Failure {
+    fn new(code: u8, message: impl std::fmt::Display) -> Self {
+        Self {
+            code,
+            message: message.to_string(),
+        }
+    }
+}
+
+impl From<ConfigError> for Failure {
+    fn from(e: ConfigError) -> Self {
+        Self::new(exit::CONFIG, e)
+    }
+}
+
+impl From<EvemuError> for Failure {
+    fn from(e: EvemuError) -> Self {
+        let code = match &e {
+            EvemuError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+                exit::NOINPUT
+            }
+            EvemuError::Io { source, .. }
+                if source.kind() == std::io::ErrorKind::PermissionDenied =>
+            {
+                exit::NOINPUT
+            }
+            EvemuError::Io { .. } => exit::IOERR,
+            _ => exit::DATAERR,
+        };
+        Self::new(code, e)
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() {
+                exit::USAGE
+            } else {
+                exit::OK
+            });
+        }
+    };
+    let config = match load_config(cli.config.as_deref()) {
+        Ok(c) => c,
+        Err(e) => {
+            logging::init("info");
+            eprintln!("marionette: {e}");
+            return ExitCode::from(exit::CONFIG);
+        }
+    };
+    logging::init(&config.log.level);
+    match run(cli.command, &config) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            eprintln!("marionette: {}", f.message);
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
+    match path {
+        Some(p) => Config::load(p),
+        None if Path::new(config::DEFAULT_PATH).exists() => {
+            Config::load(Path::new(config::DEFAULT_PATH))
+        }
+        None => Ok(Config::default()),
+    }
+}
+
+fn run(command: Command, config: &Config) -> Result<(), Failure> {
+    match command {
+        Command::Demo { out } => demo(config, &out),
+        Command::Inspect { file } => inspect(&file),
+        Command::Replay { file, contacts } => replay(config, &file, contacts),
+        Command::Record {
+            device,
+            out,
+            seconds,
+        } => live::record(config, device.as_deref(), &out, seconds)
+            .map_err(|e| Failure::new(e.exit_code(), e)),
+        Command::Play { file, settle_ms } => {
+            let rec = Recording::read_file(&file)?;
+            uinput::play(&rec, std::time::Duration::from_millis(settle_ms))
+                .map_err(|e| Failure::new(e.exit_code(), e))
+        }
+        Command::ListDevices { json } => list_devices(config, json),
+    }
+}
+
+fn stdout_error(e: std::io::Error) -> Failure {
+    Failure::new(exit::IOERR, format!("cannot write to stdout: {e}"))
+}
+
+fn inspect(file: &Path) -> Result<(), Failure> {
+    let rec = Recording::read_file(file)?;
+    let (summary, _) = pipeline::summarize(&rec);
+    let json = serde_json::to_string(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+fn replay(config: &Config, file: &Path, contacts: bool) -> Result<(), Failure> {
+    let rec = Recording::read_file(file)?;
+    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    if contacts {
+        for f in &frames {
+            let line = serde_json::to_string(f).map_err(|e| Failure::new(exit::FAILURE, e))?;
+            writeln!(out, "{line}").map_err(stdout_error)?;
+        }
+    } else {
+        let (summary, _) = pipeline::summarize(&rec);
+        writeln!(
+            out,
+            "{}: {} frames, {} touch frames, {} finger contacts (at most {} at once), {:.1} s",
+            summary.device,
+            summary.frames,
+            frames.len(),
+            summary.touch_sequences,
+            summary.max_contacts,
+            summary.duration_s
+        )
+        .map_err(stdout_error)?;
+    }
+    out.flush().map_err(stdout_error)
+}
+
+fn demo(config: &Config, out_dir: &Path) -> Result<(), Failure> {
+    // The recording is built into the binary: the demo works from anywhere.
+    let rec = Recording::parse(
+        DEMO_RECORDING,
+        Path::new("assets/recordings/demo-two-hands.evemu"),
+    )?;
+    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    std::fs::create_dir_all(out_dir).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot create {}: {e}", out_dir.display()),
+        )
+    })?;
+    let path = out_dir.join("contacts.jsonl");
+    let mut text = String::new();
+    for f in &frames {
+        text.push_str(&serde_json::to_string(f).map_err(|e| Failure::new(exit::FAILURE, e))?);
+        text.push('\n');
+    }
+    std::fs::write(&path, text).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", path.display()),
+        )
+    })?;
+    let summary = pipeline::demo_summary(&rec, &frames, config);
+    let mut stdout = std::io::stdout().lock();
+    write!(stdout, "{summary}").map_err(stdout_error)?;
+    writeln!(stdout, "touch frames written to {}", path.display()).map_err(stdout_error)
+}
+
+const DEMO_RECORDING: &str = include_str!("../assets/recordings/demo-two-hands.evemu");
+
+fn list_devices(config: &Config, json: bool) -> Result<(), Failure> {
+    let found = live::list_devices(config).map_err(|e| Failure::new(e.exit_code(), e))?;
+    let mut out = std::io::stdout().lock();
+    if found.is_empty() {
+        writeln!(
+            out,
+            "no input devices in {}",
+            config.input.dev_dir.display()
+        )
+        .map_err(stdout_error)?;
+    }
+    for d in &found {
+        let line = if json {
+            serde_json::to_string(d).map_err(|e| Failure::new(exit::FAILURE, e))?
+        } else {
+            d.to_string()
+        };
+        writeln!(out, "{line}").map_err(stdout_error)?;
+    }
+    Ok(())
+}

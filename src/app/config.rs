@@ -135,10 +135,9 @@ impl DeviceConfig {
     #[must_use]
     pub fn matches(&self, d: &DeviceDescription) -> bool {
         let name_ok = self.match_name.as_ref().is_none_or(|n| *n == d.name);
-        let usb_ok = self
-            .match_usb
-            .as_ref()
-            .is_none_or(|u| parse_usb_id(u).is_some_and(|(v, p)| v == d.id.vendor && p == d.id.product));
+        let usb_ok = self.match_usb.as_ref().is_none_or(|u| {
+            parse_usb_id(u).is_some_and(|(v, p)| v == d.id.vendor && p == d.id.product)
+        });
         name_ok && usb_ok
     }
 
@@ -152,7 +151,10 @@ impl DeviceConfig {
 #[must_use]
 pub fn parse_usb_id(s: &str) -> Option<(u16, u16)> {
     let (v, p) = s.split_once(':')?;
-    Some((u16::from_str_radix(v, 16).ok()?, u16::from_str_radix(p, 16).ok()?))
+    Some((
+        u16::from_str_radix(v, 16).ok()?,
+        u16::from_str_radix(p, 16).ok()?,
+    ))
 }
 
 /// `[log]`
@@ -201,19 +203,28 @@ impl Config {
         let d = &self.display;
         for (key, v) in [("display.width", d.width), ("display.height", d.height)] {
             if !(16..=16384).contains(&v) {
-                return Err(invalid(key, format!("must be between 16 and 16384 pixels, found {v}")));
+                return Err(invalid(
+                    key,
+                    format!("must be between 16 and 16384 pixels, found {v}"),
+                ));
             }
         }
         if Rotation::from_degrees(i64::from(d.rotation)).is_none() {
             return Err(invalid(
                 "display.rotation",
-                format!("must be one of 0, 90, 180, 270 (degrees clockwise), found {}", d.rotation),
+                format!(
+                    "must be one of 0, 90, 180, 270 (degrees clockwise), found {}",
+                    d.rotation
+                ),
             ));
         }
         if !(50..=60_000).contains(&self.input.rescan_interval_ms) {
             return Err(invalid(
                 "input.rescan_interval_ms",
-                format!("must be between 50 and 60000, found {}", self.input.rescan_interval_ms),
+                format!(
+                    "must be between 50 and 60000, found {}",
+                    self.input.rescan_interval_ms
+                ),
             ));
         }
         for (i, dev) in self.input.device.iter().enumerate() {
@@ -228,7 +239,9 @@ impl Config {
                 if parse_usb_id(u).is_none() {
                     return Err(invalid(
                         &key("match_usb"),
-                        format!("must be \"vendor:product\" in hex, like \"0eef:72a1\", found \"{u}\""),
+                        format!(
+                            "must be \"vendor:product\" in hex, like \"0eef:72a1\", found \"{u}\""
+                        ),
                     ));
                 }
             }
@@ -245,7 +258,10 @@ impl Config {
         if !["error", "warn", "info", "debug", "trace"].contains(&self.log.level.as_str()) {
             return Err(invalid(
                 "log.level",
-                format!("must be one of error, warn, info, debug, trace, found \"{}\"", self.log.level),
+                format!(
+                    "must be one of error, warn, info, debug, trace, found \"{}\"",
+                    self.log.level
+                ),
             ));
         }
         Ok(())
@@ -295,21 +311,30 @@ mod tests {
 
     #[test]
     fn wrong_type_is_an_error() {
-        let e = parse("[display]\nwidth = \"wide\"\n").unwrap_err().to_string();
+        let e = parse("[display]\nwidth = \"wide\"\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("width") && e.contains("line 2"), "{e}");
     }
 
     #[test]
     fn out_of_range_values_name_the_key_and_range() {
         let e = parse("[display]\nrotation = 45\n").unwrap_err().to_string();
-        assert!(e.contains("`display.rotation`") && e.contains("0, 90, 180, 270"), "{e}");
+        assert!(
+            e.contains("`display.rotation`") && e.contains("0, 90, 180, 270"),
+            "{e}"
+        );
         let e = parse("[[input.device]]\nmatch_name = \"x\"\ncalibration = [0, 0, 0, 0, 0, 0]\n")
             .unwrap_err()
             .to_string();
         assert!(e.contains("input.device[0].calibration"), "{e}");
-        let e = parse("[[input.device]]\ncalibration = [1, 0, 0, 0, 1, 0]\n").unwrap_err().to_string();
+        let e = parse("[[input.device]]\ncalibration = [1, 0, 0, 0, 1, 0]\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("match_name"), "{e}");
-        let e = parse("[[input.device]]\nmatch_usb = \"zz\"\n").unwrap_err().to_string();
+        let e = parse("[[input.device]]\nmatch_usb = \"zz\"\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("vendor:product"), "{e}");
         let e = parse("[log]\nlevel = \"loud\"\n").unwrap_err().to_string();
         assert!(e.contains("log.level"), "{e}");
@@ -317,7 +342,10 @@ mod tests {
 
     #[test]
     fn devices_match_by_name_or_usb_id() {
-        let c = parse("[[input.device]]\nmatch_usb = \"0eef:72A1\"\ncalibration = [2, 0, 0, 0, 2, 0]\n").unwrap();
+        let c = parse(
+            "[[input.device]]\nmatch_usb = \"0eef:72A1\"\ncalibration = [2, 0, 0, 0, 2, 0]\n",
+        )
+        .unwrap();
         let mut d = DeviceDescription {
             name: "eGalax".into(),
             ..DeviceDescription::default()

@@ -5,7 +5,8 @@ use tracing_subscriber::EnvFilter;
 /// Install the global subscriber. `RUST_LOG` wins over `default_level`.
 /// Lines carry no timestamps under systemd (the journal adds its own).
 pub fn init(default_level: &str) {
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default_level));
+    let filter =
+        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default_level));
     let under_journal = std::env::var_os("JOURNAL_STREAM").is_some();
     let builder = tracing_subscriber::fmt()
         .with_env_filter(filter)

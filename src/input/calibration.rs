@@ -166,7 +166,9 @@ impl Matrix {
 #[derive(Debug, Error, PartialEq)]
 pub enum CalibrationError {
     /// The device's axis range cannot be normalised.
-    #[error("the device's {axis} axis range {min}..{max} is {why}; the device or its recording is broken")]
+    #[error(
+        "the device's {axis} axis range {min}..{max} is {why}; the device or its recording is broken"
+    )]
     BadRange {
         axis: char,
         min: i32,
@@ -174,7 +176,9 @@ pub enum CalibrationError {
         why: &'static str,
     },
     /// The matrix is singular or not finite.
-    #[error("calibration matrix {0:?} is unusable (not finite, or it squashes the panel onto a line)")]
+    #[error(
+        "calibration matrix {0:?} is unusable (not finite, or it squashes the panel onto a line)"
+    )]
     BadMatrix([f64; 6]),
     /// The screen size is zero.
     #[error("screen size {0}x{1} is empty")]
@@ -186,10 +190,14 @@ pub enum CalibrationError {
     #[error("the {what} lie on a line (or on one spot); touch targets spread over the screen")]
     Collinear { what: &'static str },
     /// One touch is far from where the others say it should be.
-    #[error("touch {index} is {error_px:.1} px from its target after fitting the others; it was probably a slip: touch it again")]
+    #[error(
+        "touch {index} is {error_px:.1} px from its target after fitting the others; it was probably a slip: touch it again"
+    )]
     Outlier { index: usize, error_px: f64 },
     /// The touches do not agree with any linear calibration.
-    #[error("the touches do not agree with each other (mean error {rms_px:.1} px); calibrate again, touching each target's centre")]
+    #[error(
+        "the touches do not agree with each other (mean error {rms_px:.1} px); calibrate again, touching each target's centre"
+    )]
     Inconsistent { rms_px: f64 },
 }
 
@@ -334,7 +342,10 @@ pub fn solve(
         });
     }
     let touches: Vec<NormPoint> = pairs.iter().map(|(_, r)| base.normalise(*r)).collect();
-    let targets: Vec<NormPoint> = pairs.iter().map(|(s, _)| base.screen_to_panel(*s)).collect();
+    let targets: Vec<NormPoint> = pairs
+        .iter()
+        .map(|(s, _)| base.screen_to_panel(*s))
+        .collect();
     if is_collinear(&touches) {
         return Err(CalibrationError::Collinear { what: "touches" });
     }
@@ -352,7 +363,10 @@ pub fn solve(
         least_squares(&t, &g)
     };
     let error_px = |m: &Matrix, i: usize| -> f64 {
-        let cal = Calibration { matrix: *m, ..*base };
+        let cal = Calibration {
+            matrix: *m,
+            ..*base
+        };
         cal.to_screen_unclamped(pairs[i].1).distance(pairs[i].0)
     };
     let matrix = fit(None).ok_or(CalibrationError::Collinear { what: "touches" })?;
@@ -374,7 +388,9 @@ pub fn solve(
             }
         }
     }
-    let rms_px = ((0..pairs.len()).map(|i| error_px(&matrix, i).powi(2)).sum::<f64>()
+    let rms_px = ((0..pairs.len())
+        .map(|i| error_px(&matrix, i).powi(2))
+        .sum::<f64>()
         / pairs.len() as f64)
         .sqrt();
     if rms_px > opts.max_rms_px {
@@ -488,19 +504,31 @@ mod tests {
     fn identity_maps_corners_to_corners() {
         let c = base(Rotation::R0);
         assert_eq!(c.to_screen(RawPoint::new(0, 0)), ScreenPoint::new(0.0, 0.0));
-        assert_eq!(c.to_screen(RawPoint::new(4095, 4095)), ScreenPoint::new(1920.0, 1080.0));
+        assert_eq!(
+            c.to_screen(RawPoint::new(4095, 4095)),
+            ScreenPoint::new(1920.0, 1080.0)
+        );
     }
 
     #[test]
     fn rotation_turns_the_panel_clockwise() {
         // Picture turned 90° clockwise: its top left is the panel's top right.
         let c = base(Rotation::R90);
-        assert_eq!(c.to_screen(RawPoint::new(4095, 0)), ScreenPoint::new(0.0, 0.0));
-        assert_eq!(c.to_screen(RawPoint::new(0, 4095)), ScreenPoint::new(1080.0, 1920.0));
+        assert_eq!(
+            c.to_screen(RawPoint::new(4095, 0)),
+            ScreenPoint::new(0.0, 0.0)
+        );
+        assert_eq!(
+            c.to_screen(RawPoint::new(0, 4095)),
+            ScreenPoint::new(1080.0, 1920.0)
+        );
         for r in [Rotation::R0, Rotation::R90, Rotation::R180, Rotation::R270] {
             let p = NormPoint { x: 0.2, y: 0.7 };
             let q = r.invert(r.apply(p));
-            assert!((q.x - p.x).abs() < 1e-12 && (q.y - p.y).abs() < 1e-12, "{r}");
+            assert!(
+                (q.x - p.x).abs() < 1e-12 && (q.y - p.y).abs() < 1e-12,
+                "{r}"
+            );
         }
     }
 
@@ -509,21 +537,45 @@ mod tests {
         // The libinput docs' example: rotate 90° clockwise.
         let m = Matrix([0.0, -1.0, 1.0, 1.0, 0.0, 0.0]);
         let c = Calibration::new(&axis(100), &axis(100), m, Rotation::R0, (100, 100)).unwrap();
-        assert_eq!(c.to_screen(RawPoint::new(0, 0)), ScreenPoint::new(100.0, 0.0));
+        assert_eq!(
+            c.to_screen(RawPoint::new(0, 0)),
+            ScreenPoint::new(100.0, 0.0)
+        );
     }
 
     #[test]
     fn bad_ranges_and_matrices_are_refused() {
-        let e = Calibration::new(&axis(0), &axis(10), Matrix::IDENTITY, Rotation::R0, (10, 10));
-        assert!(matches!(e, Err(CalibrationError::BadRange { why: "empty", .. })));
+        let e = Calibration::new(
+            &axis(0),
+            &axis(10),
+            Matrix::IDENTITY,
+            Rotation::R0,
+            (10, 10),
+        );
+        assert!(matches!(
+            e,
+            Err(CalibrationError::BadRange { why: "empty", .. })
+        ));
         let swapped = AbsInfo {
             minimum: 10,
             maximum: 0,
             ..AbsInfo::default()
         };
-        let e = Calibration::new(&swapped, &axis(10), Matrix::IDENTITY, Rotation::R0, (10, 10));
+        let e = Calibration::new(
+            &swapped,
+            &axis(10),
+            Matrix::IDENTITY,
+            Rotation::R0,
+            (10, 10),
+        );
         assert!(e.unwrap_err().to_string().contains("swapped"));
-        let e = Calibration::new(&axis(9), &axis(9), Matrix([1.0, 1.0, 0.0, 1.0, 1.0, 0.0]), Rotation::R0, (10, 10));
+        let e = Calibration::new(
+            &axis(9),
+            &axis(9),
+            Matrix([1.0, 1.0, 0.0, 1.0, 1.0, 0.0]),
+            Rotation::R0,
+            (10, 10),
+        );
         assert!(matches!(e, Err(CalibrationError::BadMatrix(_))));
     }
 
@@ -536,7 +588,10 @@ mod tests {
         let line: Vec<_> = (0..5)
             .map(|i| {
                 let f = f64::from(i) / 4.0;
-                (ScreenPoint::new(f * 1920.0, f * 1080.0), RawPoint::new(i * 1000, i * 1000))
+                (
+                    ScreenPoint::new(f * 1920.0, f * 1080.0),
+                    RawPoint::new(i * 1000, i * 1000),
+                )
             })
             .collect();
         let e = solve(&c, &line, check, SolveOptions::default()).unwrap_err();

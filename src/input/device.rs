@@ -14,8 +14,9 @@ use std::fmt;
 use serde::Serialize;
 
 use super::event::{
-    ABS_CNT, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_X, ABS_Y, BTN_LEFT, BTN_STYLUS, BTN_TOOL_FINGER,
-    BTN_TOOL_PEN, BTN_TOUCH, EV_ABS, EV_CNT, EV_KEY, INPUT_PROP_DIRECT, INPUT_PROP_POINTER,
+    ABS_CNT, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_X, ABS_Y, BTN_LEFT, BTN_STYLUS,
+    BTN_TOOL_FINGER, BTN_TOOL_PEN, BTN_TOUCH, EV_ABS, EV_CNT, EV_KEY, INPUT_PROP_DIRECT,
+    INPUT_PROP_POINTER,
 };
 
 /// `struct input_id`.
@@ -225,7 +226,8 @@ impl DeviceDescription {
     /// devices with absolute axes.
     #[must_use]
     pub fn kind(&self) -> DeviceKind {
-        let has_xy = (self.has_abs(ABS_X) && self.has_abs(ABS_Y)) || self.has_abs(ABS_MT_POSITION_X);
+        let has_xy =
+            (self.has_abs(ABS_X) && self.has_abs(ABS_Y)) || self.has_abs(ABS_MT_POSITION_X);
         if !has_xy {
             return DeviceKind::Other;
         }
@@ -252,9 +254,11 @@ impl DeviceDescription {
     /// Number of slots of a protocol B device (`ABS_MT_SLOT` maximum + 1).
     #[must_use]
     pub fn slot_count(&self) -> usize {
-        self.abs
-            .get(&ABS_MT_SLOT)
-            .map_or(1, |a| usize::try_from(a.maximum.saturating_add(1)).unwrap_or(1).max(1))
+        self.abs.get(&ABS_MT_SLOT).map_or(1, |a| {
+            usize::try_from(a.maximum.saturating_add(1))
+                .unwrap_or(1)
+                .max(1)
+        })
     }
 
     /// The axis that carries positions for this device's protocol.
@@ -284,7 +288,13 @@ mod tests {
         d.set_abs(ABS_MT_SLOT, AbsInfo { maximum: 9, ..r });
         d.set_abs(ABS_MT_POSITION_X, r);
         d.set_abs(ABS_MT_POSITION_Y, r);
-        d.set_abs(ABS_MT_TRACKING_ID, AbsInfo { maximum: 65535, ..r });
+        d.set_abs(
+            ABS_MT_TRACKING_ID,
+            AbsInfo {
+                maximum: 65535,
+                ..r
+            },
+        );
         d.set_bit(EV_KEY, BTN_TOUCH);
         if direct {
             d.properties.insert(INPUT_PROP_DIRECT);

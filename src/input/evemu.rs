@@ -149,15 +149,19 @@ impl Parser<'_> {
         }
         if let Some(comment) = trimmed.strip_prefix('#') {
             if let Some(v) = comment.trim().strip_prefix("EVEMU ") {
-                self.rec.version = parse_version(v.trim())
-                    .ok_or_else(|| self.err(n, format!("expected `# EVEMU major.minor`, found `{line}`")))?;
+                self.rec.version = parse_version(v.trim()).ok_or_else(|| {
+                    self.err(n, format!("expected `# EVEMU major.minor`, found `{line}`"))
+                })?;
             }
             return Ok(());
         }
         let Some((tag, rest)) = trimmed.split_once(':') else {
             return Err(self.err(
                 n,
-                format!("expected a line starting with N:, I:, P:, B:, A:, L:, S:, E: or #, found `{}`", excerpt(line)),
+                format!(
+                    "expected a line starting with N:, I:, P:, B:, A:, L:, S:, E: or #, found `{}`",
+                    excerpt(line)
+                ),
             ));
         };
         // Everything after a `#` on a data line is a comment (evemu writes
@@ -200,12 +204,19 @@ impl Parser<'_> {
 
     fn id_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
         if f.len() != 4 {
-            return Err(self.err(n, format!("I: needs 4 hex numbers (bus vendor product version), found {}", f.len())));
+            return Err(self.err(
+                n,
+                format!(
+                    "I: needs 4 hex numbers (bus vendor product version), found {}",
+                    f.len()
+                ),
+            ));
         }
         let mut v = [0u16; 4];
         for (slot, s) in v.iter_mut().zip(f) {
-            *slot = u16::from_str_radix(s, 16)
-                .map_err(|_| self.err(n, format!("I: expected a 16-bit hex number, found `{s}`")))?;
+            *slot = u16::from_str_radix(s, 16).map_err(|_| {
+                self.err(n, format!("I: expected a 16-bit hex number, found `{s}`"))
+            })?;
         }
         self.rec.device.id = InputId {
             bustype: v[0],
@@ -244,14 +255,27 @@ impl Parser<'_> {
 
     fn mask_line(&mut self, n: usize, f: &[&str]) -> Result<(), EvemuError> {
         if f.len() != 9 {
-            return Err(self.err(n, format!("B: needs an event type and 8 hex bytes, found {} fields", f.len())));
+            return Err(self.err(
+                n,
+                format!(
+                    "B: needs an event type and 8 hex bytes, found {} fields",
+                    f.len()
+                ),
+            ));
         }
         let bytes = self.hex_bytes(n, "B", f)?;
         let kind = usize::from(bytes[0]);
         if kind >= EV_CNT {
-            return Err(self.err(n, format!("B: event type {kind:#04x} is beyond EV_MAX (0x1f)")));
+            return Err(self.err(
+                n,
+                format!("B: event type {kind:#04x} is beyond EV_MAX (0x1f)"),
+            ));
         }
-        let limit = if kind == 0 { EV_CNT } else { code_count(kind as u16) };
+        let limit = if kind == 0 {
+            EV_CNT
+        } else {
+            code_count(kind as u16)
+        };
         for (i, b) in bytes[1..].iter().enumerate() {
             for bit in 0..8 {
                 let code = (self.mask_bytes[kind] + i) * 8 + bit;
@@ -282,12 +306,16 @@ impl Parser<'_> {
         let code = u16::from_str_radix(f[0], 16)
             .map_err(|_| self.err(n, format!("A: expected a hex axis code, found `{}`", f[0])))?;
         if usize::from(code) >= ABS_CNT {
-            return Err(self.err(n, format!("A: axis code {code:#04x} is beyond ABS_MAX (0x3f)")));
+            return Err(self.err(
+                n,
+                format!("A: axis code {code:#04x} is beyond ABS_MAX (0x3f)"),
+            ));
         }
         let mut v = [0i32; 5];
         for (slot, s) in v.iter_mut().zip(&f[1..]) {
-            *slot = parse_int(s)
-                .ok_or_else(|| self.err(n, format!("A: expected a decimal integer, found `{s}`")))?;
+            *slot = parse_int(s).ok_or_else(|| {
+                self.err(n, format!("A: expected a decimal integer, found `{s}`"))
+            })?;
         }
         self.rec.device.set_abs(
             code,
@@ -305,12 +333,22 @@ impl Parser<'_> {
 
     fn state_line(&mut self, n: usize, tag: &str, f: &[&str]) -> Result<(), EvemuError> {
         if f.len() != 2 {
-            return Err(self.err(n, format!("{tag}: needs a hex code and a state, found {} fields", f.len())));
+            return Err(self.err(
+                n,
+                format!(
+                    "{tag}: needs a hex code and a state, found {} fields",
+                    f.len()
+                ),
+            ));
         }
         let code = u16::from_str_radix(f[0], 16)
             .map_err(|_| self.err(n, format!("{tag}: expected a hex code, found `{}`", f[0])))?;
-        let state = parse_int(f[1])
-            .ok_or_else(|| self.err(n, format!("{tag}: expected a decimal state, found `{}`", f[1])))?;
+        let state = parse_int(f[1]).ok_or_else(|| {
+            self.err(
+                n,
+                format!("{tag}: expected a decimal state, found `{}`", f[1]),
+            )
+        })?;
         if tag == "L" {
             self.rec.device.leds.push((code, state));
         } else {
@@ -326,26 +364,49 @@ impl Parser<'_> {
             });
         }
         if f.len() != 4 {
-            return Err(self.err(n, format!("E: needs `sec.usec type code value`, found {} fields", f.len())));
+            return Err(self.err(
+                n,
+                format!(
+                    "E: needs `sec.usec type code value`, found {} fields",
+                    f.len()
+                ),
+            ));
         }
-        let time_us = parse_time(f[0])
-            .ok_or_else(|| self.err(n, format!("E: expected a timestamp `sec.usec`, found `{}`", f[0])))?;
+        let time_us = parse_time(f[0]).ok_or_else(|| {
+            self.err(
+                n,
+                format!("E: expected a timestamp `sec.usec`, found `{}`", f[0]),
+            )
+        })?;
         let kind = u16::from_str_radix(f[1], 16)
             .map_err(|_| self.err(n, format!("E: expected a hex event type, found `{}`", f[1])))?;
         if kind > super::event::EV_MAX {
-            return Err(self.err(n, format!("E: event type {kind:#x} is beyond EV_MAX (0x1f)")));
+            return Err(self.err(
+                n,
+                format!("E: event type {kind:#x} is beyond EV_MAX (0x1f)"),
+            ));
         }
         let code = u16::from_str_radix(f[2], 16)
             .map_err(|_| self.err(n, format!("E: expected a hex event code, found `{}`", f[2])))?;
         if usize::from(code) >= code_count(kind) {
             return Err(self.err(
                 n,
-                format!("E: code {code:#x} is beyond the largest code of {} ({:#x})", type_name(kind), code_count(kind) - 1),
+                format!(
+                    "E: code {code:#x} is beyond the largest code of {} ({:#x})",
+                    type_name(kind),
+                    code_count(kind) - 1
+                ),
             ));
         }
-        let value = parse_int(f[3])
-            .ok_or_else(|| self.err(n, format!("E: expected a decimal 32-bit value, found `{}`", f[3])))?;
-        self.rec.events.push(RawEvent::new(time_us, kind, code, value));
+        let value = parse_int(f[3]).ok_or_else(|| {
+            self.err(
+                n,
+                format!("E: expected a decimal 32-bit value, found `{}`", f[3]),
+            )
+        })?;
+        self.rec
+            .events
+            .push(RawEvent::new(time_us, kind, code, value));
         Ok(())
     }
 
@@ -425,7 +486,13 @@ pub fn write_description(w: &mut impl Write, d: &DeviceDescription) -> io::Resul
         "# Input device ID: bus {:#04x} vendor {:#04x} product {:#04x} version {:#04x}",
         d.id.bustype, d.id.vendor, d.id.product, d.id.version
     )?;
-    writeln!(w, "# Written by marionette: {} ({})", d.kind(), d.protocol().map_or("no position axes".to_owned(), |p| format!("protocol {p}")))?;
+    writeln!(
+        w,
+        "# Written by marionette: {} ({})",
+        d.kind(),
+        d.protocol()
+            .map_or("no position axes".to_owned(), |p| format!("protocol {p}"))
+    )?;
     for (code, a) in &d.abs {
         writeln!(
             w,
@@ -439,7 +506,11 @@ pub fn write_description(w: &mut impl Write, d: &DeviceDescription) -> io::Resul
         )?;
     }
     // N: takes the rest of the line; a newline in a name would break it.
-    let name: String = d.name.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+    let name: String = d
+        .name
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
     writeln!(w, "N: {name}")?;
     writeln!(
         w,
@@ -453,7 +524,12 @@ pub fn write_description(w: &mut impl Write, d: &DeviceDescription) -> io::Resul
         if !d.codes(0).contains(kind) && set.0.iter().all(|b| *b == 0) {
             continue;
         }
-        write_bytes(w, &format!("B: {kind:02x} "), &set.0, code_count(kind).div_ceil(8))?;
+        write_bytes(
+            w,
+            &format!("B: {kind:02x} "),
+            &set.0,
+            code_count(kind).div_ceil(8),
+        )?;
     }
     for (code, a) in &d.abs {
         writeln!(
@@ -489,11 +565,28 @@ fn write_bytes(w: &mut impl Write, prefix: &str, bytes: &[u8], min_len: usize) -
 pub fn write_event(w: &mut impl Write, e: &RawEvent) -> io::Result<()> {
     let sec = e.time_us.div_euclid(1_000_000);
     let usec = e.time_us.rem_euclid(1_000_000);
-    write!(w, "E: {sec}.{usec:06} {:04x} {:04x} {:04}\t", e.kind, e.code, e.value)?;
+    write!(
+        w,
+        "E: {sec}.{usec:06} {:04x} {:04x} {:04}\t",
+        e.kind, e.code, e.value
+    )?;
     if e.kind == EV_SYN {
-        let sep = if e.code == SYN_MT_REPORT { "++++++++++++" } else { "------------" };
-        let tail = if e.code == SYN_MT_REPORT { "++++++++++" } else { "----------" };
-        writeln!(w, "# {sep} {} ({}) {tail}", code_name(e.kind, e.code), e.value)
+        let sep = if e.code == SYN_MT_REPORT {
+            "++++++++++++"
+        } else {
+            "------------"
+        };
+        let tail = if e.code == SYN_MT_REPORT {
+            "++++++++++"
+        } else {
+            "----------"
+        };
+        writeln!(
+            w,
+            "# {sep} {} ({}) {tail}",
+            code_name(e.kind, e.code),
+            e.value
+        )
     } else {
         writeln!(
             w,
@@ -552,7 +645,10 @@ E: 0.016000 0000 0000 0000\n";
         assert_eq!(r.device.abs[&0x35].maximum, 4095);
         assert_eq!(r.device.abs[&0x35].resolution, 12);
         assert_eq!(r.events.len(), 7);
-        assert_eq!(r.events[1].value, 904, "leading zeros are decimal, not octal");
+        assert_eq!(
+            r.events[1].value, 904,
+            "leading zeros are decimal, not octal"
+        );
         assert_eq!(r.events[5].value, -1);
         assert_eq!(r.events[5].time_us, 16_000);
         assert_eq!(r.frame_count(), 2);
@@ -590,8 +686,16 @@ E: 0.016000 0000 0000 0000\n";
         let e = Recording::parse(&bad, Path::new("f")).unwrap_err();
         assert_eq!(e.line(), Some(15));
 
-        let bad = SMALL.replace("E: 0.016000 0000 0000 0000", "E: 0.016000 0000 0000 99999999999");
-        assert!(Recording::parse(&bad, Path::new("f")).unwrap_err().to_string().contains("32-bit"));
+        let bad = SMALL.replace(
+            "E: 0.016000 0000 0000 0000",
+            "E: 0.016000 0000 0000 99999999999",
+        );
+        assert!(
+            Recording::parse(&bad, Path::new("f"))
+                .unwrap_err()
+                .to_string()
+                .contains("32-bit")
+        );
 
         let e = Recording::parse("E: 0.0 0 0 0\n", Path::new("f")).unwrap_err();
         assert!(matches!(e, EvemuError::NoDescription { .. }));

@@ -23,5 +23,6 @@ pub mod evemu;
 pub mod event;
 pub mod live;
 pub mod pipeline;
+pub mod synth;
 pub mod tracker;
 pub mod uinput;

@@ -402,7 +402,9 @@ impl ContactTracker {
                 max = axis.maximum,
                 "kernel bug: value outside the axis range; clamped"
             ),
-            Some(false) => tracing::warn!(device = %self.device_name, "further out-of-range values this minute are clamped silently"),
+            Some(false) => {
+                tracing::warn!(device = %self.device_name, "further out-of-range values this minute are clamped silently")
+            }
             None => {}
         }
         clamped
@@ -423,8 +425,12 @@ impl ContactTracker {
             self.stats.dropped += 1;
             self.dropping = true;
             match self.limits.dropped.check(e.time_us) {
-                Some(true) => tracing::warn!(device = %self.device_name, "SYN_DROPPED: events were lost; resynchronising"),
-                Some(false) => tracing::warn!(device = %self.device_name, "further SYN_DROPPED this minute are handled silently"),
+                Some(true) => {
+                    tracing::warn!(device = %self.device_name, "SYN_DROPPED: events were lost; resynchronising")
+                }
+                Some(false) => {
+                    tracing::warn!(device = %self.device_name, "further SYN_DROPPED this minute are handled silently")
+                }
                 None => {}
             }
             return;
@@ -466,7 +472,9 @@ impl ContactTracker {
             Protocol::B => self.abs_b(code, value, time_us),
             Protocol::A => match code {
                 ABS_MT_POSITION_X => self.a_partial.x = Some(self.clamp_axis(true, value, time_us)),
-                ABS_MT_POSITION_Y => self.a_partial.y = Some(self.clamp_axis(false, value, time_us)),
+                ABS_MT_POSITION_Y => {
+                    self.a_partial.y = Some(self.clamp_axis(false, value, time_us))
+                }
                 ABS_MT_TRACKING_ID => self.a_partial.tracking_id = Some(value),
                 ABS_MT_TOOL_TYPE => self.a_partial.tool_type = value,
                 _ => {}
@@ -487,7 +495,9 @@ impl ContactTracker {
 
     fn abs_b(&mut self, code: u16, value: i32, time_us: i64) {
         if code == ABS_MT_SLOT {
-            self.current_slot = usize::try_from(value).ok().filter(|s| *s < self.slots.len());
+            self.current_slot = usize::try_from(value)
+                .ok()
+                .filter(|s| *s < self.slots.len());
             if self.current_slot.is_none() {
                 self.stats.bad_slots += 1;
                 match self.limits.slot.check(time_us) {
@@ -497,7 +507,9 @@ impl ContactTracker {
                         slots = self.slots.len(),
                         "kernel bug: slot beyond the declared maximum; its events are ignored"
                     ),
-                    Some(false) => tracing::warn!(device = %self.device_name, "further invalid slots this minute are ignored silently"),
+                    Some(false) => {
+                        tracing::warn!(device = %self.device_name, "further invalid slots this minute are ignored silently")
+                    }
                     None => {}
                 }
             }
@@ -656,7 +668,11 @@ impl ContactTracker {
         let moved_only = std::mem::replace(&mut self.single_changed, false);
         match (self.single, down) {
             (None, true) if !self.single_suspended || moved_only => {
-                let tool = if self.pen_device { Tool::Pen } else { Tool::Finger };
+                let tool = if self.pen_device {
+                    Tool::Pen
+                } else {
+                    Tool::Finger
+                };
                 let a = self.begin(tool, pos);
                 changed.push((a.id, Phase::Down));
                 self.single = Some(a);
@@ -829,7 +845,10 @@ impl ContactTracker {
 
 /// Assign each new point to at most one old contact: by tracking id where
 /// the device gives one, else greedily by nearest distance (protocol A).
-fn match_by_proximity(old: &[Active], points: &[(RawPoint, Option<i32>, i32)]) -> Vec<Option<usize>> {
+fn match_by_proximity(
+    old: &[Active],
+    points: &[(RawPoint, Option<i32>, i32)],
+) -> Vec<Option<usize>> {
     let mut pairs: Vec<(i64, usize, usize)> = Vec::with_capacity(old.len() * points.len());
     for (j, (p, _, _)) in points.iter().enumerate() {
         for (i, a) in old.iter().enumerate() {

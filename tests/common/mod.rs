@@ -1,0 +1,24 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// `../shared` beside the checkout (or `$MARIONETTE_SHARED`): real
+/// recordings and motion capture used by the tests. Panics with a message
+/// that says where it looked.
+pub fn shared_dir() -> PathBuf {
+    let dir = std::env::var_os("MARIONETTE_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    assert!(
+        dir.join("recordings/INDEX.tsv").is_file(),
+        "real test data not found: expected {}/recordings/INDEX.tsv (the shared folder beside the checkout); set MARIONETTE_SHARED to its path",
+        dir.display()
+    );
+    dir
+}
+
+/// `tests/data` in this repository.
+pub fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
