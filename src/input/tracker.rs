@@ -24,7 +24,8 @@ use serde::Serialize;
 use super::calibration::RawPoint;
 use super::device::{AbsInfo, DeviceDescription, DeviceKind, Protocol};
 use super::event::{
-    ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
+    ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TOUCH_MAJOR,
+    ABS_MT_TRACKING_ID, ABS_X,
     ABS_Y, BTN_TOOL_PEN, BTN_TOOL_RUBBER, BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, MT_TOOL_PALM,
     MT_TOOL_PEN, RawEvent, SYN_DROPPED, SYN_MT_REPORT, SYN_REPORT,
 };
@@ -193,6 +194,8 @@ struct Partial {
     y: Option<i32>,
     tracking_id: Option<i32>,
     tool_type: i32,
+    /// `ABS_MT_TOUCH_MAJOR` sent as 0: hovering, not touching.
+    zero_size: bool,
 }
 
 /// Logs a kind of problem at most a few times per minute of event time.
@@ -451,7 +454,7 @@ impl ContactTracker {
             (EV_SYN, SYN_MT_REPORT) if self.protocol == Protocol::A => {
                 self.a_seen_mt = true;
                 let p = std::mem::take(&mut self.a_partial);
-                if p.x.is_some() && p.y.is_some() && p.tracking_id != Some(-1) {
+                if p.x.is_some() && p.y.is_some() && p.tracking_id != Some(-1) && !p.zero_size {
                     if self.a_pending.len() < MAX_A_CONTACTS {
                         self.a_pending.push(p);
                     }
@@ -477,6 +480,7 @@ impl ContactTracker {
                 }
                 ABS_MT_TRACKING_ID => self.a_partial.tracking_id = Some(value),
                 ABS_MT_TOOL_TYPE => self.a_partial.tool_type = value,
+                ABS_MT_TOUCH_MAJOR => self.a_partial.zero_size = value == 0,
                 _ => {}
             },
             Protocol::Single => match code {
@@ -614,7 +618,7 @@ impl ContactTracker {
     fn flush_a(&mut self, changed: &mut Vec<(ContactId, Phase)>) {
         // A contact left without its SYN_MT_REPORT still counts.
         let p = std::mem::take(&mut self.a_partial);
-        if p.x.is_some() && p.y.is_some() && self.a_pending.len() < MAX_A_CONTACTS {
+        if p.x.is_some() && p.y.is_some() && !p.zero_size && self.a_pending.len() < MAX_A_CONTACTS {
             self.a_pending.push(p);
             self.a_seen_mt = true;
         }
@@ -625,8 +629,12 @@ impl ContactTracker {
             // while the touch is still down: nothing changed.
             return;
         }
+        // BTN_TOUCH 0 overrides whatever contacts the frame lists (touchpads
+        // go on reporting zero-size contacts after the lift).
+        let touching = !self.has_touch_key || self.touch_key;
         let points: Vec<(RawPoint, Option<i32>, i32)> = pending
             .iter()
+            .filter(|_| touching)
             .filter_map(|p| Some((RawPoint::new(p.x?, p.y?), p.tracking_id, p.tool_type)))
             .filter(|(_, _, tool)| *tool != MT_TOOL_PALM)
             .collect();
