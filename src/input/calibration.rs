@@ -273,7 +273,7 @@ impl Calibration {
 
     /// Raw device units → screen pixels, clamped to the screen.
     #[must_use]
-    pub fn to_screen(&self, p: RawPoint) -> ScreenPoint {
+    pub fn to_screen(self, p: RawPoint) -> ScreenPoint {
         let n = self.rotation.apply(self.matrix.apply(self.normalise(p)));
         let (w, h) = (f64::from(self.size.0), f64::from(self.size.1));
         ScreenPoint {
@@ -405,7 +405,7 @@ pub fn solve(
 }
 
 impl Calibration {
-    fn to_screen_unclamped(&self, p: RawPoint) -> ScreenPoint {
+    fn to_screen_unclamped(self, p: RawPoint) -> ScreenPoint {
         let n = self.rotation.apply(self.matrix.apply(self.normalise(p)));
         ScreenPoint {
             x: n.x * f64::from(self.size.0),

@@ -454,10 +454,13 @@ impl ContactTracker {
             (EV_SYN, SYN_MT_REPORT) if self.protocol == Protocol::A => {
                 self.a_seen_mt = true;
                 let p = std::mem::take(&mut self.a_partial);
-                if p.x.is_some() && p.y.is_some() && p.tracking_id != Some(-1) && !p.zero_size {
-                    if self.a_pending.len() < MAX_A_CONTACTS {
-                        self.a_pending.push(p);
-                    }
+                if p.x.is_some()
+                    && p.y.is_some()
+                    && p.tracking_id != Some(-1)
+                    && !p.zero_size
+                    && self.a_pending.len() < MAX_A_CONTACTS
+                {
+                    self.a_pending.push(p);
                 }
             }
             (EV_KEY, BTN_TOUCH) => {
