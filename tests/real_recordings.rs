@@ -109,15 +109,22 @@ fn every_recording_matches_the_index() {
             .notes
             .split("with ")
             .nth(1)
-            .and_then(|p| p.strip_suffix(" contacts still down").or_else(|| p.split(" contacts still down").next()))
+            .and_then(|p| {
+                p.strip_suffix(" contacts still down")
+                    .or_else(|| p.split(" contacts still down").next())
+            })
             .and_then(|n| n.trim().parse::<usize>().ok())
             .unwrap_or(0);
         if rec.device.protocol().is_some() {
             let (frames, _) = track_events(&rec.device, &rec.events).unwrap();
-            let down = frames
-                .last()
-                .map_or(0, |f| f.contacts.iter().filter(|c| c.phase.is_down()).count());
-            check("contacts down at the end", down == still_down, format!("{down} vs index {still_down}"));
+            let down = frames.last().map_or(0, |f| {
+                f.contacts.iter().filter(|c| c.phase.is_down()).count()
+            });
+            check(
+                "contacts down at the end",
+                down == still_down,
+                format!("{down} vs index {still_down}"),
+            );
         }
         // Where the index's notes count touch sequences, they must agree.
         if let Some(n) = row

@@ -24,14 +24,25 @@ fn fixture(name: &str, synth: &Synth) -> Recording {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         std::fs::write(&path, &text).unwrap();
     }
-    let on_disk = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{}: {e}; regenerate with MARIONETTE_REGENERATE=1", path.display()));
-    assert_eq!(on_disk, text, "{} is stale; regenerate with MARIONETTE_REGENERATE=1", path.display());
+    let on_disk = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e}; regenerate with MARIONETTE_REGENERATE=1",
+            path.display()
+        )
+    });
+    assert_eq!(
+        on_disk,
+        text,
+        "{} is stale; regenerate with MARIONETTE_REGENERATE=1",
+        path.display()
+    );
     Recording::read_file(&path).unwrap()
 }
 
 fn down_after(frames: &[TouchFrame]) -> usize {
-    frames.last().map_or(0, |f| f.contacts.iter().filter(|c| c.phase.is_down()).count())
+    frames.last().map_or(0, |f| {
+        f.contacts.iter().filter(|c| c.phase.is_down()).count()
+    })
 }
 
 #[test]
@@ -52,7 +63,14 @@ fn syn_dropped_mid_gesture_leaves_no_contact_stuck() {
         .iter()
         .find(|f| f.contacts.iter().any(|c| c.phase == Phase::Cancel))
         .expect("contacts are cancelled at the drop");
-    assert_eq!(drop_frame.contacts.iter().filter(|c| c.phase == Phase::Cancel).count(), 2);
+    assert_eq!(
+        drop_frame
+            .contacts
+            .iter()
+            .filter(|c| c.phase == Phase::Cancel)
+            .count(),
+        2
+    );
     // Finger 0 comes back as a new contact as soon as it reports again...
     let resumed = frames
         .iter()
@@ -81,10 +99,26 @@ fn live_resync_uses_the_kernel_state() {
     let state = KernelState {
         current_slot: 2,
         slots: vec![
-            SlotState { tracking_id: 1, x: 150, y: 100, tool_type: 0 },
-            SlotState { tracking_id: -1, ..SlotState::default() },
-            SlotState { tracking_id: 9, x: 900, y: 900, tool_type: 0 },
-            SlotState { tracking_id: -1, ..SlotState::default() },
+            SlotState {
+                tracking_id: 1,
+                x: 150,
+                y: 100,
+                tool_type: 0,
+            },
+            SlotState {
+                tracking_id: -1,
+                ..SlotState::default()
+            },
+            SlotState {
+                tracking_id: 9,
+                x: 900,
+                y: 900,
+                tool_type: 0,
+            },
+            SlotState {
+                tracking_id: -1,
+                ..SlotState::default()
+            },
         ],
         ..KernelState::default()
     };
@@ -96,7 +130,10 @@ fn live_resync_uses_the_kernel_state() {
     assert!(phases.contains(&Phase::Move), "{phases:?}");
     assert!(phases.contains(&Phase::Down), "{phases:?}");
     assert_eq!(t.active_count(), 2);
-    assert!(f.contacts.iter().all(|c| c.id >> 32 == 7), "ids carry the device instance");
+    assert!(
+        f.contacts.iter().all(|c| c.id >> 32 == 7),
+        "ids carry the device instance"
+    );
 }
 
 #[test]
@@ -104,17 +141,31 @@ fn slots_beyond_the_maximum_are_ignored_not_fatal() {
     let mut s = Synth::new(panel("two-slot panel", 2, 4095));
     s.down(0, 500, 500).frame(DT);
     // Slot 5 on a 2-slot device: a kernel bug; its events are ignored.
-    s.raw(EV_ABS, ABS_MT_SLOT, 5).raw(EV_ABS, ABS_MT_TRACKING_ID, 77).raw(EV_ABS, ABS_MT_POSITION_X, 9).frame(DT);
-    s.raw(EV_ABS, ABS_MT_SLOT, -3).raw(EV_ABS, ABS_MT_POSITION_X, 9).frame(DT);
-    s.raw(EV_ABS, ABS_MT_SLOT, 0).raw(EV_ABS, ABS_MT_POSITION_X, 600).frame(DT);
+    s.raw(EV_ABS, ABS_MT_SLOT, 5)
+        .raw(EV_ABS, ABS_MT_TRACKING_ID, 77)
+        .raw(EV_ABS, ABS_MT_POSITION_X, 9)
+        .frame(DT);
+    s.raw(EV_ABS, ABS_MT_SLOT, -3)
+        .raw(EV_ABS, ABS_MT_POSITION_X, 9)
+        .frame(DT);
+    s.raw(EV_ABS, ABS_MT_SLOT, 0)
+        .raw(EV_ABS, ABS_MT_POSITION_X, 600)
+        .frame(DT);
     s.raw(EV_ABS, ABS_MT_TRACKING_ID, -1).frame(DT);
     let rec = fixture("slot-overflow.evemu", &s);
     let (frames, stats) = track_events(&rec.device, &rec.events).unwrap();
     assert_eq!(stats.bad_slots, 2);
     assert_eq!(stats.finger_sequences, 1);
     assert_eq!(stats.max_fingers, 1);
-    let moved = frames.iter().flat_map(|f| &f.contacts).find(|c| c.phase == Phase::Move).unwrap();
-    assert_eq!(moved.raw.x, 600, "slot 0 is selected again and keeps working");
+    let moved = frames
+        .iter()
+        .flat_map(|f| &f.contacts)
+        .find(|c| c.phase == Phase::Move)
+        .unwrap();
+    assert_eq!(
+        moved.raw.x, 600,
+        "slot 0 is selected again and keeps working"
+    );
     assert_eq!(down_after(&frames), 0);
 }
 
@@ -129,23 +180,39 @@ fn out_of_range_values_are_clamped() {
     let (frames, stats) = track_events(&rec.device, &rec.events).unwrap();
     assert_eq!(stats.clamped, 4);
     for c in frames.iter().flat_map(|f| &f.contacts) {
-        assert!((0..=1000).contains(&c.raw.x) && (0..=1000).contains(&c.raw.y), "{c:?}");
+        assert!(
+            (0..=1000).contains(&c.raw.x) && (0..=1000).contains(&c.raw.y),
+            "{c:?}"
+        );
     }
-    let moved: Vec<_> = frames.iter().flat_map(|f| &f.contacts).filter(|c| c.phase == Phase::Move).collect();
+    let moved: Vec<_> = frames
+        .iter()
+        .flat_map(|f| &f.contacts)
+        .filter(|c| c.phase == Phase::Move)
+        .collect();
     assert_eq!((moved[0].raw.x, moved[0].raw.y), (1000, 0));
 }
 
 #[test]
 fn repeated_and_replaced_tracking_ids() {
     let mut s = Synth::new(panel("id panel", 4, 4095));
-    s.raw(EV_ABS, ABS_MT_TRACKING_ID, 5).raw(EV_ABS, ABS_MT_POSITION_X, 10).raw(EV_ABS, ABS_MT_POSITION_Y, 10).frame(DT);
+    s.raw(EV_ABS, ABS_MT_TRACKING_ID, 5)
+        .raw(EV_ABS, ABS_MT_POSITION_X, 10)
+        .raw(EV_ABS, ABS_MT_POSITION_Y, 10)
+        .frame(DT);
     // The same id again: nothing new.
     s.raw(EV_ABS, ABS_MT_TRACKING_ID, 5).frame(DT);
     // A different id without a lift: the old touch ends, a new one begins.
-    s.raw(EV_ABS, ABS_MT_TRACKING_ID, 6).raw(EV_ABS, ABS_MT_POSITION_X, 20).frame(DT);
+    s.raw(EV_ABS, ABS_MT_TRACKING_ID, 6)
+        .raw(EV_ABS, ABS_MT_POSITION_X, 20)
+        .frame(DT);
     // A lift of a slot that has no touch: counted, harmless.
-    s.raw(EV_ABS, ABS_MT_SLOT, 1).raw(EV_ABS, ABS_MT_TRACKING_ID, -1).frame(DT);
-    s.raw(EV_ABS, ABS_MT_SLOT, 0).raw(EV_ABS, ABS_MT_TRACKING_ID, -1).frame(DT);
+    s.raw(EV_ABS, ABS_MT_SLOT, 1)
+        .raw(EV_ABS, ABS_MT_TRACKING_ID, -1)
+        .frame(DT);
+    s.raw(EV_ABS, ABS_MT_SLOT, 0)
+        .raw(EV_ABS, ABS_MT_TRACKING_ID, -1)
+        .frame(DT);
     let rec = fixture("tracking-ids.evemu", &s);
     let (frames, stats) = track_events(&rec.device, &rec.events).unwrap();
     assert_eq!(stats.repeated_ids, 1);
@@ -160,19 +227,35 @@ fn repeated_and_replaced_tracking_ids() {
 #[test]
 fn palms_are_cancelled_and_pens_are_not_fingers() {
     let mut d = panel("pen and palm panel", 4, 4095);
-    d.set_abs(ABS_MT_TOOL_TYPE, marionette::input::device::AbsInfo { maximum: 2, ..Default::default() });
+    d.set_abs(
+        ABS_MT_TOOL_TYPE,
+        marionette::input::device::AbsInfo {
+            maximum: 2,
+            ..Default::default()
+        },
+    );
     let mut s = Synth::new(d);
     s.down(0, 100, 100).frame(DT);
     s.raw(EV_ABS, ABS_MT_TOOL_TYPE, MT_TOOL_PALM).frame(DT);
-    s.raw(EV_ABS, ABS_MT_SLOT, 1).raw(EV_ABS, ABS_MT_TOOL_TYPE, MT_TOOL_PEN);
-    s.raw(EV_ABS, ABS_MT_TRACKING_ID, 40).raw(EV_ABS, ABS_MT_POSITION_X, 300).frame(DT);
-    s.raw(EV_ABS, ABS_MT_TRACKING_ID, -1).raw(EV_ABS, ABS_MT_SLOT, 0).raw(EV_ABS, ABS_MT_TRACKING_ID, -1).frame(DT);
+    s.raw(EV_ABS, ABS_MT_SLOT, 1)
+        .raw(EV_ABS, ABS_MT_TOOL_TYPE, MT_TOOL_PEN);
+    s.raw(EV_ABS, ABS_MT_TRACKING_ID, 40)
+        .raw(EV_ABS, ABS_MT_POSITION_X, 300)
+        .frame(DT);
+    s.raw(EV_ABS, ABS_MT_TRACKING_ID, -1)
+        .raw(EV_ABS, ABS_MT_SLOT, 0)
+        .raw(EV_ABS, ABS_MT_TRACKING_ID, -1)
+        .frame(DT);
     let rec = fixture("palm-and-pen.evemu", &s);
     let (frames, stats) = track_events(&rec.device, &rec.events).unwrap();
     assert_eq!(stats.cancelled, 1);
     assert_eq!(stats.pen_sequences, 1);
     assert_eq!(stats.finger_sequences, 1);
-    let pen = frames.iter().flat_map(|f| &f.contacts).find(|c| c.phase == Phase::Down && c.raw.x == 300).unwrap();
+    let pen = frames
+        .iter()
+        .flat_map(|f| &f.contacts)
+        .find(|c| c.phase == Phase::Down && c.raw.x == 300)
+        .unwrap();
     assert_eq!(pen.tool, marionette::input::tracker::Tool::Pen);
     assert_eq!(down_after(&frames), 0);
 }
@@ -185,14 +268,20 @@ fn real_pen_recording_reports_pens_only() {
         let (frames, stats) = track_events(&rec.device, &rec.events).unwrap();
         assert_eq!(stats.finger_sequences, 0, "{f}");
         assert!(stats.pen_sequences > 0, "{f}: the pen touched the screen");
-        assert!(frames.iter().flat_map(|fr| &fr.contacts).all(|c| c.tool == marionette::input::tracker::Tool::Pen));
+        assert!(
+            frames
+                .iter()
+                .flat_map(|fr| &fr.contacts)
+                .all(|c| c.tool == marionette::input::tracker::Tool::Pen)
+        );
     }
 }
 
 #[test]
 fn protocol_a_contacts_are_matched_by_proximity() {
     let dir = common::shared_dir().join("recordings/evemu");
-    let rec = Recording::read_file(&dir.join("ntrig-multitouch.2-fingers-touch-release.evemu")).unwrap();
+    let rec =
+        Recording::read_file(&dir.join("ntrig-multitouch.2-fingers-touch-release.evemu")).unwrap();
     let (frames, stats) = track_events(&rec.device, &rec.events).unwrap();
     assert_eq!(stats.max_fingers, 2);
     // Contacts keep their ids while they move: every contact's successive

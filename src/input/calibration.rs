@@ -373,14 +373,24 @@ pub fn solve(
     if !matrix.is_usable() {
         return Err(CalibrationError::BadMatrix(matrix.0));
     }
-    // A single slip: with enough points, fit without each one and see
-    // whether it stands out.
+    // A single slip: with enough points, find the one whose removal leaves
+    // the others most consistent, and refuse if it lies far off their fit.
     if pairs.len() > NEED {
-        let worst = (0..pairs.len())
-            .filter_map(|i| fit(Some(i)).map(|m| (i, error_px(&m, i))))
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((index, err)) = worst {
-            if err > opts.outlier_px {
+        let rms_without = |m: &Matrix, skip: usize| -> f64 {
+            let sum: f64 = (0..pairs.len())
+                .filter(|i| *i != skip)
+                .map(|i| error_px(m, i).powi(2))
+                .sum();
+            (sum / (pairs.len() - 1) as f64).sqrt()
+        };
+        let mut removals: Vec<(usize, f64, f64)> = (0..pairs.len())
+            .filter_map(|i| fit(Some(i)).map(|m| (i, rms_without(&m, i), error_px(&m, i))))
+            .collect();
+        removals.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // Only when one removal is clearly the best can the slip be named;
+        // otherwise the consistency check below refuses the whole set.
+        if let [(index, rms, err), (_, next_rms, _), ..] = removals[..] {
+            if err > opts.outlier_px && rms <= opts.max_rms_px && next_rms > 3.0 * rms + 1.0 {
                 return Err(CalibrationError::Outlier {
                     index,
                     error_px: err,

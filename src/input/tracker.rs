@@ -25,9 +25,8 @@ use super::calibration::RawPoint;
 use super::device::{AbsInfo, DeviceDescription, DeviceKind, Protocol};
 use super::event::{
     ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TOUCH_MAJOR,
-    ABS_MT_TRACKING_ID, ABS_X,
-    ABS_Y, BTN_TOOL_PEN, BTN_TOOL_RUBBER, BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, MT_TOOL_PALM,
-    MT_TOOL_PEN, RawEvent, SYN_DROPPED, SYN_MT_REPORT, SYN_REPORT,
+    ABS_MT_TRACKING_ID, ABS_X, ABS_Y, BTN_TOOL_PEN, BTN_TOOL_RUBBER, BTN_TOUCH, EV_ABS, EV_KEY,
+    EV_SYN, MT_TOOL_PALM, MT_TOOL_PEN, RawEvent, SYN_DROPPED, SYN_MT_REPORT, SYN_REPORT,
 };
 
 /// Most slots a protocol B device may have here; a description that
