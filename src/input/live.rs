@@ -46,6 +46,12 @@ pub enum LiveError {
         #[source]
         source: io::Error,
     },
+    /// The device folder does not exist (no input subsystem, or a wrong
+    /// `input.dev_dir`).
+    #[error(
+        "there is no input device folder {0}; this machine has no evdev devices, or `input.dev_dir` in the configuration is wrong"
+    )]
+    NoDeviceDir(PathBuf),
     /// No touchscreen to use.
     #[error("no touchscreen found in {0}; `marionette list-devices` shows what is there")]
     NoTouchscreen(PathBuf),
@@ -73,7 +79,9 @@ impl LiveError {
     #[must_use]
     pub fn exit_code(&self) -> u8 {
         match self {
-            LiveError::Gone(_) | LiveError::NoTouchscreen(_) => exit::UNAVAILABLE,
+            LiveError::Gone(_) | LiveError::NoTouchscreen(_) | LiveError::NoDeviceDir(_) => {
+                exit::UNAVAILABLE
+            }
             LiveError::Io { source, .. } if source.kind() == io::ErrorKind::PermissionDenied => {
                 exit::NOPERM
             }
@@ -672,6 +680,17 @@ pub fn listing(path: &Path, desc: &DeviceDescription, config: &Config) -> Device
     }
 }
 
+fn scan_error(dir: &Path, source: io::Error) -> LiveError {
+    if source.kind() == io::ErrorKind::NotFound {
+        LiveError::NoDeviceDir(dir.to_owned())
+    } else {
+        LiveError::Io {
+            path: dir.to_owned(),
+            source,
+        }
+    }
+}
+
 /// Every device node and what marionette makes of it.
 pub fn list_devices(config: &Config) -> Result<Vec<DeviceListing>, LiveError> {
     list_devices_with(&EvdevOpener, config)
@@ -683,10 +702,7 @@ pub fn list_devices_with(
     config: &Config,
 ) -> Result<Vec<DeviceListing>, LiveError> {
     let dir = &config.input.dev_dir;
-    let paths = opener.scan(dir).map_err(|source| LiveError::Io {
-        path: dir.clone(),
-        source,
-    })?;
+    let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
     Ok(paths
         .iter()
         .map(|p| match opener.open(p) {
@@ -743,10 +759,7 @@ pub fn record(
         Some(p) => p.to_owned(),
         None => {
             let dir = &config.input.dev_dir;
-            let paths = opener.scan(dir).map_err(|source| LiveError::Io {
-                path: dir.clone(),
-                source,
-            })?;
+            let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
             paths
                 .into_iter()
                 .find(|p| {

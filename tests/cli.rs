@@ -1,0 +1,203 @@
+//! The command line as an operator or a script sees it: output, messages on
+//! stderr, exit codes (sysexits) that systemd can act on.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn marionette(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run marionette")
+}
+
+fn recording(name: &str) -> String {
+    common::shared_dir()
+        .join("recordings/evemu")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+#[test]
+fn inspect_prints_one_json_object() {
+    let out = marionette(&["inspect", &recording("evemu-data.3m-microtouch-usb.evemu")]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.lines().count(), 1);
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(
+        v["device"],
+        "3M-3M-MicroTouch-USB-controller Virtual Device"
+    );
+    assert_eq!(v["protocol"], "B");
+    assert_eq!(v["direct"], true);
+    assert_eq!(v["frames"], 3422);
+    assert_eq!(v["max_contacts"], 10);
+    assert_eq!(v["touch_sequences"], 34);
+    assert!((v["duration_s"].as_f64().unwrap() - 29.1).abs() < 0.1);
+    // The truncated last frame is mentioned on stderr.
+    assert!(String::from_utf8_lossy(&out.stderr).contains("middle of a frame"));
+}
+
+#[test]
+fn inspect_of_a_touchpad_says_it_is_not_direct() {
+    let out = marionette(&["inspect", &recording("evemu-data.bcm5974-touchpad.evemu")]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["protocol"], "A");
+    assert_eq!(v["direct"], false);
+}
+
+#[test]
+fn malformed_recording_exits_65_with_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.evemu");
+    std::fs::write(
+        &path,
+        "# EVEMU 1.3\nN: x\nI: 0003 0001 0002 0003\nE: 0.000000 0003 zz 1\n",
+    )
+    .unwrap();
+    let out = marionette(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.evemu:4") && err.contains("hex event code"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn missing_recording_exits_66() {
+    let out = marionette(&["inspect", "/nonexistent/x.evemu"]);
+    assert_eq!(out.status.code(), Some(66));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/x.evemu"));
+}
+
+#[test]
+fn bad_config_exits_78_naming_file_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("marionette.toml");
+    std::fs::write(&path, "[display]\nrotation = 45\n").unwrap();
+    let out = marionette(&[
+        "--config",
+        path.to_str().unwrap(),
+        "inspect",
+        &recording("quanta-optical.evemu"),
+    ]);
+    assert_eq!(out.status.code(), Some(78));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("marionette.toml") && err.contains("display.rotation"),
+        "{err}"
+    );
+    std::fs::write(&path, "[input]\ngrab = \"yes\"\n").unwrap();
+    let out = marionette(&["--config", path.to_str().unwrap(), "demo"]);
+    assert_eq!(out.status.code(), Some(78));
+    let out = marionette(&["--config", "/nonexistent/marionette.toml", "demo"]);
+    assert_eq!(out.status.code(), Some(78));
+}
+
+#[test]
+fn replay_contacts_are_json_lines_in_screen_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("m.toml");
+    std::fs::write(&cfg, "[display]\nwidth = 1920\nheight = 1080\n").unwrap();
+    let out = marionette(&[
+        "--config",
+        cfg.to_str().unwrap(),
+        "replay",
+        &recording("quanta-optical.touch-on-left.evemu"),
+        "--contacts",
+    ]);
+    assert!(out.status.success());
+    let lines: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(!lines.is_empty());
+    let first = &lines[0]["contacts"][0];
+    assert_eq!(first["phase"], "down");
+    // This panel's raw range is 0..1920 x 0..1080: identity maps 1:1.
+    let raw = (
+        first["raw"]["x"].as_f64().unwrap(),
+        first["raw"]["y"].as_f64().unwrap(),
+    );
+    let screen = (
+        first["screen"]["x"].as_f64().unwrap(),
+        first["screen"]["y"].as_f64().unwrap(),
+    );
+    assert!((raw.0 - screen.0).abs() < 1e-9 && (raw.1 - screen.1).abs() < 1e-9);
+    assert!(screen.0 < 960.0, "the touch is on the left");
+    assert_eq!(lines.last().unwrap()["contacts"][0]["phase"], "up");
+}
+
+#[test]
+fn demo_runs_and_writes_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = marionette(&["demo", "--out", dir.path().to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        stdout.contains("9 finger contacts, at most 2 at once"),
+        "{stdout}"
+    );
+    assert!(Path::new(&dir.path().join("contacts.jsonl")).is_file());
+}
+
+#[test]
+fn list_devices_reports_an_empty_or_missing_folder_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("m.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[input]\ndev_dir = \"{}\"\n",
+            dir.path().join("none").display()
+        ),
+    )
+    .unwrap();
+    let out = marionette(&["--config", cfg.to_str().unwrap(), "list-devices"]);
+    assert_eq!(
+        out.status.code(),
+        Some(69),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("none") && err.contains("input.dev_dir"),
+        "{err}"
+    );
+    std::fs::create_dir(dir.path().join("none")).unwrap();
+    let out = marionette(&["--config", cfg.to_str().unwrap(), "list-devices"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("no input devices in"));
+}
+
+#[test]
+fn play_without_uinput_says_what_to_do() {
+    if Path::new("/dev/uinput").exists() {
+        return; // covered by the VM test where uinput exists
+    }
+    let out = marionette(&[
+        "play",
+        &recording("wacom-isdv4-e6-finger.2fg-tap.evemu"),
+        "--settle-ms",
+        "0",
+    ]);
+    assert_eq!(out.status.code(), Some(69));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("uinput"));
+}
