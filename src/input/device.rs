@@ -100,7 +100,8 @@ pub struct DeviceDescription {
     /// `INPUT_PROP_*` bits.
     pub properties: BitSet,
     /// Supported codes per event type (index = `EV_*`); entry 0 holds the
-    /// supported types themselves, as `EVIOCGBIT(0)` does.
+    /// `EV_SYN` codes, as evemu's `B: 00` line does. A type is supported
+    /// when it has codes.
     pub bits: Vec<BitSet>,
     /// Axis ranges of the supported `EV_ABS` codes.
     pub abs: BTreeMap<u16, AbsInfo>,
@@ -188,7 +189,6 @@ impl DeviceDescription {
             self.bits.resize(EV_CNT, BitSet::default());
         }
         self.bits[usize::from(kind)].insert(code);
-        self.bits[0].insert(kind);
     }
 
     /// Add an absolute axis with its range.

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
-use super::device::{AbsInfo, BitSet, DeviceDescription, InputId};
+use super::device::{AbsInfo, DeviceDescription, InputId};
 use super::event::{
     ABS_CNT, EV_ABS, EV_CNT, EV_KEY, EV_SYN, INPUT_PROP_CNT, RawEvent, SYN_MT_REPORT, code_count,
     code_name, type_name,
@@ -185,7 +185,7 @@ impl Parser<'_> {
         match tag {
             "N" => {
                 if self.rec.device.name.is_empty() {
-                    self.rec.device.name = rest.trim().to_owned();
+                    self.rec.device.name = clean_name(rest);
                 }
                 Ok(())
             }
@@ -271,24 +271,12 @@ impl Parser<'_> {
                 format!("B: event type {kind:#04x} is beyond EV_MAX (0x1f)"),
             ));
         }
-        let limit = if kind == 0 {
-            EV_CNT
-        } else {
-            code_count(kind as u16)
-        };
+        let limit = code_count(kind as u16);
         for (i, b) in bytes[1..].iter().enumerate() {
             for bit in 0..8 {
                 let code = (self.mask_bytes[kind] + i) * 8 + bit;
                 if b & (1 << bit) != 0 && code < limit {
-                    if kind == 0 {
-                        // The supported types: the per-type lines set them too.
-                        if self.rec.device.bits.len() < EV_CNT {
-                            self.rec.device.bits.resize(EV_CNT, BitSet::default());
-                        }
-                        self.rec.device.bits[0].insert(code as u16);
-                    } else {
-                        self.rec.device.set_bit(kind as u16, code as u16);
-                    }
+                    self.rec.device.set_bit(kind as u16, code as u16);
                 }
             }
         }
@@ -436,6 +424,16 @@ impl Parser<'_> {
     }
 }
 
+/// A device name as one printable line: control characters become spaces,
+/// surrounding blanks go.
+fn clean_name(s: &str) -> String {
+    let cleaned: String = s
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    cleaned.trim().to_owned()
+}
+
 fn excerpt(line: &str) -> String {
     let mut s: String = line.chars().take(60).collect();
     if line.chars().count() > 60 {
@@ -518,10 +516,16 @@ pub fn write_description(w: &mut impl Write, d: &DeviceDescription) -> io::Resul
         d.id.bustype, d.id.vendor, d.id.product, d.id.version
     )?;
     write_bytes(w, "P: ", &d.properties.0, INPUT_PROP_CNT.div_ceil(8))?;
-    writeln!(w, "B: 00 0b 00 00 00 00 00 00 00")?;
+    // EV_SYN codes; evemu always writes at least SYN_REPORT, SYN_CONFIG and
+    // SYN_DROPPED, and so does every kernel device.
+    if d.codes(EV_SYN).iter().next().is_some() {
+        write_bytes(w, "B: 00 ", &d.codes(EV_SYN).0, 8)?;
+    } else {
+        writeln!(w, "B: 00 0b 00 00 00 00 00 00 00")?;
+    }
     for kind in 1..EV_CNT as u16 {
         let set = d.codes(kind);
-        if !d.codes(0).contains(kind) && set.0.iter().all(|b| *b == 0) {
+        if set.iter().next().is_none() {
             continue;
         }
         write_bytes(

@@ -230,9 +230,13 @@ fn describe(dev: &evdev::raw_stream::RawDevice) -> io::Result<DeviceDescription>
             }
         }
     }
-    for t in dev.supported_events().iter() {
-        d.set_bit(0, t.0);
-        d.bits[0].insert(t.0);
+    // Every evdev device reports these EV_SYN codes.
+    for code in [
+        super::event::SYN_REPORT,
+        super::event::SYN_CONFIG,
+        super::event::SYN_DROPPED,
+    ] {
+        d.set_bit(super::event::EV_SYN, code);
     }
     Ok(d)
 }

@@ -25,7 +25,9 @@ pub fn panel(name: &str, slots: i32, max: i32) -> DeviceDescription {
         ..DeviceDescription::default()
     };
     d.properties.insert(INPUT_PROP_DIRECT);
-    d.set_bit(EV_SYN, SYN_REPORT);
+    for code in [SYN_REPORT, SYN_CONFIG, SYN_DROPPED] {
+        d.set_bit(EV_SYN, code);
+    }
     d.set_bit(EV_KEY, BTN_TOUCH);
     let axis = AbsInfo {
         maximum: max,
