@@ -40,6 +40,22 @@ fn ten_fingers(frames: u32) -> String {
     s.to_text()
 }
 
+/// Every event through a fresh tracker, every contact to screen pixels.
+fn track_and_calibrate(rec: &Recording, cal: &Calibration) -> f64 {
+    let mut t = ContactTracker::new(&rec.device, ResyncSource::Reconcile, 0).unwrap();
+    let mut frames = Vec::new();
+    let mut sum = 0.0;
+    for e in &rec.events {
+        t.push(e, &mut frames);
+        for f in frames.drain(..) {
+            for c in &f.contacts {
+                sum += cal.to_screen(c.raw).x;
+            }
+        }
+    }
+    black_box(sum)
+}
+
 fn bench_input(c: &mut Criterion, name: &str, text: &str) {
     let rec = Recording::parse(text, Path::new(name)).unwrap();
     let events = rec.events.len() as u64;
@@ -51,37 +67,13 @@ fn bench_input(c: &mut Criterion, name: &str, text: &str) {
         b.iter(|| Recording::parse(black_box(text), Path::new(name)).unwrap())
     });
     g.bench_function("track+calibrate", |b| {
-        b.iter(|| {
-            let mut t = ContactTracker::new(&rec.device, ResyncSource::Reconcile, 0).unwrap();
-            let mut frames = Vec::new();
-            let mut sum = 0.0;
-            for e in &rec.events {
-                t.push(e, &mut frames);
-                for f in frames.drain(..) {
-                    for c in &f.contacts {
-                        sum += cal.to_screen(c.raw).x;
-                    }
-                }
-            }
-            black_box(sum)
-        });
+        b.iter(|| track_and_calibrate(&rec, &cal))
     });
     g.bench_function("parse+track+calibrate", |b| {
         b.iter(|| {
             let rec = Recording::parse(black_box(text), Path::new(name)).unwrap();
-            let mut t = ContactTracker::new(&rec.device, ResyncSource::Reconcile, 0).unwrap();
-            let mut frames = Vec::new();
-            let mut sum = 0.0;
-            for e in &rec.events {
-                t.push(e, &mut frames);
-                for f in frames.drain(..) {
-                    for c in &f.contacts {
-                        sum += cal.to_screen(c.raw).x;
-                    }
-                }
-            }
-            black_box(sum)
-        });
+            track_and_calibrate(&rec, &cal)
+        })
     });
     g.finish();
 }

@@ -20,7 +20,7 @@ use thiserror::Error;
 
 use super::device::{AbsInfo, DeviceDescription, InputId};
 use super::event::{
-    ABS_CNT, EV_ABS, EV_CNT, EV_KEY, EV_SYN, INPUT_PROP_CNT, RawEvent, SYN_MT_REPORT, code_count,
+    ABS_CNT, EV_ABS, EV_CNT, EV_SYN, INPUT_PROP_CNT, RawEvent, SYN_MT_REPORT, code_count,
     code_name, type_name,
 };
 
@@ -602,13 +602,6 @@ pub fn write_event(w: &mut impl Write, e: &RawEvent) -> io::Result<()> {
     }
 }
 
-/// Whether a description has the key bits a touch device needs to be
-/// recreated by uinput (used by `play` to warn early).
-#[must_use]
-pub fn has_keys(d: &DeviceDescription) -> bool {
-    d.codes(EV_KEY).iter().next().is_some()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -645,7 +638,10 @@ E: 0.016000 0000 0000 0000\n";
         assert_eq!(r.version, (1, 3));
         assert_eq!(r.device.name, "Test Panel");
         assert_eq!(r.device.id.vendor, 0x1234);
-        assert!(r.device.has(EV_KEY, super::super::event::BTN_TOUCH));
+        assert!(
+            r.device
+                .has(super::super::event::EV_KEY, super::super::event::BTN_TOUCH)
+        );
         assert_eq!(r.device.abs[&0x35].maximum, 4095);
         assert_eq!(r.device.abs[&0x35].resolution, 12);
         assert_eq!(r.events.len(), 7);

@@ -28,7 +28,7 @@ use super::event::{
     ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
     ABS_Y, BTN_TOUCH, EV_KEY, EV_LED, EV_MSC, EV_REL, EV_SW, RawEvent,
 };
-use super::pipeline::ScreenContact;
+use super::pipeline::{ScreenContact, screen_contacts};
 use super::tracker::{ContactTracker, KernelState, ResyncSource, SlotState, TouchFrame};
 use crate::app::config::{Config, device_label};
 use crate::app::exit;
@@ -597,19 +597,6 @@ impl<O: DeviceOpener> InputHub<O> {
             name: d.dev.description().name.clone(),
         });
     }
-}
-
-fn screen_contacts(f: &TouchFrame, cal: &Calibration) -> Vec<ScreenContact> {
-    f.contacts
-        .iter()
-        .map(|c| ScreenContact {
-            id: c.id,
-            phase: c.phase,
-            tool: c.tool,
-            raw: c.raw,
-            screen: cal.to_screen(c.raw),
-        })
-        .collect()
 }
 
 /// One line of `marionette list-devices`.

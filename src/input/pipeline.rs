@@ -101,22 +101,28 @@ pub fn calibration_for(
     })
 }
 
-/// Map a tracker frame to screen pixels.
+/// A tracker frame's contacts in screen pixels.
+#[must_use]
+pub fn screen_contacts(frame: &TouchFrame, cal: &Calibration) -> Vec<ScreenContact> {
+    frame
+        .contacts
+        .iter()
+        .map(|c| ScreenContact {
+            id: c.id,
+            phase: c.phase,
+            tool: c.tool,
+            raw: c.raw,
+            screen: cal.to_screen(c.raw),
+        })
+        .collect()
+}
+
+/// Map a tracker frame to screen pixels, `t` relative to `t0_us`.
 #[must_use]
 pub fn to_screen(frame: &TouchFrame, cal: &Calibration, t0_us: i64) -> ScreenFrame {
     ScreenFrame {
         t: (frame.time_us - t0_us) as f64 / 1e6,
-        contacts: frame
-            .contacts
-            .iter()
-            .map(|c| ScreenContact {
-                id: c.id,
-                phase: c.phase,
-                tool: c.tool,
-                raw: c.raw,
-                screen: cal.to_screen(c.raw),
-            })
-            .collect(),
+        contacts: screen_contacts(frame, cal),
     }
 }
 

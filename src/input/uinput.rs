@@ -9,7 +9,7 @@ use thiserror::Error;
 
 use super::device::DeviceDescription;
 use super::evemu::Recording;
-use super::event::{EV_ABS, EV_KEY, EV_MSC, EV_REL, EV_SW, RawEvent};
+use super::event::{EV_KEY, EV_MSC, EV_REL, EV_SW, RawEvent};
 use crate::app::exit;
 
 /// Errors of `play`.
@@ -91,7 +91,6 @@ pub fn create_device(d: &DeviceDescription) -> Result<evdev::uinput::VirtualDevi
         );
         b = b.with_absolute_axis(&setup).map_err(create)?;
     }
-    let _ = EV_ABS;
     b.build().map_err(create)
 }
 
