@@ -11,7 +11,7 @@ use clap::{Parser, Subcommand};
 use marionette::app::config::{self, Config, ConfigError};
 use marionette::app::{exit, logging};
 use marionette::input::evemu::{EvemuError, Recording};
-use marionette::input::{live, pipeline, uinput};
+use marionette::input::{live, pipeline, record, uinput};
 
 #[derive(Parser)]
 #[command(
@@ -168,7 +168,7 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
             device,
             out,
             seconds,
-        } => live::record(config, device.as_deref(), &out, seconds)
+        } => record::record(config, device.as_deref(), &out, seconds)
             .map_err(|e| Failure::new(e.exit_code(), e)),
         Command::Play { file, settle_ms } => {
             let rec = Recording::read_file(&file)?;

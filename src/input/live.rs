@@ -11,19 +11,17 @@
 use std::collections::{BTreeMap, HashSet};
 use std::fmt;
 use std::fs::OpenOptions;
-use std::io::{self, Write};
+use std::io;
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant, UNIX_EPOCH};
+use std::time::{Duration, UNIX_EPOCH};
 
 use serde::Serialize;
 use thiserror::Error;
 
 use super::calibration::{Calibration, Matrix};
 use super::device::{AbsInfo, DeviceDescription, DeviceKind, InputId};
-use super::evemu;
 use super::event::{
     ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
     ABS_Y, BTN_TOUCH, EV_KEY, EV_LED, EV_MSC, EV_REL, EV_SW, RawEvent,
@@ -168,6 +166,14 @@ impl EvdevDevice {
             dev,
             desc,
         })
+    }
+}
+
+impl EvdevDevice {
+    /// The device's file descriptor, for poll(2).
+    #[must_use]
+    pub fn fd(&self) -> BorrowedFd<'_> {
+        self.dev.as_fd()
     }
 }
 
@@ -671,7 +677,7 @@ pub fn listing(path: &Path, desc: &DeviceDescription, config: &Config) -> Device
     }
 }
 
-fn scan_error(dir: &Path, source: io::Error) -> LiveError {
+pub(crate) fn scan_error(dir: &Path, source: io::Error) -> LiveError {
     if source.kind() == io::ErrorKind::NotFound {
         LiveError::NoDeviceDir(dir.to_owned())
     } else {
@@ -712,116 +718,4 @@ pub fn list_devices_with(
             },
         })
         .collect())
-}
-
-static STOP: AtomicBool = AtomicBool::new(false);
-
-extern "C" fn on_stop_signal(_: libc::c_int) {
-    STOP.store(true, Ordering::SeqCst);
-}
-
-/// Set SIGINT/SIGTERM to set a flag instead of killing the process.
-fn install_stop_handler() {
-    use nix::sys::signal::{SaFlags, SigAction, SigHandler, SigSet, Signal, sigaction};
-    let action = SigAction::new(
-        SigHandler::Handler(on_stop_signal),
-        SaFlags::empty(),
-        SigSet::empty(),
-    );
-    for sig in [Signal::SIGINT, Signal::SIGTERM] {
-        // SAFETY: the handler only stores to an atomic.
-        if let Err(e) = unsafe { sigaction(sig, &action) } {
-            tracing::warn!(signal = %sig, error = %e, "cannot install signal handler");
-        }
-    }
-}
-
-/// `marionette record`: write a device's events to an evemu file until
-/// Ctrl-C (or `seconds`). Each frame is flushed as it completes, so an
-/// interrupted recording keeps everything up to the last frame.
-pub fn record(
-    config: &Config,
-    device: Option<&Path>,
-    out: &Path,
-    seconds: Option<f64>,
-) -> Result<(), LiveError> {
-    let opener = EvdevOpener;
-    let path = match device {
-        Some(p) => p.to_owned(),
-        None => {
-            let dir = &config.input.dev_dir;
-            let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
-            paths
-                .into_iter()
-                .find(|p| {
-                    opener
-                        .open(p)
-                        .is_ok_and(|d| d.description().kind() == DeviceKind::Touchscreen)
-                })
-                .ok_or_else(|| LiveError::NoTouchscreen(dir.clone()))?
-        }
-    };
-    let mut dev = EvdevDevice::open(&path).map_err(|source| LiveError::Io {
-        path: path.clone(),
-        source,
-    })?;
-    let file = std::fs::File::create(out).map_err(|source| LiveError::Write {
-        path: out.to_owned(),
-        source,
-    })?;
-    let mut w = io::BufWriter::new(file);
-    let werr = |source| LiveError::Write {
-        path: out.to_owned(),
-        source,
-    };
-    evemu::write_description(&mut w, dev.description()).map_err(werr)?;
-    w.flush().map_err(werr)?;
-    install_stop_handler();
-    tracing::info!(device = %dev.description().name, path = %path.display(), out = %out.display(), "recording; stop with Ctrl-C");
-    let started = Instant::now();
-    let deadline = seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
-    let mut t0: Option<i64> = None;
-    let mut events = Vec::new();
-    let (mut n_events, mut n_frames) = (0u64, 0u64);
-    while !STOP.load(Ordering::SeqCst) && deadline.is_none_or(|d| started.elapsed() < d) {
-        {
-            use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
-            let mut fds = [PollFd::new(dev.dev.as_fd(), PollFlags::POLLIN)];
-            match poll(&mut fds, PollTimeout::from(100u16)) {
-                Ok(_) | Err(nix::errno::Errno::EINTR) => {}
-                Err(e) => {
-                    return Err(LiveError::Io {
-                        path: path.clone(),
-                        source: e.into(),
-                    });
-                }
-            }
-        }
-        events.clear();
-        let gone = dev.read(&mut events);
-        for e in &events {
-            let base = *t0.get_or_insert(e.time_us);
-            evemu::write_event(
-                &mut w,
-                &RawEvent {
-                    time_us: e.time_us - base,
-                    ..*e
-                },
-            )
-            .map_err(werr)?;
-            n_events += 1;
-            if e.is_syn_report() {
-                n_frames += 1;
-                w.flush().map_err(werr)?;
-            }
-        }
-        if let Err(e) = gone {
-            w.flush().map_err(werr)?;
-            tracing::warn!(error = %e, "device went away; recording ends here");
-            break;
-        }
-    }
-    w.flush().map_err(werr)?;
-    tracing::info!(events = n_events, frames = n_frames, out = %out.display(), "recording written");
-    Ok(())
 }

@@ -10,12 +10,17 @@
 //! - [`event`]: kernel event numbers and [`event::RawEvent`].
 //! - [`device`]: what a device is and how marionette classifies it.
 //! - [`evemu`]: recordings, read and written.
-//! - [`tracker`]: protocol A/B/single-touch state machine, SYN_DROPPED.
+//! - [`tracker`]: protocol A/B/single-touch state machine, SYN_DROPPED;
+//!   [`touch`]: the touch frames it reports.
 //! - [`calibration`]: typed coordinate spaces and the calibration solver.
+//! - [`pipeline`]: recordings through the stack (inspect, replay, demo);
+//!   [`synth`]: authoring recordings.
 //! - [`live`]: real devices (evdev, hotplug, resync ioctls) behind an
-//!   injected opener; [`uinput`]: virtual devices for `play`.
+//!   injected opener; [`record`]: devices to evemu files; [`uinput`]:
+//!   virtual devices for `play`.
 //!
-//! Everything but `live` and `uinput` is pure and runs without devices.
+//! Everything but `live`, `record` and `uinput` is pure and runs without
+//! devices.
 
 pub mod calibration;
 pub mod device;
@@ -23,6 +28,8 @@ pub mod evemu;
 pub mod event;
 pub mod live;
 pub mod pipeline;
+pub mod record;
 pub mod synth;
+pub mod touch;
 pub mod tracker;
 pub mod uinput;
