@@ -72,6 +72,13 @@ enum Command {
         #[arg(long, default_value_t = 500)]
         settle_ms: u64,
     },
+    /// Read the touchscreens as the kiosk does and print what they report
+    /// (devices added and removed, touches in screen pixels) as JSON lines
+    Watch {
+        /// Stop after this many seconds [default: until Ctrl-C]
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
     /// List the input devices and what marionette makes of each
     ListDevices {
         /// One JSON object per line instead of a table
@@ -176,6 +183,8 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
                 .map_err(|e| Failure::new(e.exit_code(), e))
         }
         Command::ListDevices { json } => list_devices(config, json),
+        Command::Watch { seconds } => live::watch(config, seconds, &mut std::io::stdout().lock())
+            .map_err(|e| Failure::new(e.exit_code(), e)),
     }
 }
 

@@ -349,7 +349,8 @@ impl EventDevice for EvdevDevice {
 }
 
 /// What the hub reports.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
 pub enum HubEvent {
     /// A touchscreen is being read.
     Added {
@@ -718,4 +719,42 @@ pub fn list_devices_with(
             },
         })
         .collect())
+}
+
+/// `marionette watch`: read every touchscreen as the kiosk will and print
+/// what the hub reports, one JSON object per line, until SIGINT/SIGTERM or
+/// `seconds`. For operators checking a panel and its calibration.
+pub fn watch(
+    config: &Config,
+    seconds: Option<f64>,
+    out: &mut dyn io::Write,
+) -> Result<(), LiveError> {
+    let dir = &config.input.dev_dir;
+    if !dir.is_dir() {
+        return Err(LiveError::NoDeviceDir(dir.clone()));
+    }
+    crate::app::signals::install_stop_handler();
+    let started = std::time::Instant::now();
+    let deadline = seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
+    let mut hub = InputHub::new(EvdevOpener, config.clone());
+    let mut events = Vec::new();
+    let stdout_err = |source| LiveError::Write {
+        path: PathBuf::from("stdout"),
+        source,
+    };
+    while !crate::app::signals::stop_requested() && deadline.is_none_or(|d| started.elapsed() < d) {
+        let now_us = i64::try_from(started.elapsed().as_micros()).unwrap_or(i64::MAX);
+        hub.dispatch(now_us, &mut events);
+        for e in events.drain(..) {
+            let line = serde_json::to_string(&e).map_err(|e| stdout_err(e.into()))?;
+            writeln!(out, "{line}").map_err(stdout_err)?;
+        }
+        out.flush().map_err(stdout_err)?;
+        let wait = Duration::from_millis(100.min(config.input.rescan_interval_ms));
+        hub.wait(wait).map_err(|source| LiveError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
+    Ok(())
 }

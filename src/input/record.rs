@@ -2,7 +2,6 @@
 
 use std::io::{self, Write};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use super::device::DeviceKind;
@@ -10,28 +9,7 @@ use super::evemu;
 use super::event::RawEvent;
 use super::live::{DeviceOpener, EvdevDevice, EvdevOpener, EventDevice, LiveError, scan_error};
 use crate::app::config::Config;
-
-static STOP: AtomicBool = AtomicBool::new(false);
-
-extern "C" fn on_stop_signal(_: libc::c_int) {
-    STOP.store(true, Ordering::SeqCst);
-}
-
-/// Set SIGINT/SIGTERM to set a flag instead of killing the process.
-fn install_stop_handler() {
-    use nix::sys::signal::{SaFlags, SigAction, SigHandler, SigSet, Signal, sigaction};
-    let action = SigAction::new(
-        SigHandler::Handler(on_stop_signal),
-        SaFlags::empty(),
-        SigSet::empty(),
-    );
-    for sig in [Signal::SIGINT, Signal::SIGTERM] {
-        // SAFETY: the handler only stores to an atomic.
-        if let Err(e) = unsafe { sigaction(sig, &action) } {
-            tracing::warn!(signal = %sig, error = %e, "cannot install signal handler");
-        }
-    }
-}
+use crate::app::signals;
 
 /// `marionette record`: write a device's events to an evemu file until
 /// Ctrl-C (or `seconds`). Each frame is flushed as it completes, so an
@@ -73,14 +51,14 @@ pub fn record(
     };
     evemu::write_description(&mut w, dev.description()).map_err(werr)?;
     w.flush().map_err(werr)?;
-    install_stop_handler();
+    signals::install_stop_handler();
     tracing::info!(device = %dev.description().name, path = %path.display(), out = %out.display(), "recording; stop with Ctrl-C");
     let started = Instant::now();
     let deadline = seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
     let mut t0: Option<i64> = None;
     let mut events = Vec::new();
     let (mut n_events, mut n_frames) = (0u64, 0u64);
-    while !STOP.load(Ordering::SeqCst) && deadline.is_none_or(|d| started.elapsed() < d) {
+    while !signals::stop_requested() && deadline.is_none_or(|d| started.elapsed() < d) {
         {
             use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
             let mut fds = [PollFd::new(dev.fd(), PollFlags::POLLIN)];

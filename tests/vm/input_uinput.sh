@@ -1,0 +1,128 @@
+#!/usr/bin/env bash
+# Real kernel, real evdev, real uinput.
+#
+# Boots Debian's kernel under qemu (TCG, no network) with a busybox
+# initramfs. Inside, `marionette watch` reads the touchscreens through evdev
+# while `marionette play` recreates a recorded panel with uinput and replays
+# it, twice: the panel disappears when the first play ends (unplug) and comes
+# back as a new node with the second (replug). Then a burst of events that
+# overflows the reader's buffer (a real SYN_DROPPED, resynchronised with
+# EVIOCGMTSLOTS), and a panel unplugged with two fingers down. On the host, what watch saw
+# is compared with `marionette replay --contacts` of the same recording.
+#
+# usage: tests/vm/input_uinput.sh [RECORDING.evemu]
+# env:   MARIONETTE_BIN (default target/debug/marionette),
+#        MARIONETTE_VM_CACHE (kernel cache, default target/vm-cache)
+# needs: qemu-system-x86_64, busybox (static), cpio, python3
+#        apt-get install qemu-system-x86 busybox-static cpio python3
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin=${MARIONETTE_BIN:-$root/target/debug/marionette}
+cache=${MARIONETTE_VM_CACHE:-$root/target/vm-cache}
+rec=${1:-$root/../shared/recordings/evemu/atmel-maxtouch.4-finger-drag-down.evemu}
+
+for tool in qemu-system-x86_64 cpio python3; do
+    command -v "$tool" >/dev/null || { echo "vm test: $tool is missing: apt-get install qemu-system-x86 busybox-static cpio python3" >&2; exit 69; }
+done
+busybox=/bin/busybox
+linkage=$(ldd "$busybox" 2>&1 || true)
+if [ ! -x "$busybox" ] || [[ "$linkage" != *"not a dynamic executable"* ]]; then
+    echo "vm test: a static busybox is needed at $busybox: apt-get install busybox-static" >&2
+    exit 69
+fi
+[ -x "$bin" ] || { echo "vm test: $bin not built (cargo build)" >&2; exit 66; }
+[ -f "$rec" ] || { echo "vm test: recording $rec not found" >&2; exit 66; }
+
+# The kernel and its evdev/uinput modules, cached.
+mkdir -p "$cache"
+if [ ! -f "$cache/vmlinuz" ] || [ ! -f "$cache/uinput.ko" ]; then
+    pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ {print $2; exit}')
+    [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package (apt-get update first)" >&2; exit 69; }
+    tmp=$(mktemp -d)
+    (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
+    dpkg -x "$tmp"/*.deb "$tmp/x"
+    cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
+    for m in evdev uinput; do
+        f=$(find "$tmp/x/lib/modules" -name "$m.ko*" | head -n1)
+        case "$f" in
+            *.xz) xz -dc "$f" > "$cache/$m.ko" ;;
+            *.zst) zstd -qdc "$f" > "$cache/$m.ko" ;;
+            *) cp "$f" "$cache/$m.ko" ;;
+        esac
+    done
+    rm -rf "$tmp"
+fi
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+ird="$work/initrd"
+mkdir -p "$ird"/{bin,dev,proc,sys,tmp,modules}
+cp "$busybox" "$ird/bin/busybox"
+cp "$bin" "$ird/bin/marionette"
+# The binary's shared libraries, at their own paths.
+ldd "$bin" | awk '/=> \// {print $3} /^\t\// {print $1}' | while read -r lib; do
+    mkdir -p "$ird$(dirname "$lib")"
+    cp -L "$lib" "$ird$lib"
+done
+cp "$cache/evdev.ko" "$cache/uinput.ko" "$ird/modules/"
+cp "$rec" "$ird/rec.evemu"
+cp "$root/tests/data/burst-overflow.evemu" "$ird/burst.evemu"
+cp "$root/tests/data/unplug-mid-drag.evemu" "$ird/middrag.evemu"
+cat > "$ird/m.toml" <<'TOML'
+[input]
+rescan_interval_ms = 100
+grab = true
+TOML
+cat > "$ird/init" <<'INIT'
+#!/bin/busybox sh
+/bin/busybox --install -s /bin
+export PATH=/bin
+mount -t proc proc /proc; mount -t sysfs sys /sys; mount -t devtmpfs dev /dev
+insmod /modules/evdev.ko; insmod /modules/uinput.ko
+m="marionette --config /m.toml"
+$m watch --seconds 12 > /tmp/watch.jsonl 2> /tmp/watch.log &
+watcher=$!
+sleep 1
+$m play /rec.evemu --settle-ms 600 2> /tmp/play1.log; echo "play1 rc=$?" >> /tmp/rc
+sleep 1
+$m play /rec.evemu --settle-ms 600 2> /tmp/play2.log &
+sleep 0.3
+$m list-devices > /tmp/list.txt 2>&1; echo "list rc=$?" >> /tmp/rc
+wait $!; echo "play2 rc=$?" >> /tmp/rc
+sleep 1
+# A burst that overflows the reader's buffer: SYN_DROPPED, resync from the kernel.
+$m play /burst.evemu --settle-ms 600 2> /tmp/play3.log; echo "play3 rc=$?" >> /tmp/rc
+sleep 1
+# A panel that disappears with two fingers down.
+$m play /middrag.evemu --settle-ms 600 2> /tmp/play4.log; echo "play4 rc=$?" >> /tmp/rc
+wait $watcher; echo "watch rc=$?" >> /tmp/rc
+for f in rc list.txt watch.log play1.log play2.log play3.log play4.log watch.jsonl; do
+    echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
+done
+poweroff -f
+INIT
+chmod +x "$ird/init"
+(cd "$ird" && find . | cpio -o -H newc --quiet | gzip -1 > "$work/initrd.gz")
+
+timeout 300 qemu-system-x86_64 -accel tcg -cpu max -m 512 -smp 1 -nic none -display none \
+    -serial "file:$work/console.log" -monitor none -no-reboot \
+    -kernel "$cache/vmlinuz" -initrd "$work/initrd.gz" \
+    -append "console=ttyS0 quiet panic=-1 rdinit=/init" || true
+
+out=${MARIONETTE_VM_OUT:-$work/out}
+mkdir -p "$out"
+python3 - "$work/console.log" "$out" <<'PY'
+import re, sys
+text = open(sys.argv[1], errors="replace").read().replace("\r", "")
+for name, body in re.findall(r"=== BEGIN (\S+)\n(.*?)=== END \1", text, re.S):
+    open(f"{sys.argv[2]}/{name}", "w").write(body)
+PY
+if [ ! -f "$out/watch.jsonl" ]; then
+    echo "vm test: the guest did not report back; console:" >&2
+    tail -n 40 "$work/console.log" >&2
+    exit 1
+fi
+"$bin" replay "$rec" --contacts > "$out/expected.jsonl"
+"$bin" replay "$root/tests/data/burst-overflow.evemu" --contacts > "$out/expected-burst.jsonl"
+python3 "$here/check_watch.py" "$out"
