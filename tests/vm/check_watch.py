@@ -6,6 +6,8 @@
 - the burst: events were lost (SYN_DROPPED), yet after the resync the
   fingers lift where the recording lifts them and none stays down;
 - the panel unplugged mid-drag: its two fingers are cancelled;
+- `marionette record` of the panel while it played gives a recording whose
+  replay has the same touch frames as the original's;
 - every command exits 0."""
 import json
 import sys
@@ -57,6 +59,12 @@ if len(added) >= 4:
     cancelled = [c for c in mid[-1]["contacts"] if c["phase"] == "cancel"] if mid else []
     if len(cancelled) != 2 or down_at_end(mid):
         failures.append(f"unplug mid-drag: last frame {mid[-1] if mid else None}, want 2 cancelled and none down")
+recorded = [shape(json.loads(l)["contacts"]) for l in read("recorded.jsonl").splitlines() if l.strip()]
+if recorded != want:
+    failures.append(f"the recording made in the VM replays to {len(recorded)} touch frames, the original to {len(want)}"
+                    + ("" if len(recorded) != len(want) else " (different contents)"))
+else:
+    print(f"vm: record: the recording made in the VM replays identically ({len(recorded)} touch frames)")
 if "touchscreen" not in read("list.txt"):
     failures.append("list-devices did not show the touchscreen: " + read("list.txt"))
 print(f"vm: {len(added)} plugs, {len(removed)} unplugs, {len(want)} touch frames per plug")

@@ -7,7 +7,8 @@
 # it, twice: the panel disappears when the first play ends (unplug) and comes
 # back as a new node with the second (replug). Then a burst of events that
 # overflows the reader's buffer (a real SYN_DROPPED, resynchronised with
-# EVIOCGMTSLOTS), and a panel unplugged with two fingers down. On the host, what watch saw
+# EVIOCGMTSLOTS), a panel unplugged with two fingers down, and
+# `marionette record` of the panel while it plays. On the host, what watch saw
 # is compared with `marionette replay --contacts` of the same recording.
 #
 # usage: tests/vm/input_uinput.sh [RECORDING.evemu]
@@ -97,7 +98,13 @@ sleep 1
 # A panel that disappears with two fingers down.
 $m play /middrag.evemu --settle-ms 600 2> /tmp/play4.log; echo "play4 rc=$?" >> /tmp/rc
 wait $watcher; echo "watch rc=$?" >> /tmp/rc
-for f in rc list.txt watch.log play1.log play2.log play3.log play4.log watch.jsonl; do
+# Record the panel while it plays (watch has let go of its grab by now).
+$m play /rec.evemu --settle-ms 1200 2> /tmp/play5.log &
+player=$!
+sleep 0.5
+$m record --out /tmp/recorded.evemu --seconds 3 2> /tmp/record.log; echo "record rc=$?" >> /tmp/rc
+wait $player; echo "play5 rc=$?" >> /tmp/rc
+for f in rc list.txt watch.log play1.log play2.log play3.log play4.log record.log recorded.evemu watch.jsonl; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f
@@ -125,4 +132,5 @@ if [ ! -f "$out/watch.jsonl" ]; then
 fi
 "$bin" replay "$rec" --contacts > "$out/expected.jsonl"
 "$bin" replay "$root/tests/data/burst-overflow.evemu" --contacts > "$out/expected-burst.jsonl"
+"$bin" replay "$out/recorded.evemu" --contacts > "$out/recorded.jsonl" || true
 python3 "$here/check_watch.py" "$out"
