@@ -21,4 +21,5 @@
 //! origin top left with y down.
 
 pub mod app;
+pub mod character;
 pub mod input;

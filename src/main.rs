@@ -37,9 +37,9 @@ enum Command {
         #[arg(long, default_value = "demo-out")]
         out: PathBuf,
     },
-    /// Describe a recording as one JSON object
+    /// Describe an evemu recording or a BVH motion file as one JSON object
     Inspect {
-        /// An evemu recording
+        /// An evemu recording, or a .bvh file
         file: PathBuf,
     },
     /// Replay a recording through the input stack
@@ -193,8 +193,53 @@ fn stdout_error(e: std::io::Error) -> Failure {
 }
 
 fn inspect(file: &Path) -> Result<(), Failure> {
+    if file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+    {
+        return inspect_bvh(file);
+    }
     let rec = Recording::read_file(file)?;
     let (summary, _) = pipeline::summarize(&rec);
+    let json = serde_json::to_string(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+/// What `inspect FILE.bvh` prints.
+#[derive(serde::Serialize)]
+struct BvhSummary {
+    joints: usize,
+    frames: usize,
+    frame_time: f64,
+    height_m: f64,
+    scale_to_m: f64,
+    roles: std::collections::BTreeMap<String, String>,
+}
+
+fn inspect_bvh(file: &Path) -> Result<(), Failure> {
+    use marionette::character::bvh::{self, BvhError};
+    use marionette::character::motion::{Clip, ImportSettings};
+    let parsed = bvh::read_file(file).map_err(|e| {
+        let code = match &e {
+            BvhError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+                exit::NOINPUT
+            }
+            BvhError::Io { .. } => exit::IOERR,
+            BvhError::Syntax { .. } => exit::DATAERR,
+        };
+        Failure::new(code, e)
+    })?;
+    let frames = parsed.frames.len();
+    let clip = Clip::from_bvh(parsed, &ImportSettings::default())
+        .map_err(|e| Failure::new(exit::DATAERR, format!("{}: {e}", file.display())))?;
+    let summary = BvhSummary {
+        joints: clip.skeleton.len(),
+        frames,
+        frame_time: clip.frame_time,
+        height_m: (clip.height_m * 1e4).round() / 1e4,
+        scale_to_m: clip.scale_to_m,
+        roles: clip.roles.names(&clip.skeleton),
+    };
     let json = serde_json::to_string(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }

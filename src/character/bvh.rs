@@ -1,0 +1,518 @@
+//! BVH motion files, read and written.
+//!
+//! The reader takes what real files contain: any rotation order per joint,
+//! translation channels on the root only or on every joint, `End Site`s,
+//! CRLF, tabs and runs of spaces, values wrapped over lines, offsets that are
+//! not axis-aligned, and any length unit (see [`detect_scale`]). A malformed
+//! file is a [`BvhError`] naming the file, the line and what was expected;
+//! it never panics.
+//!
+//! The writer produces a conventional layout that Blender's importer reads:
+//! `Xposition Yposition Zposition` where the source had translation channels,
+//! and `Zrotation Yrotation Xrotation` everywhere, in metres and degrees.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use glam::{DQuat, DVec3, EulerRot};
+use thiserror::Error;
+
+use super::skeleton::{Joint, Pose, Skeleton};
+
+/// Most joints a file may declare.
+pub const MAX_JOINTS: usize = 1024;
+/// Most channel values a file may hold (frames × channels).
+pub const MAX_VALUES: usize = 400_000_000;
+
+/// Errors reading a BVH file.
+#[derive(Debug, Error)]
+pub enum BvhError {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}: {message}")]
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+}
+
+impl BvhError {
+    #[must_use]
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            BvhError::Syntax { line, .. } => Some(*line),
+            BvhError::Io { .. } => None,
+        }
+    }
+}
+
+/// One channel of a joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Channel {
+    Xposition,
+    Yposition,
+    Zposition,
+    Xrotation,
+    Yrotation,
+    Zrotation,
+}
+
+impl Channel {
+    fn parse(s: &str) -> Option<Self> {
+        Some(match s.to_ascii_lowercase().as_str() {
+            "xposition" => Self::Xposition,
+            "yposition" => Self::Yposition,
+            "zposition" => Self::Zposition,
+            "xrotation" => Self::Xrotation,
+            "yrotation" => Self::Yrotation,
+            "zrotation" => Self::Zrotation,
+            _ => return None,
+        })
+    }
+
+    fn is_position(self) -> bool {
+        matches!(self, Self::Xposition | Self::Yposition | Self::Zposition)
+    }
+}
+
+/// A BVH file as written: hierarchy in file units, channels, raw frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BvhFile {
+    pub skeleton: Skeleton,
+    /// Channels of each joint, in file order.
+    pub channels: Vec<Vec<Channel>>,
+    pub frame_time: f64,
+    /// One posture per frame, in file units.
+    pub frames: Vec<Pose>,
+}
+
+impl BvhFile {
+    /// Whether any joint but the root has translation channels.
+    #[must_use]
+    pub fn has_joint_translations(&self) -> bool {
+        self.channels
+            .iter()
+            .skip(1)
+            .any(|c| c.iter().any(|ch| ch.is_position()))
+    }
+}
+
+struct Tokens<'a> {
+    toks: Vec<(usize, &'a str)>,
+    pos: usize,
+    path: &'a Path,
+    last_line: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn new(text: &'a str, path: &'a Path) -> Self {
+        let mut toks = Vec::new();
+        let mut last_line = 1;
+        for (i, line) in text.lines().enumerate() {
+            for t in line.split_whitespace() {
+                toks.push((i + 1, t));
+            }
+            last_line = i + 1;
+        }
+        Self {
+            toks,
+            pos: 0,
+            path,
+            last_line,
+        }
+    }
+
+    fn line(&self) -> usize {
+        self.toks.get(self.pos).map_or(self.last_line, |t| t.0)
+    }
+
+    fn err(&self, message: impl Into<String>) -> BvhError {
+        BvhError::Syntax {
+            path: self.path.to_owned(),
+            line: self.line(),
+            message: message.into(),
+        }
+    }
+
+    fn peek(&self) -> Option<&'a str> {
+        self.toks.get(self.pos).map(|t| t.1)
+    }
+
+    fn next(&mut self, what: &str) -> Result<&'a str, BvhError> {
+        let t = self
+            .peek()
+            .ok_or_else(|| self.err(format!("expected {what}, found the end of the file")))?;
+        self.pos += 1;
+        Ok(t)
+    }
+
+    fn expect(&mut self, word: &str) -> Result<(), BvhError> {
+        let line = self.line();
+        let t = self.next(&format!("`{word}`"))?;
+        if t.eq_ignore_ascii_case(word) {
+            Ok(())
+        } else {
+            Err(BvhError::Syntax {
+                path: self.path.to_owned(),
+                line,
+                message: format!("expected `{word}`, found `{t}`"),
+            })
+        }
+    }
+
+    fn number(&mut self, what: &str) -> Result<f64, BvhError> {
+        let line = self.line();
+        let t = self.next(what)?;
+        match t.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(BvhError::Syntax {
+                path: self.path.to_owned(),
+                line,
+                message: format!("expected {what} (a finite number), found `{t}`"),
+            }),
+        }
+    }
+
+    /// The rest of the current token's line, as a name.
+    fn rest_of_line(&mut self, what: &str) -> Result<String, BvhError> {
+        let line = self.line();
+        let mut parts = Vec::new();
+        while let Some((l, t)) = self.toks.get(self.pos) {
+            if *l != line || *t == "{" {
+                break;
+            }
+            parts.push(*t);
+            self.pos += 1;
+        }
+        if parts.is_empty() {
+            return Err(self.err(format!("expected {what}")));
+        }
+        Ok(parts.join(" "))
+    }
+}
+
+/// Parse BVH text; `path` is used in messages.
+pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
+    let mut t = Tokens::new(text, path);
+    t.expect("HIERARCHY")?;
+    let mut skeleton = Skeleton::default();
+    let mut channels: Vec<Vec<Channel>> = Vec::new();
+    let kw = t.next("`ROOT`")?;
+    if !kw.eq_ignore_ascii_case("ROOT") {
+        t.pos -= 1;
+        return Err(t.err(format!("expected `ROOT`, found `{kw}`")));
+    }
+    parse_joint(&mut t, &mut skeleton, &mut channels, None)?;
+    if let Some(w) = t.peek() {
+        if w.eq_ignore_ascii_case("ROOT") {
+            return Err(t.err("a second ROOT: marionette reads one skeleton per file"));
+        }
+    }
+    t.expect("MOTION")?;
+    t.expect("Frames:")?;
+    let line = t.line();
+    let frames_declared = t.number("the frame count")?;
+    if frames_declared < 0.0 || frames_declared.fract() != 0.0 {
+        return Err(BvhError::Syntax {
+            path: path.to_owned(),
+            line,
+            message: format!("expected a whole number of frames, found {frames_declared}"),
+        });
+    }
+    t.expect("Frame")?;
+    t.expect("Time:")?;
+    let line = t.line();
+    let frame_time = t.number("the frame time in seconds")?;
+    if frame_time <= 0.0 || frame_time > 10.0 {
+        return Err(BvhError::Syntax {
+            path: path.to_owned(),
+            line,
+            message: format!(
+                "frame time must be above 0 and at most 10 seconds, found {frame_time}"
+            ),
+        });
+    }
+    let per_frame: usize = channels.iter().map(Vec::len).sum();
+    let remaining = t.toks.len() - t.pos;
+    if per_frame == 0 {
+        return Err(t.err("the hierarchy has no channels"));
+    }
+    if remaining > MAX_VALUES {
+        return Err(t.err(format!(
+            "{remaining} channel values is more than marionette reads ({MAX_VALUES})"
+        )));
+    }
+    let declared = frames_declared as usize;
+    let available = remaining / per_frame;
+    if available < declared {
+        let line = t.toks.last().map_or(t.last_line, |x| x.0);
+        return Err(BvhError::Syntax {
+            path: path.to_owned(),
+            line,
+            message: format!(
+                "the header says {declared} frames of {per_frame} values, but the file ends after {available} complete frames"
+            ),
+        });
+    }
+    if remaining != declared * per_frame {
+        tracing::warn!(path = %path.display(), declared, extra_values = remaining - declared * per_frame, "values after the declared frames are ignored");
+    }
+    let mut frames = Vec::with_capacity(declared);
+    for _ in 0..declared {
+        let mut pose = skeleton.rest_pose();
+        for (j, chans) in channels.iter().enumerate() {
+            let mut rot = DQuat::IDENTITY;
+            let mut trans = skeleton.joints[j].offset;
+            for ch in chans {
+                let v = t.number("a channel value")?;
+                match ch {
+                    Channel::Xposition => trans.x = v,
+                    Channel::Yposition => trans.y = v,
+                    Channel::Zposition => trans.z = v,
+                    Channel::Xrotation => rot *= DQuat::from_rotation_x(v.to_radians()),
+                    Channel::Yrotation => rot *= DQuat::from_rotation_y(v.to_radians()),
+                    Channel::Zrotation => rot *= DQuat::from_rotation_z(v.to_radians()),
+                }
+            }
+            pose.translations[j] = trans;
+            pose.rotations[j] = rot.normalize();
+        }
+        frames.push(pose);
+    }
+    Ok(BvhFile {
+        skeleton,
+        channels,
+        frame_time,
+        frames,
+    })
+}
+
+fn parse_joint(
+    t: &mut Tokens<'_>,
+    skeleton: &mut Skeleton,
+    channels: &mut Vec<Vec<Channel>>,
+    parent: Option<usize>,
+) -> Result<(), BvhError> {
+    let name = t.rest_of_line("a joint name")?;
+    if skeleton.joints.len() >= MAX_JOINTS {
+        return Err(t.err(format!("more than {MAX_JOINTS} joints")));
+    }
+    if skeleton.find(&name).is_some() {
+        return Err(t.err(format!("joint name `{name}` is used twice")));
+    }
+    let index = skeleton.joints.len();
+    skeleton.joints.push(Joint {
+        name,
+        parent,
+        offset: DVec3::ZERO,
+        end_site: None,
+    });
+    channels.push(Vec::new());
+    t.expect("{")?;
+    loop {
+        let line = t.line();
+        let word = t.next("`OFFSET`, `CHANNELS`, `JOINT`, `End Site` or `}`")?;
+        match word.to_ascii_uppercase().as_str() {
+            "OFFSET" => {
+                let x = t.number("the OFFSET's x")?;
+                let y = t.number("the OFFSET's y")?;
+                let z = t.number("the OFFSET's z")?;
+                skeleton.joints[index].offset = DVec3::new(x, y, z);
+            }
+            "CHANNELS" => {
+                let n_line = t.line();
+                let n = t.number("the number of channels")?;
+                if !(0.0..=6.0).contains(&n) || n.fract() != 0.0 {
+                    return Err(BvhError::Syntax {
+                        path: t.path.to_owned(),
+                        line: n_line,
+                        message: format!("a joint has 0 to 6 channels, found {n}"),
+                    });
+                }
+                let mut list = Vec::new();
+                for _ in 0..n as usize {
+                    let cline = t.line();
+                    let c = t.next("a channel name")?;
+                    let ch = Channel::parse(c).ok_or_else(|| BvhError::Syntax {
+                        path: t.path.to_owned(),
+                        line: cline,
+                        message: format!("expected a channel (Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation), found `{c}`"),
+                    })?;
+                    if list.contains(&ch) {
+                        return Err(BvhError::Syntax {
+                            path: t.path.to_owned(),
+                            line: cline,
+                            message: format!("channel `{c}` appears twice"),
+                        });
+                    }
+                    list.push(ch);
+                }
+                channels[index] = list;
+            }
+            "JOINT" => parse_joint(t, skeleton, channels, Some(index))?,
+            "END" => {
+                t.expect("Site")?;
+                t.expect("{")?;
+                t.expect("OFFSET")?;
+                let x = t.number("the End Site's x")?;
+                let y = t.number("the End Site's y")?;
+                let z = t.number("the End Site's z")?;
+                t.expect("}")?;
+                skeleton.joints[index].end_site = Some(DVec3::new(x, y, z));
+            }
+            "}" => return Ok(()),
+            _ => {
+                return Err(BvhError::Syntax {
+                    path: t.path.to_owned(),
+                    line,
+                    message: format!(
+                        "expected `OFFSET`, `CHANNELS`, `JOINT`, `End Site` or `}}`, found `{word}`"
+                    ),
+                });
+            }
+        }
+    }
+}
+
+/// Read a BVH file from disk.
+pub fn read_file(path: &Path) -> Result<BvhFile, BvhError> {
+    let bytes = std::fs::read(path).map_err(|source| BvhError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse(&String::from_utf8_lossy(&bytes), path)
+}
+
+/// Write a skeleton and postures (metres) as BVH. Joints whose
+/// `translates[j]` is set get translation channels (the root always does).
+#[must_use]
+pub fn write(skeleton: &Skeleton, translates: &[bool], frames: &[Pose], frame_time: f64) -> String {
+    let mut s = String::from("HIERARCHY\n");
+    write_joint(&mut s, skeleton, translates, 0, 0);
+    let _ = writeln!(
+        s,
+        "MOTION\nFrames: {}\nFrame Time: {:.8}",
+        frames.len(),
+        frame_time
+    );
+    for pose in frames {
+        let mut first = true;
+        for (j, _) in skeleton.joints.iter().enumerate() {
+            let mut push = |v: f64| {
+                if !first {
+                    s.push(' ');
+                }
+                first = false;
+                // Avoid "-0.000000".
+                let v = if v.abs() < 5e-10 { 0.0 } else { v };
+                let _ = write!(s, "{v:.6}");
+            };
+            if j == 0 || translates.get(j).copied().unwrap_or(false) {
+                let p = pose.translations[j];
+                push(p.x);
+                push(p.y);
+                push(p.z);
+            }
+            let (z, y, x) = pose.rotations[j].to_euler(EulerRot::ZYX);
+            push(z.to_degrees());
+            push(y.to_degrees());
+            push(x.to_degrees());
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn write_joint(s: &mut String, skeleton: &Skeleton, translates: &[bool], j: usize, depth: usize) {
+    let ind = "\t".repeat(depth);
+    let joint = &skeleton.joints[j];
+    let kw = if j == 0 { "ROOT" } else { "JOINT" };
+    let _ = writeln!(s, "{ind}{kw} {}\n{ind}{{", joint.name);
+    let o = joint.offset;
+    let _ = writeln!(s, "{ind}\tOFFSET {:.6} {:.6} {:.6}", o.x, o.y, o.z);
+    if j == 0 || translates.get(j).copied().unwrap_or(false) {
+        let _ = writeln!(
+            s,
+            "{ind}\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation"
+        );
+    } else {
+        let _ = writeln!(s, "{ind}\tCHANNELS 3 Zrotation Yrotation Xrotation");
+    }
+    for c in skeleton.children(j).collect::<Vec<_>>() {
+        write_joint(s, skeleton, translates, c, depth + 1);
+    }
+    if let Some(e) = joint.end_site {
+        let _ = writeln!(
+            s,
+            "{ind}\tEnd Site\n{ind}\t{{\n{ind}\t\tOFFSET {:.6} {:.6} {:.6}\n{ind}\t}}",
+            e.x, e.y, e.z
+        );
+    }
+    let _ = writeln!(s, "{ind}}}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::character::skeleton::forward_kinematics;
+
+    const SMALL: &str = "HIERARCHY\r\nROOT Hips\r\n{\r\n\tOFFSET 0 0 0\r\n\tCHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation\r\n\tJOINT Leg\r\n\t{\r\n\t\tOFFSET  0.1   -0.4 0.05\r\n\t\tCHANNELS 3 Xrotation Zrotation Yrotation\r\n\t\tEnd Site\r\n\t\t{\r\n\t\t\tOFFSET 0 -0.4 0\r\n\t\t}\r\n\t}\r\n}\r\nMOTION\r\nFrames: 2\r\nFrame Time: 0.0333333\r\n1 2 3 10 20 30 40 50\r\n60\r\n0 0 0 0 0 0 0 0 0\r\n";
+
+    #[test]
+    fn parses_any_rotation_order_and_wrapped_values() {
+        let f = parse(SMALL, Path::new("small.bvh")).unwrap();
+        assert_eq!(f.skeleton.len(), 2);
+        assert_eq!(f.frames.len(), 2);
+        assert_eq!(f.frames[0].translations[0], DVec3::new(1.0, 2.0, 3.0));
+        let want = DQuat::from_rotation_y(10f64.to_radians())
+            * DQuat::from_rotation_x(20f64.to_radians())
+            * DQuat::from_rotation_z(30f64.to_radians());
+        assert!(f.frames[0].rotations[0].angle_between(want) < 1e-12);
+        let want = DQuat::from_rotation_x(40f64.to_radians())
+            * DQuat::from_rotation_z(50f64.to_radians())
+            * DQuat::from_rotation_y(60f64.to_radians());
+        assert!(f.frames[0].rotations[1].angle_between(want) < 1e-12);
+    }
+
+    #[test]
+    fn writer_round_trips_positions() {
+        let f = parse(SMALL, Path::new("small.bvh")).unwrap();
+        let text = write(&f.skeleton, &[true, false], &f.frames, f.frame_time);
+        let g = parse(&text, Path::new("again.bvh")).unwrap();
+        for (a, b) in f.frames.iter().zip(&g.frames) {
+            let wa = forward_kinematics(&f.skeleton, a);
+            let wb = forward_kinematics(&g.skeleton, b);
+            for (pa, pb) in wa.positions.iter().zip(&wb.positions) {
+                assert!((*pa - *pb).length() < 1e-6);
+            }
+            assert!(
+                (wa.end_site(&f.skeleton, 1).unwrap() - wb.end_site(&g.skeleton, 1).unwrap())
+                    .length()
+                    < 1e-6
+            );
+        }
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let bad = SMALL.replace("CHANNELS 3 Xrotation", "CHANNELS 3 Wrotation");
+        let e = parse(&bad, Path::new("f.bvh")).unwrap_err();
+        assert_eq!(e.line(), Some(9), "{e}");
+        assert!(
+            e.to_string().contains("f.bvh:9") && e.to_string().contains("Wrotation"),
+            "{e}"
+        );
+        let e = parse(&SMALL.replace("Frames: 2", "Frames: 3"), Path::new("f.bvh")).unwrap_err();
+        assert!(e.to_string().contains("2 complete frames"), "{e}");
+        let e = parse("HIERARCHY\nROOT a\n{\nOFFSET 0 0\n}", Path::new("f.bvh")).unwrap_err();
+        assert_eq!(e.line(), Some(5), "{e}");
+        assert!(parse("", Path::new("f")).is_err());
+        let e = parse(&SMALL.replace("1 2 3", "1 nan 3"), Path::new("f")).unwrap_err();
+        assert!(e.to_string().contains("finite"), "{e}");
+    }
+}

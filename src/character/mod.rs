@@ -1,0 +1,12 @@
+//! The character: skeleton, motion data, body-part roles and the motion
+//! library that the paper's learned models are built from.
+//!
+//! - [`skeleton`]: joints, poses, forward kinematics (the conventions).
+//! - [`bvh`]: BVH files in and out.
+//! - [`motion`]: a clip in metres, with units and T-pose frame resolved.
+//! - [`roles`]: which joint is the head, a hand, a foot...
+
+pub mod bvh;
+pub mod motion;
+pub mod roles;
+pub mod skeleton;
