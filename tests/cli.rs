@@ -201,3 +201,53 @@ fn play_without_uinput_says_what_to_do() {
     assert_eq!(out.status.code(), Some(69));
     assert!(String::from_utf8_lossy(&out.stderr).contains("uinput"));
 }
+
+#[test]
+fn inspect_bvh_prints_skeleton_units_and_roles() {
+    let path = common::shared_dir().join("mocap/cmu-mixed/jump/131_03.bvh");
+    let out = marionette(&["inspect", path.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["joints"], 31);
+    assert_eq!(v["frames"], 1102);
+    assert!((v["frame_time"].as_f64().unwrap() - 0.0083333).abs() < 1e-9);
+    assert!((v["scale_to_m"].as_f64().unwrap() - 0.0254 / 0.45).abs() < 1e-9);
+    let h = v["height_m"].as_f64().unwrap();
+    assert!((1.2..2.1).contains(&h), "{h}");
+    // 3ds Max names: the "shoulder" joint is the upper arm, the wrist is the hand.
+    assert_eq!(v["roles"]["left_hand"], "LeftWrist");
+    assert_eq!(v["roles"]["left_elbow"], "LeftElbow");
+    assert_eq!(v["roles"]["left_shoulder"], "LeftShoulder");
+    assert_eq!(v["roles"]["right_knee"], "RightKnee");
+    assert_eq!(v["roles"]["pelvis"], "Hips");
+    assert_eq!(v["roles"].as_object().unwrap().len(), 16);
+}
+
+#[test]
+fn malformed_bvh_exits_65_naming_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.bvh");
+    std::fs::write(
+        &path,
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Xrotation Yrotation Qrotation\n}\n",
+    )
+    .unwrap();
+    let out = marionette(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.bvh:5") && err.contains("Qrotation"),
+        "{err}"
+    );
+    // A skeleton without recognisable body parts is malformed for marionette.
+    std::fs::write(&path, "HIERARCHY\nROOT a\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Xrotation Yrotation Zrotation\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n").unwrap();
+    let out = marionette(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot find the joints for pelvis"));
+    let out = marionette(&["inspect", "/nonexistent/x.bvh"]);
+    assert_eq!(out.status.code(), Some(66));
+}

@@ -5,8 +5,10 @@
 //! - [`bvh`]: BVH files in and out.
 //! - [`motion`]: a clip in metres, with units and T-pose frame resolved.
 //! - [`roles`]: which joint is the head, a hand, a foot...
+//! - [`library`]: a folder of clips and its `library.toml`.
 
 pub mod bvh;
+pub mod library;
 pub mod motion;
 pub mod roles;
 pub mod skeleton;

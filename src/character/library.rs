@@ -1,0 +1,350 @@
+//! Motion libraries: a folder of BVH files that share one hierarchy, and a
+//! `library.toml` that says which clips are for posing and which clips form
+//! each action model, with its primary body part and its condition segments
+//! (the paper's Fig. 5).
+//!
+//! ```toml
+//! [settings]                 # optional
+//! clips_dir = "clips"        # where the BVH files are, relative to this file (default: beside it)
+//! scale_to_m = 0.01          # file units to metres; detected when left out
+//! action_lead_in = 0.3       # how much of each action clip also feeds posing
+//!
+//! [roles]                    # optional: joints the names do not give away
+//! left_hand = "LeftWrist"
+//!
+//! [posing]
+//! clips = ["idle.bvh", "reach_high.bvh"]
+//!
+//! [[action]]
+//! name = "punch"
+//! clips = ["punch_1.bvh", "punch_2.bvh"]
+//! primary = "right_hand"
+//! segments = [               # generalized time 0..1, in order, the last ends at 1
+//!   { until = 0.3, still = true,  release = "backward" },  # wind-up: may pause; cancels on lift
+//!   { until = 0.7, still = false, release = "forward" },   # strike: keeps moving; completes on lift
+//!   { until = 1.0, still = true,  release = "forward" },   # recovery
+//! ]
+//! ```
+//!
+//! Loading validates everything and reports every problem at once.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use thiserror::Error;
+
+use super::bvh;
+use super::motion::{Clip, ImportSettings};
+use super::roles::Role;
+use super::skeleton::Skeleton;
+
+/// Everything wrong with a library, listed together.
+#[derive(Debug, Error)]
+#[error("motion library {dir} has {} problem{}:\n{}", .problems.len(), if .problems.len() == 1 { "" } else { "s" }, .problems.iter().map(|p| format!("  - {p}")).collect::<Vec<_>>().join("\n"))]
+pub struct LibraryError {
+    pub dir: PathBuf,
+    pub problems: Vec<String>,
+}
+
+/// Which way an action runs by itself when the fingers lift.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Release {
+    /// Finish the action.
+    Forward,
+    /// Cancel it, running back to the start.
+    Backward,
+}
+
+/// A condition segment of an action, in generalized time.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Segment {
+    /// The segment ends at this generalized time (the previous one's end is
+    /// its start).
+    pub until: f64,
+    /// Whether the character may stand still here while a finger rests.
+    pub still: bool,
+    /// Where time runs when all fingers lift here.
+    pub release: Release,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SettingsFile {
+    clips_dir: Option<PathBuf>,
+    scale_to_m: Option<f64>,
+    action_lead_in: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PosingFile {
+    #[serde(default)]
+    clips: Vec<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ActionFile {
+    name: String,
+    clips: Vec<String>,
+    primary: String,
+    segments: Vec<Segment>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LibraryFile {
+    #[serde(default)]
+    settings: SettingsFile,
+    #[serde(default)]
+    roles: BTreeMap<String, String>,
+    #[serde(default)]
+    posing: PosingFile,
+    #[serde(default)]
+    action: Vec<ActionFile>,
+}
+
+/// An action model's definition.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActionDef {
+    pub name: String,
+    /// Names of its clips (keys of [`Library::clips`]).
+    pub clips: Vec<String>,
+    pub primary: Role,
+    pub segments: Vec<Segment>,
+}
+
+impl ActionDef {
+    /// The segment in force at generalized time `t`.
+    #[must_use]
+    pub fn segment_at(&self, t: f64) -> &Segment {
+        self.segments
+            .iter()
+            .find(|s| t < s.until)
+            .unwrap_or_else(|| {
+                self.segments
+                    .last()
+                    .expect("validated: at least one segment")
+            })
+    }
+}
+
+/// A loaded, validated library.
+#[derive(Clone, Debug)]
+pub struct Library {
+    pub dir: PathBuf,
+    pub skeleton: Skeleton,
+    /// Every clip by file name.
+    pub clips: BTreeMap<String, Clip>,
+    pub posing: Vec<String>,
+    pub actions: Vec<ActionDef>,
+    /// Fraction (generalized time) of each action clip that also feeds the
+    /// posing model.
+    pub action_lead_in: f64,
+}
+
+impl Library {
+    /// Load and validate `dir/library.toml` and its clips.
+    pub fn load(dir: &Path) -> Result<Self, LibraryError> {
+        let mut problems = Vec::new();
+        let fail = |problems: Vec<String>| LibraryError {
+            dir: dir.to_owned(),
+            problems,
+        };
+        let toml_path = dir.join("library.toml");
+        let text = std::fs::read_to_string(&toml_path)
+            .map_err(|e| fail(vec![format!("cannot read {}: {e}", toml_path.display())]))?;
+        let file: LibraryFile = toml::from_str(&text).map_err(|e| {
+            fail(vec![format!(
+                "{}: {}",
+                toml_path.display(),
+                e.to_string().trim_end()
+            )])
+        })?;
+
+        let lead_in = file.settings.action_lead_in.unwrap_or(0.3);
+        if !(0.0..=1.0).contains(&lead_in) {
+            problems.push(format!(
+                "settings.action_lead_in must be between 0 and 1, found {lead_in}"
+            ));
+        }
+        if let Some(s) = file.settings.scale_to_m {
+            if !(s.is_finite() && s > 0.0) {
+                problems.push(format!(
+                    "settings.scale_to_m must be a positive number, found {s}"
+                ));
+            }
+        }
+        for key in file.roles.keys() {
+            if Role::from_name(key).is_none() {
+                problems.push(format!(
+                    "[roles] `{key}` is not a role; roles are {}",
+                    Role::ALL.map(Role::name).join(", ")
+                ));
+            }
+        }
+        let settings = ImportSettings {
+            scale_to_m: file
+                .settings
+                .scale_to_m
+                .filter(|s| s.is_finite() && *s > 0.0),
+            roles: file
+                .roles
+                .iter()
+                .filter(|(k, _)| Role::from_name(k).is_some())
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect(),
+        };
+
+        let clips_dir = file
+            .settings
+            .clips_dir
+            .as_ref()
+            .map_or_else(|| dir.to_owned(), |d| dir.join(d));
+        if !clips_dir.is_dir() {
+            problems.push(format!(
+                "settings.clips_dir: {} is not a folder",
+                clips_dir.display()
+            ));
+        }
+        // Every clip named anywhere, once.
+        let mut names: Vec<&String> = file.posing.clips.iter().collect();
+        for a in &file.action {
+            names.extend(a.clips.iter());
+        }
+        names.sort();
+        names.dedup();
+        if names.is_empty() {
+            problems.push("no clips: list posing clips in [posing] clips and action clips in [[action]] tables".to_owned());
+        }
+        let mut clips = BTreeMap::new();
+        let mut skeleton: Option<(String, Skeleton)> = None;
+        for name in names {
+            let path = clips_dir.join(name);
+            let parsed = match bvh::read_file(&path) {
+                Ok(p) => p,
+                Err(e) => {
+                    problems.push(e.to_string());
+                    continue;
+                }
+            };
+            match &skeleton {
+                None => skeleton = Some((name.clone(), parsed.skeleton.clone())),
+                Some((first, s)) => {
+                    if let Some(why) = hierarchy_difference(s, &parsed.skeleton) {
+                        problems.push(format!("{name}: its hierarchy differs from {first}'s ({why}); a library's clips share one skeleton"));
+                        continue;
+                    }
+                }
+            }
+            match Clip::from_bvh(parsed, &settings) {
+                Ok(c) => {
+                    clips.insert(name.clone(), c);
+                }
+                Err(e) => problems.push(format!("{name}: {e}")),
+            }
+        }
+        let mut actions = Vec::new();
+        let mut seen = BTreeMap::new();
+        for (i, a) in file.action.iter().enumerate() {
+            let label = if a.name.is_empty() {
+                format!("action #{}", i + 1)
+            } else {
+                format!("action `{}`", a.name)
+            };
+            if a.name.is_empty() {
+                problems.push(format!("{label}: needs a name"));
+            }
+            if seen.insert(a.name.clone(), i).is_some() {
+                problems.push(format!("{label}: the name is used twice"));
+            }
+            if a.clips.is_empty() {
+                problems.push(format!("{label}: needs at least one clip"));
+            }
+            let primary = Role::from_name(&a.primary);
+            if primary.is_none() {
+                problems.push(format!(
+                    "{label}: primary `{}` is not a role; roles are {}",
+                    a.primary,
+                    Role::ALL.map(Role::name).join(", ")
+                ));
+            }
+            problems.extend(
+                check_segments(&a.segments)
+                    .into_iter()
+                    .map(|p| format!("{label}: {p}")),
+            );
+            if let Some(primary) = primary {
+                actions.push(ActionDef {
+                    name: a.name.clone(),
+                    clips: a.clips.clone(),
+                    primary,
+                    segments: a.segments.clone(),
+                });
+            }
+        }
+        if !problems.is_empty() {
+            return Err(fail(problems));
+        }
+        let skeleton = clips
+            .values()
+            .next()
+            .map(|c| c.skeleton.clone())
+            .unwrap_or_default();
+        Ok(Self {
+            dir: dir.to_owned(),
+            skeleton,
+            clips,
+            posing: file.posing.clips,
+            actions,
+            action_lead_in: lead_in,
+        })
+    }
+}
+
+fn check_segments(segments: &[Segment]) -> Vec<String> {
+    let mut p = Vec::new();
+    if segments.is_empty() {
+        p.push("needs condition segments (`segments = [{ until = 1.0, still = true, release = \"forward\" }]` at least)".to_owned());
+        return p;
+    }
+    let mut prev = 0.0;
+    for (i, s) in segments.iter().enumerate() {
+        if !(s.until > prev && s.until <= 1.0) {
+            p.push(format!(
+                "segment {} ends at {}, which must be after {prev} and at most 1",
+                i + 1,
+                s.until
+            ));
+        }
+        prev = s.until;
+    }
+    if (prev - 1.0).abs() > 1e-9 {
+        p.push(format!(
+            "the last segment must end at 1 (generalized time), not {prev}"
+        ));
+    }
+    p
+}
+
+/// Why two hierarchies differ, if they do: joint count, names, parents.
+fn hierarchy_difference(a: &Skeleton, b: &Skeleton) -> Option<String> {
+    if a.len() != b.len() {
+        return Some(format!("{} joints against {}", b.len(), a.len()));
+    }
+    for (ja, jb) in a.joints.iter().zip(&b.joints) {
+        if ja.name != jb.name {
+            return Some(format!(
+                "joint `{}` where `{}` was expected",
+                jb.name, ja.name
+            ));
+        }
+        if ja.parent != jb.parent {
+            return Some(format!("joint `{}` has another parent", jb.name));
+        }
+    }
+    None
+}
