@@ -54,7 +54,7 @@ fn a_cmu_library_loads() {
     assert_eq!(lib.actions.len(), 2);
     assert_eq!(lib.actions[0].primary, Role::RightHand);
     assert_eq!(lib.actions[0].segment_at(0.1).release, Release::Backward);
-    assert_eq!(lib.actions[0].segment_at(0.5).still, false);
+    assert!(!lib.actions[0].segment_at(0.5).still);
     assert_eq!(lib.actions[0].segment_at(1.0).release, Release::Forward);
     assert!(lib.clips.values().all(|c| c.scale_to_m == 0.01));
 }
