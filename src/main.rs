@@ -79,6 +79,29 @@ enum Command {
         #[arg(long)]
         seconds: Option<f64>,
     },
+    /// Compile the default library's scores (keyframes) into BVH clips and
+    /// library.toml
+    AuthorLibrary {
+        /// Folder of score files (*.toml)
+        #[arg(long, default_value = "assets/library-src")]
+        src: PathBuf,
+        /// Output folder for the BVH files and library.toml
+        #[arg(long, default_value = "assets/library")]
+        out: PathBuf,
+    },
+    /// Draw each clip of a library as a contact sheet (stick figures, front
+    /// and side views) and report foot sliding, floor contact and joint limits
+    ContactSheet {
+        /// Library folder (with library.toml)
+        #[arg(long, default_value = "assets/library")]
+        library: PathBuf,
+        /// Output folder for the PNG files
+        #[arg(long, default_value = "contact-sheets")]
+        out: PathBuf,
+        /// Frames per sheet
+        #[arg(long, default_value_t = 10)]
+        frames: usize,
+    },
     /// List the input devices and what marionette makes of each
     ListDevices {
         /// One JSON object per line instead of a table
@@ -183,6 +206,27 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
                 .map_err(|e| Failure::new(e.exit_code(), e))
         }
         Command::ListDevices { json } => list_devices(config, json),
+        Command::AuthorLibrary { src, out } => {
+            let n = marionette::character::author::author_library(&src, &out).map_err(|e| {
+                let code = match &e {
+                    marionette::character::author::compile::AuthorError::Write { .. } => {
+                        exit::CANTCREAT
+                    }
+                    marionette::character::author::compile::AuthorError::List { .. } => {
+                        exit::NOINPUT
+                    }
+                    _ => exit::DATAERR,
+                };
+                Failure::new(code, e)
+            })?;
+            writeln!(std::io::stdout(), "wrote {n} files to {}", out.display())
+                .map_err(stdout_error)
+        }
+        Command::ContactSheet {
+            library,
+            out,
+            frames,
+        } => contact_sheets(&library, &out, frames),
         Command::Watch { seconds } => live::watch(config, seconds, &mut std::io::stdout().lock())
             .map_err(|e| Failure::new(e.exit_code(), e)),
     }
@@ -299,6 +343,48 @@ fn demo(config: &Config, out_dir: &Path) -> Result<(), Failure> {
     let mut stdout = std::io::stdout().lock();
     write!(stdout, "{summary}").map_err(stdout_error)?;
     writeln!(stdout, "touch frames written to {}", path.display()).map_err(stdout_error)
+}
+
+fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failure> {
+    use marionette::character::{checks, library::Library, sheet};
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    std::fs::create_dir_all(out).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot create {}: {e}", out.display()),
+        )
+    })?;
+    let mut stdout = std::io::stdout().lock();
+    for (name, clip) in &lib.clips {
+        let png = out.join(name.replace(".bvh", ".png"));
+        sheet::write_sheet(&png, &clip.skeleton, &clip.roles, &clip.frames, frames).map_err(
+            |e| {
+                Failure::new(
+                    exit::CANTCREAT,
+                    format!("cannot write {}: {e}", png.display()),
+                )
+            },
+        )?;
+        let r = checks::check(
+            &clip.skeleton,
+            &clip.roles,
+            &clip.frames,
+            0.0,
+            &checks::Limits::default(),
+        );
+        writeln!(
+            stdout,
+            "{name}: {} frames, slide {:.2} mm/frame ({}), below floor {:.1} mm, {} limit problems{}",
+            clip.frames.len(),
+            r.max_slide_mm,
+            r.worst_slide,
+            r.max_penetration_mm,
+            r.violations.len(),
+            r.violations.first().map(|v| format!(" ({v})")).unwrap_or_default()
+        )
+        .map_err(stdout_error)?;
+    }
+    writeln!(stdout, "sheets written to {}", out.display()).map_err(stdout_error)
 }
 
 const DEMO_RECORDING: &str = include_str!("../assets/recordings/demo-two-hands.evemu");

@@ -7,8 +7,11 @@
 //! - [`roles`]: which joint is the head, a hand, a foot...
 //! - [`library`]: a folder of clips and its `library.toml`.
 
+pub mod author;
 pub mod bvh;
+pub mod checks;
 pub mod library;
 pub mod motion;
 pub mod roles;
+pub mod sheet;
 pub mod skeleton;
