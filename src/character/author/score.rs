@@ -220,10 +220,12 @@ impl Score {
             ));
         }
         for v in &file.variant {
-            if !(v.speed > 0.1 && v.speed < 10.0)
-                || !(v.reach > 0.0 && v.reach < 5.0)
-                || !v.lift.is_finite()
-            {
+            let sane = v.speed > 0.1
+                && v.speed < 10.0
+                && v.reach > 0.0
+                && v.reach < 5.0
+                && v.lift.is_finite();
+            if !sane {
                 return Err(invalid(format!(
                     "variant {}: speed must be in 0.1..10, reach in 0..5, lift finite",
                     v.file
