@@ -30,6 +30,7 @@ pub struct Limits {
     pub elbow_flexion: f64,
     pub hip_flexion: f64,
     pub hip_extension: f64,
+    pub hip_abduction: f64,
     pub head_turn: f64,
     pub spine_turn: f64,
 }
@@ -41,6 +42,7 @@ impl Default for Limits {
             elbow_flexion: 155.0,
             hip_flexion: 125.0,
             hip_extension: 35.0,
+            hip_abduction: 45.0,
             head_turn: 80.0,
             spine_turn: 95.0,
         }
@@ -157,19 +159,29 @@ pub fn check(
             if flex > 10.0 && bulge.dot(forward) < -0.01 {
                 bad(format!("{knee} bends backwards"));
             }
-            let thigh = k - h;
-            let from_down = angle(thigh, -up);
-            let forwardness = thigh.dot(forward);
-            if forwardness > 0.0 && from_down > limits.hip_flexion {
+            // Flexion and extension in the pelvis's sagittal plane,
+            // abduction across it.
+            let thigh = (k - h).normalize();
+            let side = up.cross(forward);
+            let sagittal = thigh.dot(-up).atan2(thigh.dot(forward));
+            let pitch_from_down = 90.0 - sagittal.to_degrees();
+            let abduction = thigh.dot(side).abs().asin().to_degrees();
+            if pitch_from_down > limits.hip_flexion {
                 bad(format!(
-                    "{hip} flexed {from_down:.0}° (limit {})",
+                    "{hip} flexed {pitch_from_down:.0}° (limit {})",
                     limits.hip_flexion
                 ));
             }
-            if forwardness < 0.0 && from_down > limits.hip_extension {
+            if -pitch_from_down > limits.hip_extension {
                 bad(format!(
-                    "{hip} extended {from_down:.0}° backwards (limit {})",
-                    limits.hip_extension
+                    "{hip} extended {:.0}° backwards (limit {})",
+                    -pitch_from_down, limits.hip_extension
+                ));
+            }
+            if abduction > limits.hip_abduction {
+                bad(format!(
+                    "{hip} spread {abduction:.0}° sideways (limit {})",
+                    limits.hip_abduction
                 ));
             }
         }
