@@ -14,6 +14,9 @@
 //! - [`input`] turns panels (live evdev devices or evemu recordings) into
 //!   touch frames in screen pixels. Pure except [`input::live`] and
 //!   [`input::uinput`], which touch devices.
+//! - [`character`] holds the motion data the method learns from: skeletons,
+//!   BVH, body-part roles, motion libraries and the authoring of the default
+//!   library. Pure.
 //! - [`app`] is the application edge: configuration, exit codes, logging.
 //!
 //! Conventions, stated once: time is in microseconds from the events' own

@@ -79,6 +79,18 @@ enum Command {
         #[arg(long)]
         seconds: Option<f64>,
     },
+    /// Rewrite a BVH file in metres with a conventional channel layout
+    /// (a converter's T-pose frame dropped)
+    ConvertBvh {
+        /// Input BVH file
+        file: PathBuf,
+        /// Output BVH file
+        #[arg(long)]
+        out: PathBuf,
+        /// File units to metres [default: detected]
+        #[arg(long)]
+        scale_to_m: Option<f64>,
+    },
     /// Compile the default library's scores (keyframes) into BVH clips and
     /// library.toml
     AuthorLibrary {
@@ -206,6 +218,11 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
                 .map_err(|e| Failure::new(e.exit_code(), e))
         }
         Command::ListDevices { json } => list_devices(config, json),
+        Command::ConvertBvh {
+            file,
+            out,
+            scale_to_m,
+        } => convert_bvh(&file, &out, scale_to_m),
         Command::AuthorLibrary { src, out } => {
             let n = marionette::character::author::author_library(&src, &out).map_err(|e| {
                 let code = match &e {
@@ -260,7 +277,11 @@ struct BvhSummary {
     roles: std::collections::BTreeMap<String, String>,
 }
 
-fn inspect_bvh(file: &Path) -> Result<(), Failure> {
+/// Read and import a BVH file, with exit codes for its errors.
+fn read_clip(
+    file: &Path,
+    scale_to_m: Option<f64>,
+) -> Result<(usize, marionette::character::motion::Clip), Failure> {
     use marionette::character::bvh::{self, BvhError};
     use marionette::character::motion::{Clip, ImportSettings};
     let parsed = bvh::read_file(file).map_err(|e| {
@@ -274,8 +295,47 @@ fn inspect_bvh(file: &Path) -> Result<(), Failure> {
         Failure::new(code, e)
     })?;
     let frames = parsed.frames.len();
-    let clip = Clip::from_bvh(parsed, &ImportSettings::default())
+    let settings = ImportSettings {
+        scale_to_m,
+        ..ImportSettings::default()
+    };
+    let clip = Clip::from_bvh(parsed, &settings)
         .map_err(|e| Failure::new(exit::DATAERR, format!("{}: {e}", file.display())))?;
+    Ok((frames, clip))
+}
+
+fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> Result<(), Failure> {
+    let (_, clip) = read_clip(file, scale_to_m)?;
+    let text = marionette::character::bvh::write(
+        &clip.skeleton,
+        &clip.translates,
+        &clip.frames,
+        clip.frame_time,
+    );
+    std::fs::write(out, text).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", out.display()),
+        )
+    })?;
+    writeln!(
+        std::io::stdout(),
+        "wrote {} ({} frames, {} joints, unit {} m{})",
+        out.display(),
+        clip.frames.len(),
+        clip.skeleton.len(),
+        clip.scale_to_m,
+        if clip.dropped_tpose {
+            ", T-pose frame dropped"
+        } else {
+            ""
+        }
+    )
+    .map_err(stdout_error)
+}
+
+fn inspect_bvh(file: &Path) -> Result<(), Failure> {
+    let (frames, clip) = read_clip(file, None)?;
     let summary = BvhSummary {
         joints: clip.skeleton.len(),
         frames,

@@ -3,7 +3,7 @@
 //! The reader takes what real files contain: any rotation order per joint,
 //! translation channels on the root only or on every joint, `End Site`s,
 //! CRLF, tabs and runs of spaces, values wrapped over lines, offsets that are
-//! not axis-aligned, and any length unit (see [`detect_scale`]). A malformed
+//! not axis-aligned, and any length unit (see [`detect_scale`](super::motion::detect_scale)). A malformed
 //! file is a [`BvhError`] naming the file, the line and what was expected;
 //! it never panics.
 //!

@@ -88,7 +88,7 @@ pub struct SlotState {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ResyncSource {
     /// A live device: the caller reads [`KernelState`] and calls
-    /// [`ContactTracker::resync`] when [`ContactTracker::needs_resync`].
+    /// [`ContactTracker::resync`](super::tracker::ContactTracker::resync) when [`ContactTracker::needs_resync`](super::tracker::ContactTracker::needs_resync).
     Kernel,
     /// A recording: contacts that may have lifted unseen are cancelled, and
     /// come back as new contacts if the device goes on reporting them.
