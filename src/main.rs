@@ -91,6 +91,11 @@ enum Command {
         #[arg(long)]
         scale_to_m: Option<f64>,
     },
+    /// Measure the character controllers on held-out motion capture
+    Eval {
+        #[command(subcommand)]
+        what: EvalCommand,
+    },
     /// Compile the default library's scores (keyframes) into BVH clips and
     /// library.toml
     AuthorLibrary {
@@ -120,6 +125,44 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Subcommand)]
+enum EvalCommand {
+    /// Posing control: reconstruct held-out frames from N constrained parts
+    /// and print one JSON object (mpjpe_cm, constraint_err_px,
+    /// constraint_err_cm, ms_per_pose, poses)
+    Pose {
+        /// Library folder (with library.toml)
+        #[arg(long)]
+        library: PathBuf,
+        /// Held-out BVH clips of the library's skeleton
+        #[arg(long, num_args = 1.., required = true)]
+        test: Vec<PathBuf>,
+        /// Constrained parts, first N of right_hand, left_hand, right_foot, left_foot, head
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u8).range(1..=5))]
+        parts: u8,
+        #[arg(long, value_enum, default_value = "touch")]
+        mode: EvalMode,
+        #[arg(long, value_enum, default_value = "model")]
+        method: EvalMethod,
+        /// Frames sampled evenly from the test clips
+        #[arg(long, default_value_t = 200)]
+        frames: usize,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EvalMode {
+    Touch,
+    Targets,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EvalMethod {
+    Model,
+    Nearest,
+    CcdRest,
 }
 
 /// An error with the exit code it deserves.
@@ -223,6 +266,17 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
             out,
             scale_to_m,
         } => convert_bvh(&file, &out, scale_to_m),
+        Command::Eval {
+            what:
+                EvalCommand::Pose {
+                    library,
+                    test,
+                    parts,
+                    mode,
+                    method,
+                    frames,
+                },
+        } => eval_pose(&library, &test, parts, mode, method, frames),
         Command::AuthorLibrary { src, out } => {
             let n = marionette::character::author::author_library(&src, &out).map_err(|e| {
                 let code = match &e {
@@ -332,6 +386,65 @@ fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> Result<(), F
         }
     )
     .map_err(stdout_error)
+}
+
+fn eval_pose(
+    library: &Path,
+    tests: &[PathBuf],
+    parts: u8,
+    mode: EvalMode,
+    method: EvalMethod,
+    frames: usize,
+) -> Result<(), Failure> {
+    use marionette::character::library::Library;
+    use marionette::character::posing::{eval, model};
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let mut clips = Vec::new();
+    for t in tests {
+        let (_, clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;
+        if let Some(why) =
+            marionette::character::library::hierarchy_difference(&lib.skeleton, &clip.skeleton)
+        {
+            return Err(Failure::new(
+                exit::DATAERR,
+                format!("{}: not the library's skeleton ({why})", t.display()),
+            ));
+        }
+        clips.push(clip);
+    }
+    let (_, samples) = model::posing_samples(&lib);
+    if samples.is_empty() {
+        return Err(Failure::new(
+            exit::DATAERR,
+            format!("{}: the library has no posing samples", library.display()),
+        ));
+    }
+    tracing::info!(samples = samples.len(), "building the posing model");
+    let learned = model::LearnedModel::build(samples);
+    let rest = lib
+        .clips
+        .get(&lib.posing[0])
+        .or_else(|| lib.clips.values().next())
+        .expect("library has clips");
+    let refs: Vec<&marionette::character::motion::Clip> = clips.iter().collect();
+    let mode = match mode {
+        EvalMode::Touch => eval::Mode::Touch,
+        EvalMode::Targets => eval::Mode::Targets,
+    };
+    let method = match method {
+        EvalMethod::Model => eval::Method::Model,
+        EvalMethod::Nearest => eval::Method::Nearest,
+        EvalMethod::CcdRest => eval::Method::CcdRest,
+    };
+    let setup = eval::EvalSetup {
+        parts: usize::from(parts),
+        mode,
+        method,
+        frames,
+    };
+    let result = eval::eval_pose(&lib.skeleton, &learned, rest, &refs, setup);
+    let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
 fn inspect_bvh(file: &Path) -> Result<(), Failure> {

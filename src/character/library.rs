@@ -331,7 +331,8 @@ fn check_segments(segments: &[Segment]) -> Vec<String> {
 }
 
 /// Why two hierarchies differ, if they do: joint count, names, parents.
-fn hierarchy_difference(a: &Skeleton, b: &Skeleton) -> Option<String> {
+#[must_use]
+pub fn hierarchy_difference(a: &Skeleton, b: &Skeleton) -> Option<String> {
     if a.len() != b.len() {
         return Some(format!("{} joints against {}", b.len(), a.len()));
     }

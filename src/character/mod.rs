@@ -9,9 +9,11 @@
 
 pub mod author;
 pub mod bvh;
+pub mod camera;
 pub mod checks;
 pub mod library;
 pub mod motion;
+pub mod posing;
 pub mod roles;
 pub mod sheet;
 pub mod skeleton;

@@ -1,0 +1,193 @@
+//! `marionette eval pose`: how well posing control reconstructs held-out
+//! postures from a few constrained parts.
+//!
+//! For frames spread evenly over the test clips: place the character where
+//! the true frame stands and faces, constrain the first N of [right_hand,
+//! left_hand, right_foot, left_foot, head] to the true frame (touch mode:
+//! half-lines from a camera 3 m away at the character's side or 45°
+//! front-side, alternating; targets mode: the true 3-D points), synthesise,
+//! and measure.
+
+use std::time::Instant;
+
+use glam::{DQuat, DVec3};
+use serde::Serialize;
+
+use super::model::LearnedModel;
+use super::sample::{Placement, pose_of};
+use super::synth::{Constraint, SynthOptions, Target, apply_ik, synthesize};
+use crate::character::camera::Camera;
+use crate::character::motion::Clip;
+use crate::character::roles::Role;
+use crate::character::skeleton::{Skeleton, forward_kinematics};
+
+/// The order in which parts are constrained.
+pub const PARTS: [Role; 5] = [
+    Role::RightHand,
+    Role::LeftHand,
+    Role::RightFoot,
+    Role::LeftFoot,
+    Role::Head,
+];
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Touch,
+    Targets,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The learned model with the grid, blending and IK.
+    Model,
+    /// The single best sample.
+    Nearest,
+    /// CCD IK alone, from the library's first posing frame.
+    CcdRest,
+}
+
+/// What `eval pose` prints.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct EvalResult {
+    pub mpjpe_cm: f64,
+    pub constraint_err_px: f64,
+    pub constraint_err_cm: f64,
+    pub ms_per_pose: f64,
+    pub poses: usize,
+}
+
+/// The evaluation camera for test frame `k`: 3 m from the chest, at the
+/// character's side (even `k`) or 45° front-side (odd `k`), 1280 × 720.
+#[must_use]
+pub fn camera_for(k: usize, chest: DVec3, yaw: f64) -> Camera {
+    let angle = if k % 2 == 0 { 90f64 } else { 45f64 };
+    let dir = DQuat::from_rotation_y(yaw + angle.to_radians()) * DVec3::Z;
+    Camera {
+        eye: chest + dir * 3.0,
+        target: chest,
+        fov_y_deg: 45.0,
+        width: 1280.0,
+        height: 720.0,
+    }
+}
+
+/// What to evaluate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EvalSetup {
+    /// Constrain the first `parts` of [`PARTS`].
+    pub parts: usize,
+    pub mode: Mode,
+    pub method: Method,
+    /// Frames sampled evenly from the test clips.
+    pub frames: usize,
+}
+
+/// Run the evaluation.
+#[must_use]
+pub fn eval_pose(
+    skeleton: &Skeleton,
+    model: &LearnedModel,
+    rest: &Clip,
+    tests: &[&Clip],
+    setup: EvalSetup,
+) -> EvalResult {
+    let EvalSetup {
+        parts,
+        mode,
+        method,
+        frames,
+    } = setup;
+    let roles = &rest.roles;
+    let all: Vec<(&Clip, usize)> = tests
+        .iter()
+        .flat_map(|c| (0..c.frames.len()).map(move |k| (*c, k)))
+        .collect();
+    if all.is_empty() || frames == 0 {
+        return EvalResult::default();
+    }
+    let n = frames.min(all.len());
+    let parts = &PARTS[..parts.min(PARTS.len())];
+    let (mut mpjpe, mut err_cm, mut err_px, mut elapsed) = (0.0, 0.0, 0.0, 0.0);
+    let mut constrained = 0usize;
+    for k in 0..n {
+        let (clip, f) = all[k * (all.len() - 1) / (n - 1).max(1)];
+        let truth = forward_kinematics(skeleton, &clip.frames[f]);
+        let at = Placement::of(skeleton, roles, &clip.frames[f]);
+        let cam = camera_for(k, truth.positions[roles.get(Role::Chest)], at.yaw);
+        let constraints: Vec<Constraint> = parts
+            .iter()
+            .map(|&role| {
+                let p = truth.positions[roles.get(role)];
+                let target = match mode {
+                    Mode::Targets => Target::Point(p),
+                    Mode::Touch => Target::Ray(cam.ray(cam.project(p).unwrap_or_default())),
+                };
+                Constraint { role, target }
+            })
+            .collect();
+        let started = Instant::now();
+        let pose = match method {
+            Method::Model => synthesize(
+                skeleton,
+                roles,
+                model,
+                &constraints,
+                &at,
+                None,
+                &SynthOptions::default(),
+            ),
+            Method::Nearest => synthesize(
+                skeleton,
+                roles,
+                model,
+                &constraints,
+                &at,
+                None,
+                &SynthOptions {
+                    use_grid: false,
+                    blend: 1,
+                    ik: false,
+                    ..SynthOptions::default()
+                },
+            ),
+            Method::CcdRest => {
+                let mut pose = pose_of(skeleton, &model.samples[0], &at);
+                apply_ik(
+                    skeleton,
+                    roles,
+                    &mut pose,
+                    &constraints,
+                    None,
+                    f64::INFINITY,
+                );
+                pose
+            }
+        };
+        elapsed += started.elapsed().as_secs_f64();
+        let w = forward_kinematics(skeleton, &pose);
+        mpjpe += w
+            .positions
+            .iter()
+            .zip(&truth.positions)
+            .map(|(a, b)| (*a - *b).length())
+            .sum::<f64>()
+            / w.positions.len() as f64;
+        for c in &constraints {
+            let got = w.positions[roles.get(c.role)];
+            let want = truth.positions[roles.get(c.role)];
+            err_cm += c.target.distance(got);
+            if let (Some(a), Some(b)) = (cam.project(got), cam.project(want)) {
+                err_px += a.distance(b);
+            }
+            constrained += 1;
+        }
+    }
+    let round = |v: f64| (v * 1000.0).round() / 1000.0;
+    EvalResult {
+        mpjpe_cm: round(mpjpe / n as f64 * 100.0),
+        constraint_err_px: round(err_px / constrained.max(1) as f64),
+        constraint_err_cm: round(err_cm / constrained.max(1) as f64 * 100.0),
+        ms_per_pose: round(elapsed / n as f64 * 1000.0),
+        poses: n,
+    }
+}

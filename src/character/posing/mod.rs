@@ -1,0 +1,15 @@
+//! Posing control (the paper's section 4): a learned model of sample
+//! postures in a 2-D latent space, and posture synthesis from touches.
+//!
+//! - [`sample`]: sample postures, the posture distance, placement.
+//! - [`mds`]: landmark MDS to 2-D.
+//! - [`model`]: the learned model and its grid.
+//! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
+//! - [`pick`]: the body part under a screen point.
+
+pub mod eval;
+pub mod mds;
+pub mod model;
+pub mod pick;
+pub mod sample;
+pub mod synth;

@@ -1,0 +1,178 @@
+//! Sample postures: frames of the library's clips, each with what the
+//! method needs precomputed: its joint rotations, its root placement
+//! relative to the start of its clip, its joint positions when that start is
+//! at the origin facing +Z, and its positions aligned by pelvis position and
+//! facing for the posture distance (Kovar et al.).
+
+use glam::{DQuat, DVec3};
+
+use crate::character::motion::Clip;
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
+
+/// The facing of a posture: yaw (radians, 0 = +Z, positive turns towards
+/// +X) of the direction the hips point, from the left and right hips.
+#[must_use]
+pub fn facing_yaw(world: &WorldPose, roles: &RoleMap) -> f64 {
+    let l = world.positions[roles.get(Role::LeftHip)] - world.positions[roles.get(Role::RightHip)];
+    let fwd = l.cross(DVec3::Y);
+    if fwd.x.hypot(fwd.z) < 1e-9 {
+        return 0.0;
+    }
+    fwd.x.atan2(fwd.z)
+}
+
+/// A sample posture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// Which clip (index into the model's clip list) and frame.
+    pub clip: usize,
+    pub frame: usize,
+    /// Generalized time of the frame in its clip, 0..1.
+    pub time: f64,
+    /// Local rotations of every joint; the root's has its facing removed.
+    pub rotations: Vec<DQuat>,
+    /// Root offset from the clip's start: x and z in the start's facing
+    /// frame, y the root's height.
+    pub root_offset: DVec3,
+    /// Facing relative to the clip's start (radians).
+    pub yaw: f64,
+    /// Joint positions with the clip's start at the origin facing +Z.
+    pub placed: Vec<DVec3>,
+    /// Joint positions relative to the pelvis's floor point, facing +Z.
+    pub aligned: Vec<DVec3>,
+}
+
+/// Samples from frames `frames` of a clip.
+#[must_use]
+pub fn samples_of(
+    clip_index: usize,
+    clip: &Clip,
+    frames: impl Iterator<Item = usize>,
+) -> Vec<Sample> {
+    let sk = &clip.skeleton;
+    let roles = &clip.roles;
+    let w0 = forward_kinematics(sk, &clip.frames[0]);
+    let yaw0 = facing_yaw(&w0, roles);
+    let root0 = w0.positions[0];
+    let last = clip.frames.len().saturating_sub(1).max(1) as f64;
+    frames
+        .filter(|&k| k < clip.frames.len())
+        .map(|k| {
+            let pose = &clip.frames[k];
+            let w = forward_kinematics(sk, pose);
+            let yaw = facing_yaw(&w, roles);
+            let unyaw = DQuat::from_rotation_y(-yaw);
+            let root = w.positions[0];
+            let floor = DVec3::new(root.x, 0.0, root.z);
+            let d = DQuat::from_rotation_y(-yaw0) * (root - root0);
+            let mut rotations = pose.rotations.clone();
+            rotations[0] = (unyaw * w.rotations[0]).normalize();
+            let rel = DQuat::from_rotation_y(-yaw0);
+            let start = DVec3::new(root0.x, 0.0, root0.z);
+            Sample {
+                clip: clip_index,
+                frame: k,
+                time: k as f64 / last,
+                rotations,
+                root_offset: DVec3::new(d.x, root.y, d.z),
+                yaw: wrap(yaw - yaw0),
+                placed: w.positions.iter().map(|p| rel * (*p - start)).collect(),
+                aligned: w.positions.iter().map(|p| unyaw * (*p - floor)).collect(),
+            }
+        })
+        .collect()
+}
+
+/// An angle in (−π, π].
+#[must_use]
+pub fn wrap(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let r = a.rem_euclid(t);
+    if r > std::f64::consts::PI { r - t } else { r }
+}
+
+/// The posture distance: mean distance between corresponding joints after
+/// aligning pelvis position and facing.
+#[must_use]
+pub fn distance(a: &Sample, b: &Sample) -> f64 {
+    a.aligned
+        .iter()
+        .zip(&b.aligned)
+        .map(|(p, q)| (*p - *q).length())
+        .sum::<f64>()
+        / a.aligned.len().max(1) as f64
+}
+
+/// What of a sample is put at the placement.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Anchor {
+    /// The start of the sample's clip (the paper: the sample's offset and
+    /// turn since its clip began are added to where the character stood
+    /// when posing began).
+    #[default]
+    ClipStart,
+    /// The sample's own pelvis: it stands exactly where the placement is,
+    /// facing its way (for evaluations and for holding the character in
+    /// place).
+    Root,
+}
+
+/// Where the character stands: its floor position and facing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub position: DVec3,
+    pub yaw: f64,
+    pub anchor: Anchor,
+}
+
+impl Placement {
+    /// World position of a sample's joint placed here (`p` from
+    /// [`Sample::local`]).
+    #[must_use]
+    pub fn place(&self, p: DVec3) -> DVec3 {
+        DVec3::new(self.position.x, 0.0, self.position.z) + DQuat::from_rotation_y(self.yaw) * p
+    }
+
+    /// The placement of a pose: its root's floor point and its facing.
+    #[must_use]
+    pub fn of(skeleton: &Skeleton, roles: &RoleMap, pose: &Pose) -> Self {
+        let w = forward_kinematics(skeleton, pose);
+        let r = w.positions[0];
+        Self {
+            position: DVec3::new(r.x, 0.0, r.z),
+            yaw: facing_yaw(&w, roles),
+            anchor: Anchor::Root,
+        }
+    }
+}
+
+impl Sample {
+    /// Joint positions relative to the anchor, facing +Z.
+    #[must_use]
+    pub fn local(&self, anchor: Anchor) -> &[DVec3] {
+        match anchor {
+            Anchor::ClipStart => &self.placed,
+            Anchor::Root => &self.aligned,
+        }
+    }
+}
+
+/// The pose of a sample placed at `at`: root translation and rotation from
+/// the placement, other joints' rotations and translations from the sample
+/// (translations from the skeleton's rest offsets).
+#[must_use]
+pub fn pose_of(skeleton: &Skeleton, sample: &Sample, at: &Placement) -> Pose {
+    let mut pose = skeleton.rest_pose();
+    pose.rotations.clone_from(&sample.rotations);
+    let (off, yaw) = match at.anchor {
+        Anchor::ClipStart => (
+            DVec3::new(sample.root_offset.x, 0.0, sample.root_offset.z),
+            sample.yaw,
+        ),
+        Anchor::Root => (DVec3::ZERO, 0.0),
+    };
+    pose.translations[0] = at.place(off) + DVec3::Y * sample.root_offset.y;
+    pose.rotations[0] = (DQuat::from_rotation_y(at.yaw + yaw) * sample.rotations[0]).normalize();
+    pose
+}

@@ -1,0 +1,239 @@
+//! Posing control on the default library and on held-out CMU motion
+//! capture: synthesis meets its constraints, beats its baselines, and
+//! picking finds the part under a finger.
+
+mod common;
+
+use glam::DVec3;
+use marionette::character::camera::Camera;
+use marionette::character::library::Library;
+use marionette::character::posing::eval::{self, Method, Mode};
+use marionette::character::posing::model::{LearnedModel, posing_samples};
+use marionette::character::posing::pick::pick;
+use marionette::character::posing::sample::Placement;
+use marionette::character::posing::synth::{Constraint, SynthOptions, Target, synthesize};
+use marionette::character::roles::Role;
+use marionette::character::skeleton::forward_kinematics;
+
+fn default_library() -> Library {
+    Library::load(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
+        .unwrap()
+}
+
+#[test]
+fn the_model_embeds_every_sample_and_fills_a_grid() {
+    let lib = default_library();
+    let (names, samples) = posing_samples(&lib);
+    assert!(
+        names.len() > 20 && samples.len() > 1000,
+        "{} clips, {} samples",
+        names.len(),
+        samples.len()
+    );
+    let n = samples.len();
+    let model = LearnedModel::build(samples);
+    assert_eq!(model.coords.len(), n);
+    assert!(
+        model
+            .coords
+            .iter()
+            .all(|c| c[0].is_finite() && c[1].is_finite())
+    );
+    let members: usize = model.cells.iter().map(|c| c.members.len()).sum();
+    assert_eq!(members, n, "every sample in exactly one cell");
+    assert!(model.cells.len() > 20);
+    for (i, cell) in model.cells.iter().enumerate() {
+        assert!(cell.members.contains(&cell.representative));
+        assert!(
+            cell.members
+                .iter()
+                .all(|&m| model.cell_of[m as usize] as usize == i)
+        );
+    }
+}
+
+#[test]
+fn synthesis_puts_constrained_parts_on_their_targets() {
+    let lib = default_library();
+    let (_, samples) = posing_samples(&lib);
+    let model = LearnedModel::build(samples);
+    let clip = &lib.clips["pose_reach_front_right.bvh"];
+    let (skeleton, roles) = (&clip.skeleton, &clip.roles);
+    // A reach the library has: the right hand high in front.
+    let truth = forward_kinematics(skeleton, &clip.frames[30]);
+    let at = Placement::of(skeleton, roles, &clip.frames[30]);
+    let constraints: Vec<Constraint> = [Role::RightHand, Role::LeftFoot, Role::RightFoot]
+        .iter()
+        .map(|&role| Constraint {
+            role,
+            target: Target::Point(truth.positions[roles.get(role)]),
+        })
+        .collect();
+    let pose = synthesize(
+        skeleton,
+        roles,
+        &model,
+        &constraints,
+        &at,
+        None,
+        &SynthOptions::default(),
+    );
+    let w = forward_kinematics(skeleton, &pose);
+    for c in &constraints {
+        let err = c.target.distance(w.positions[roles.get(c.role)]);
+        assert!(err < 0.01, "{} is {err:.3} m from its target", c.role);
+    }
+    // And the same with touches: on the half-lines, within a pixel.
+    let cam = Camera {
+        eye: DVec3::new(2.5, 1.3, 2.0),
+        target: DVec3::new(0.0, 1.0, 0.0),
+        fov_y_deg: 45.0,
+        width: 1280.0,
+        height: 720.0,
+    };
+    let touches: Vec<Constraint> = constraints
+        .iter()
+        .map(|c| {
+            let p = truth.positions[roles.get(c.role)];
+            Constraint {
+                role: c.role,
+                target: Target::Ray(cam.ray(cam.project(p).unwrap())),
+            }
+        })
+        .collect();
+    let pose = synthesize(
+        skeleton,
+        roles,
+        &model,
+        &touches,
+        &at,
+        None,
+        &SynthOptions::default(),
+    );
+    let w = forward_kinematics(skeleton, &pose);
+    for c in &touches {
+        let got = cam.project(w.positions[roles.get(c.role)]).unwrap();
+        let want = cam.project(truth.positions[roles.get(c.role)]).unwrap();
+        assert!(
+            got.distance(want) < 1.0,
+            "{} is {:.2} px off its touch",
+            c.role,
+            got.distance(want)
+        );
+    }
+}
+
+#[test]
+fn planted_feet_stay_where_they_are() {
+    let lib = default_library();
+    let (_, samples) = posing_samples(&lib);
+    let model = LearnedModel::build(samples);
+    let clip = &lib.clips["pose_lean_crouch.bvh"];
+    let (skeleton, roles) = (&clip.skeleton, &clip.roles);
+    let start = forward_kinematics(skeleton, &clip.frames[0]);
+    let feet = [
+        start.positions[roles.get(Role::LeftFoot)],
+        start.positions[roles.get(Role::RightFoot)],
+    ];
+    let at = Placement::of(skeleton, roles, &clip.frames[0]);
+    // Drag the right hand low and forward: the body bends, the feet stay.
+    let c = [Constraint {
+        role: Role::RightHand,
+        target: Target::Point(DVec3::new(-0.15, 0.6, 0.45)),
+    }];
+    let pose = synthesize(
+        skeleton,
+        roles,
+        &model,
+        &c,
+        &at,
+        Some(feet),
+        &SynthOptions::default(),
+    );
+    let w = forward_kinematics(skeleton, &pose);
+    for (role, want) in [(Role::LeftFoot, feet[0]), (Role::RightFoot, feet[1])] {
+        let err = (w.positions[roles.get(role)] - want).length();
+        assert!(err < 0.02, "{role} moved {err:.3} m");
+    }
+}
+
+#[test]
+fn the_model_beats_its_baselines_on_held_out_mocap() {
+    let dir = tempfile::tempdir().unwrap();
+    let clips_dir = common::shared_dir().join("mocap/cmu-cc");
+    let posing: Vec<String> = [
+        "002_04", "002_05", "005_02", "005_09", "005_12", "006_02", "006_14", "007_02", "007_06",
+    ]
+    .iter()
+    .map(|n| format!("\"{n}.bvh\""))
+    .collect();
+    std::fs::write(
+        dir.path().join("library.toml"),
+        format!(
+            "[settings]\nclips_dir = {:?}\n[posing]\nclips = [{}]\n",
+            clips_dir.display().to_string(),
+            posing.join(", ")
+        ),
+    )
+    .unwrap();
+    let lib = Library::load(dir.path()).unwrap();
+    let (_, samples) = posing_samples(&lib);
+    let model = LearnedModel::build(samples);
+    let held_out: Vec<_> = ["005_10", "007_03"]
+        .iter()
+        .map(|n| {
+            let f =
+                marionette::character::bvh::read_file(&clips_dir.join(format!("{n}.bvh"))).unwrap();
+            marionette::character::motion::Clip::from_bvh(f, &Default::default()).unwrap()
+        })
+        .collect();
+    let tests: Vec<_> = held_out.iter().collect();
+    let rest = &lib.clips[&lib.posing[0]];
+    let run = |mode, method| {
+        let setup = eval::EvalSetup {
+            parts: 5,
+            mode,
+            method,
+            frames: 40,
+        };
+        eval::eval_pose(&lib.skeleton, &model, rest, &tests, setup)
+    };
+    let model_targets = run(Mode::Targets, Method::Model);
+    let rest_targets = run(Mode::Targets, Method::CcdRest);
+    let nearest_targets = run(Mode::Targets, Method::Nearest);
+    let model_touch = run(Mode::Touch, Method::Model);
+    eprintln!(
+        "model {model_targets:?}\nccd-rest {rest_targets:?}\nnearest {nearest_targets:?}\ntouch {model_touch:?}"
+    );
+    assert!(
+        model_targets.mpjpe_cm < rest_targets.mpjpe_cm,
+        "the model beats IK from the rest pose"
+    );
+    assert!(
+        model_targets.mpjpe_cm < nearest_targets.mpjpe_cm,
+        "blending and IK beat the nearest sample"
+    );
+    assert!(model_targets.mpjpe_cm < 12.0, "{model_targets:?}");
+}
+
+#[test]
+fn picking_finds_the_part_under_the_finger() {
+    let lib = default_library();
+    let clip = &lib.clips["pose_arms.bvh"];
+    let (skeleton, roles) = (&clip.skeleton, &clip.roles);
+    let w = forward_kinematics(skeleton, &clip.frames[0]);
+    let cam = Camera {
+        eye: DVec3::new(0.0, 1.1, 3.0),
+        target: DVec3::new(0.0, 1.0, 0.0),
+        fov_y_deg: 45.0,
+        width: 1280.0,
+        height: 720.0,
+    };
+    for role in [Role::LeftHand, Role::RightHand, Role::Head, Role::LeftFoot] {
+        let s = cam.project(w.positions[roles.get(role)]).unwrap();
+        let near = marionette::input::calibration::ScreenPoint::new(s.x + 6.0, s.y - 4.0);
+        assert_eq!(pick(&cam, skeleton, roles, &w, near, 30.0), Some(role));
+    }
+    let empty = marionette::input::calibration::ScreenPoint::new(40.0, 40.0);
+    assert_eq!(pick(&cam, skeleton, roles, &w, empty, 30.0), None);
+}
