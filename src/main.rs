@@ -91,6 +91,16 @@ enum Command {
         #[arg(long)]
         scale_to_m: Option<f64>,
     },
+    /// Build the learned models of a library and cache them (run and demo
+    /// use the cache when it matches the library, and bake when it does not)
+    Bake {
+        /// Library folder (with library.toml)
+        #[arg(long, default_value = "assets/library")]
+        library: PathBuf,
+        /// Bake even if a matching cache exists
+        #[arg(long)]
+        force: bool,
+    },
     /// Measure the character controllers on held-out motion capture
     Eval {
         #[command(subcommand)]
@@ -266,6 +276,7 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
             out,
             scale_to_m,
         } => convert_bvh(&file, &out, scale_to_m),
+        Command::Bake { library, force } => bake(&library, force),
         Command::Eval {
             what:
                 EvalCommand::Pose {
@@ -388,6 +399,68 @@ fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> Result<(), F
     .map_err(stdout_error)
 }
 
+/// Load a library and its posing model (from the cache when it matches).
+fn load_model(
+    library: &Path,
+    force: bool,
+) -> Result<
+    (
+        marionette::character::library::Library,
+        marionette::character::posing::model::LearnedModel,
+    ),
+    Failure,
+> {
+    use marionette::character::library::Library;
+    use marionette::character::posing::cache::{self, Source};
+    use std::io::IsTerminal;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let dir = cache::cache_dir();
+    let tty = std::io::stderr().is_terminal();
+    let mut last = -1i32;
+    let mut progress = |f: f64| {
+        let pct = (f * 100.0) as i32;
+        if tty {
+            eprint!("\rbaking the posing model: {pct:3}%");
+        } else if pct / 25 != last / 25 {
+            tracing::info!(percent = pct, "baking the posing model");
+        }
+        last = pct;
+    };
+    let (model, source) = cache::posing_model(&lib, &dir, force, &mut progress).map_err(|e| {
+        Failure::new(
+            exit::IOERR,
+            format!("cannot bake or cache {}: {e}", library.display()),
+        )
+    })?;
+    if tty && last >= 0 {
+        eprintln!();
+    }
+    match source {
+        Source::Cache(path) => {
+            tracing::info!(cache = %path.display(), samples = model.samples.len(), "posing model loaded from the cache")
+        }
+        Source::Baked { reason } => {
+            tracing::info!(%reason, samples = model.samples.len(), cells = model.cells.len(), cache = %dir.display(), "posing model baked")
+        }
+    }
+    Ok((lib, model))
+}
+
+fn bake(library: &Path, force: bool) -> Result<(), Failure> {
+    let started = std::time::Instant::now();
+    let (lib, model) = load_model(library, force)?;
+    writeln!(
+        std::io::stdout(),
+        "{}: posing model of {} samples from {} clips in {} cells ({:.1} s)",
+        lib.dir.display(),
+        model.samples.len(),
+        lib.clips.len(),
+        model.cells.len(),
+        started.elapsed().as_secs_f64()
+    )
+    .map_err(stdout_error)
+}
+
 fn eval_pose(
     library: &Path,
     tests: &[PathBuf],
@@ -396,9 +469,8 @@ fn eval_pose(
     method: EvalMethod,
     frames: usize,
 ) -> Result<(), Failure> {
-    use marionette::character::library::Library;
-    use marionette::character::posing::{eval, model};
-    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    use marionette::character::posing::eval;
+    let (lib, learned) = load_model(library, false)?;
     let mut clips = Vec::new();
     for t in tests {
         let (_, clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;
@@ -412,15 +484,12 @@ fn eval_pose(
         }
         clips.push(clip);
     }
-    let (_, samples) = model::posing_samples(&lib);
-    if samples.is_empty() {
+    if learned.samples.is_empty() {
         return Err(Failure::new(
             exit::DATAERR,
             format!("{}: the library has no posing samples", library.display()),
         ));
     }
-    tracing::info!(samples = samples.len(), "building the posing model");
-    let learned = model::LearnedModel::build(samples);
     let rest = lib
         .clips
         .get(&lib.posing[0])

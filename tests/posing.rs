@@ -237,3 +237,39 @@ fn picking_finds_the_part_under_the_finger() {
     let empty = marionette::input::calibration::ScreenPoint::new(40.0, 40.0);
     assert_eq!(pick(&cam, skeleton, roles, &w, empty, 30.0), None);
 }
+
+#[test]
+fn the_cache_is_used_when_it_matches_and_rebuilt_when_stale_or_corrupt() {
+    use marionette::character::posing::cache::{Source, posing_model};
+    let lib = default_library();
+    let dir = tempfile::tempdir().unwrap();
+    let (first, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    assert!(matches!(source, Source::Baked { .. }), "{source:?}");
+    let (again, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    assert!(matches!(source, Source::Cache(_)), "{source:?}");
+    assert_eq!(
+        first.coords, again.coords,
+        "the cache gives the baked model back exactly"
+    );
+    // Corrupt it: rebuilt, and it says why.
+    let file = std::fs::read_dir(dir.path())
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let mut bytes = std::fs::read(&file).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&file, &bytes).unwrap();
+    let (rebuilt, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    match source {
+        Source::Baked { reason } => assert!(reason.contains("corrupt"), "{reason}"),
+        other => panic!("a corrupt cache was trusted: {other:?}"),
+    }
+    assert_eq!(rebuilt.coords, first.coords);
+    // Truncated: rebuilt too.
+    std::fs::write(&file, &bytes[..10]).unwrap();
+    let (_, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    assert!(matches!(source, Source::Baked { .. }));
+}

@@ -136,6 +136,8 @@ impl ActionDef {
 #[derive(Clone, Debug)]
 pub struct Library {
     pub dir: PathBuf,
+    /// Where the clips are (`settings.clips_dir`, else `dir`).
+    pub clips_dir: PathBuf,
     pub skeleton: Skeleton,
     /// Every clip by file name.
     pub clips: BTreeMap<String, Clip>,
@@ -147,6 +149,12 @@ pub struct Library {
 }
 
 impl Library {
+    /// The file of a clip.
+    #[must_use]
+    pub fn clip_path(&self, name: &str) -> PathBuf {
+        self.clips_dir.join(name)
+    }
+
     /// Load and validate `dir/library.toml` and its clips.
     pub fn load(dir: &Path) -> Result<Self, LibraryError> {
         let mut problems = Vec::new();
@@ -296,6 +304,7 @@ impl Library {
             .unwrap_or_default();
         Ok(Self {
             dir: dir.to_owned(),
+            clips_dir,
             skeleton,
             clips,
             posing: file.posing.clips,

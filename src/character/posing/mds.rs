@@ -16,6 +16,16 @@ pub fn embed(
     landmarks: usize,
     dist: &(dyn Fn(usize, usize) -> f64 + Sync),
 ) -> Vec<[f64; 2]> {
+    embed_with_progress(n, landmarks, dist, &mut |_| {})
+}
+
+/// [`embed`], reporting progress from 0 to 1.
+pub fn embed_with_progress(
+    n: usize,
+    landmarks: usize,
+    dist: &(dyn Fn(usize, usize) -> f64 + Sync),
+    progress: &mut dyn FnMut(f64),
+) -> Vec<[f64; 2]> {
     if n == 0 {
         return Vec::new();
     }
@@ -39,6 +49,7 @@ pub fn embed(
             break; // every item coincides with a landmark
         }
         chosen.push(next);
+        progress(chosen.len() as f64 / l as f64 * 0.9);
         let row: Vec<f64> = (0..n).map(|i| dist(next, i)).collect();
         for (m, d) in nearest.iter_mut().zip(&row) {
             *m = m.min(*d);
@@ -65,6 +76,7 @@ pub fn embed(
         }
     }
     let (vecs, vals) = top_two(&centred, l);
+    progress(1.0);
     // Place every item: y_k = -1/2 · v_k · (δ² − mean δ²) / sqrt(λ_k).
     let mean_sq: Vec<f64> = row_mean.clone();
     (0..n)

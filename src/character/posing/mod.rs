@@ -7,6 +7,7 @@
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 
+pub mod cache;
 pub mod eval;
 pub mod mds;
 pub mod model;

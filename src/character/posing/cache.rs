@@ -1,0 +1,184 @@
+//! Baking: the learned models of a library, computed once and cached on
+//! disk, keyed by the library's content. Only the expensive part (the
+//! latent coordinates) is stored; samples are rebuilt from the clips, which
+//! is quick. A cache that does not match, is truncated or fails its checksum
+//! is rebuilt, never trusted.
+
+use std::path::{Path, PathBuf};
+
+use super::model::{LearnedModel, posing_samples};
+use super::sample::distance;
+use crate::character::library::Library;
+
+const MAGIC: &[u8; 8] = b"MRNTPOSE";
+/// Bumped whenever samples, the distance or the embedding change.
+const FORMAT: u32 = 1;
+
+/// FNV-1a, 64 bits: stable across builds and platforms.
+#[derive(Clone, Copy)]
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 ^= u64::from(*b);
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}
+
+/// The content key of a library: its `library.toml` and every clip's bytes.
+pub fn library_key(lib: &Library) -> std::io::Result<u64> {
+    let mut h = Fnv::new();
+    h.write(&FORMAT.to_le_bytes());
+    h.write(&std::fs::read(lib.dir.join("library.toml"))?);
+    for name in lib.clips.keys() {
+        h.write(name.as_bytes());
+        h.write(&std::fs::read(lib.clip_path(name))?);
+    }
+    Ok(h.0)
+}
+
+/// Where caches live: `$CACHE_DIRECTORY` (systemd), else
+/// `$XDG_CACHE_HOME/marionette`, else `~/.cache/marionette`.
+#[must_use]
+pub fn cache_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("CACHE_DIRECTORY") {
+        return PathBuf::from(d);
+    }
+    if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
+        return PathBuf::from(d).join("marionette");
+    }
+    std::env::var_os("HOME").map_or_else(
+        || std::env::temp_dir().join("marionette-cache"),
+        |h| PathBuf::from(h).join(".cache/marionette"),
+    )
+}
+
+fn encode(key: u64, coords: &[[f64; 2]]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(32 + coords.len() * 16);
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&FORMAT.to_le_bytes());
+    out.extend_from_slice(&key.to_le_bytes());
+    out.extend_from_slice(&(coords.len() as u64).to_le_bytes());
+    for c in coords {
+        out.extend_from_slice(&c[0].to_le_bytes());
+        out.extend_from_slice(&c[1].to_le_bytes());
+    }
+    let mut h = Fnv::new();
+    h.write(&out);
+    out.extend_from_slice(&h.0.to_le_bytes());
+    out
+}
+
+/// The coordinates in a cache file, or why they cannot be used.
+fn decode(bytes: &[u8], key: u64, n: usize) -> Result<Vec<[f64; 2]>, String> {
+    if bytes.len() < 36 {
+        return Err("too short".into());
+    }
+    let (body, sum) = bytes.split_at(bytes.len() - 8);
+    let mut h = Fnv::new();
+    h.write(body);
+    if sum != h.0.to_le_bytes() {
+        return Err("checksum mismatch (corrupt)".into());
+    }
+    if &body[..8] != MAGIC {
+        return Err("not a marionette cache".into());
+    }
+    let u32_at = |i: usize| u32::from_le_bytes(body[i..i + 4].try_into().expect("4 bytes"));
+    let u64_at = |i: usize| u64::from_le_bytes(body[i..i + 8].try_into().expect("8 bytes"));
+    if u32_at(8) != FORMAT {
+        return Err(format!("format {} (this build writes {FORMAT})", u32_at(8)));
+    }
+    if u64_at(12) != key {
+        return Err("made for other library contents (stale)".into());
+    }
+    let count = u64_at(20) as usize;
+    if count != n || body.len() != 28 + count * 16 {
+        return Err(format!("holds {count} samples, the library has {n}"));
+    }
+    Ok((0..count)
+        .map(|i| {
+            let at = 28 + i * 16;
+            [
+                f64::from_le_bytes(body[at..at + 8].try_into().expect("8")),
+                f64::from_le_bytes(body[at + 8..at + 16].try_into().expect("8")),
+            ]
+        })
+        .collect())
+}
+
+/// How a model was obtained.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Source {
+    Cache(PathBuf),
+    Baked { reason: String },
+}
+
+/// The library's posing model: from the cache in `dir` when it matches the
+/// library, else baked (and the cache rewritten, atomically). `progress`
+/// hears 0..1 while baking.
+pub fn posing_model(
+    lib: &Library,
+    dir: &Path,
+    force: bool,
+    progress: &mut dyn FnMut(f64),
+) -> std::io::Result<(LearnedModel, Source)> {
+    let key = library_key(lib)?;
+    let (_, samples) = posing_samples(lib);
+    let path = dir.join(format!("posing-{key:016x}.bin"));
+    let reason = if force {
+        "asked to bake".to_owned()
+    } else {
+        match std::fs::read(&path) {
+            Ok(bytes) => match decode(&bytes, key, samples.len()) {
+                Ok(coords) => {
+                    return Ok((
+                        LearnedModel::with_coords(samples, coords),
+                        Source::Cache(path),
+                    ));
+                }
+                Err(why) => format!("cache {} unusable: {why}", path.display()),
+            },
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                "no cache for this library yet".to_owned()
+            }
+            Err(e) => format!("cannot read cache {}: {e}", path.display()),
+        }
+    };
+    let coords = super::mds::embed_with_progress(
+        samples.len(),
+        super::mds::DEFAULT_LANDMARKS,
+        &|a, b| distance(&samples[a], &samples[b]),
+        progress,
+    );
+    std::fs::create_dir_all(dir)?;
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, encode(key, &coords))?;
+    std::fs::rename(&tmp, &path)?;
+    Ok((
+        LearnedModel::with_coords(samples, coords),
+        Source::Baked { reason },
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn encode_decode_round_trip_and_refusals() {
+        let coords = vec![[1.0, 2.0], [-3.5, 0.25]];
+        let bytes = encode(42, &coords);
+        assert_eq!(decode(&bytes, 42, 2).unwrap(), coords);
+        assert!(decode(&bytes, 43, 2).unwrap_err().contains("stale"));
+        assert!(decode(&bytes, 42, 3).unwrap_err().contains("holds 2"));
+        let mut bad = bytes.clone();
+        bad[30] ^= 1;
+        assert!(decode(&bad, 42, 2).unwrap_err().contains("corrupt"));
+        assert!(decode(&bytes[..20], 42, 2).is_err());
+    }
+}
