@@ -171,6 +171,7 @@ enum EvalMode {
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum EvalMethod {
     Model,
+    Scan,
     Nearest,
     CcdRest,
 }
@@ -502,6 +503,7 @@ fn eval_pose(
     };
     let method = match method {
         EvalMethod::Model => eval::Method::Model,
+        EvalMethod::Scan => eval::Method::Scan,
         EvalMethod::Nearest => eval::Method::Nearest,
         EvalMethod::CcdRest => eval::Method::CcdRest,
     };

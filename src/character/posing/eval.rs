@@ -40,6 +40,8 @@ pub enum Mode {
 pub enum Method {
     /// The learned model with the grid, blending and IK.
     Model,
+    /// The same without the grid: every sample scored.
+    Scan,
     /// The single best sample.
     Nearest,
     /// CCD IK alone, from the library's first posing frame.
@@ -135,6 +137,18 @@ pub fn eval_pose(
                 &at,
                 None,
                 &SynthOptions::default(),
+            ),
+            Method::Scan => synthesize(
+                skeleton,
+                roles,
+                model,
+                &constraints,
+                &at,
+                None,
+                &SynthOptions {
+                    use_grid: false,
+                    ..SynthOptions::default()
+                },
             ),
             Method::Nearest => synthesize(
                 skeleton,

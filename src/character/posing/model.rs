@@ -45,11 +45,11 @@ impl LearnedModel {
         Self::with_coords(samples, coords)
     }
 
-    /// Lay the grid over known coordinates (about five samples per cell).
+    /// Lay the grid over known coordinates (about sixteen samples per cell).
     #[must_use]
     pub fn with_coords(samples: Vec<Sample>, coords: Vec<[f64; 2]>) -> Self {
         let n = samples.len();
-        let grid = ((n as f64 / 5.0).sqrt().round() as usize).clamp(1, 64);
+        let grid = ((n as f64 / 16.0).sqrt().round() as usize).clamp(1, 64);
         let mut min = [f64::INFINITY; 2];
         let mut max = [f64::NEG_INFINITY; 2];
         for c in &coords {

@@ -67,7 +67,7 @@ impl Default for SynthOptions {
     fn default() -> Self {
         Self {
             use_grid: true,
-            cells: 5,
+            cells: 10,
             blend: 12,
             ik: true,
             max_ik_m: 0.2,
@@ -227,7 +227,9 @@ fn chain(skeleton: &Skeleton, roles: &RoleMap, role: Role) -> Vec<usize> {
 }
 
 /// CCD IK: move each effector towards its goal, turning the joints of its
-/// chain, nearest first.
+/// chain, nearest first. Turning a chain joint moves neither its ancestors
+/// nor their rotations, so one forward-kinematics pass per goal and sweep
+/// suffices; sweeps stop once every goal is within 0.1 mm.
 pub fn ccd(
     skeleton: &Skeleton,
     pose: &mut Pose,
@@ -235,11 +237,14 @@ pub fn ccd(
     sweeps: usize,
 ) {
     for _ in 0..sweeps {
+        let mut worst = 0.0f64;
         for (effector, chain, goal) in goals {
+            let w = forward_kinematics(skeleton, pose);
+            let mut end = w.positions[*effector];
+            worst = worst.max((end - *goal).length());
             for &j in chain {
-                let w = forward_kinematics(skeleton, pose);
                 let pivot = w.positions[j];
-                let (a, b) = (w.positions[*effector] - pivot, *goal - pivot);
+                let (a, b) = (end - pivot, *goal - pivot);
                 if a.length() < 1e-9 || b.length() < 1e-9 {
                     continue;
                 }
@@ -247,9 +252,15 @@ pub fn ccd(
                 let parent_rot = skeleton.joints[j]
                     .parent
                     .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
-                let world = turn * w.rotations[j];
-                pose.rotations[j] = (parent_rot.inverse() * world).normalize();
+                // This joint's world rotation now, after the turns of the
+                // joints below it (which do not change it).
+                let current = parent_rot * pose.rotations[j];
+                pose.rotations[j] = (parent_rot.inverse() * (turn * current)).normalize();
+                end = pivot + turn * a;
             }
+        }
+        if worst < 1e-4 {
+            break;
         }
     }
 }
