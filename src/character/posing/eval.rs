@@ -128,43 +128,23 @@ pub fn eval_pose(
             })
             .collect();
         let started = Instant::now();
-        let pose = match method {
-            Method::Model => synthesize(
-                skeleton,
-                roles,
-                model,
-                &constraints,
-                &at,
-                None,
-                &SynthOptions::default(),
-            ),
-            Method::Scan => synthesize(
-                skeleton,
-                roles,
-                model,
-                &constraints,
-                &at,
-                None,
-                &SynthOptions {
-                    use_grid: false,
-                    ..SynthOptions::default()
-                },
-            ),
-            Method::Nearest => synthesize(
-                skeleton,
-                roles,
-                model,
-                &constraints,
-                &at,
-                None,
-                &SynthOptions {
-                    use_grid: false,
-                    blend: 1,
-                    ik: false,
-                    ..SynthOptions::default()
-                },
-            ),
-            Method::CcdRest => {
+        let options = match method {
+            Method::Model => Some(SynthOptions::default()),
+            Method::Scan => Some(SynthOptions {
+                use_grid: false,
+                ..SynthOptions::default()
+            }),
+            Method::Nearest => Some(SynthOptions {
+                use_grid: false,
+                blend: 1,
+                ik: false,
+                ..SynthOptions::default()
+            }),
+            Method::CcdRest => None,
+        };
+        let pose = match options {
+            Some(opts) => synthesize(skeleton, roles, model, &constraints, &at, None, &opts),
+            None => {
                 let mut pose = pose_of(skeleton, &model.samples[0], &at);
                 apply_ik(
                     skeleton,
