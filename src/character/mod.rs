@@ -7,6 +7,7 @@
 //! - [`roles`]: which joint is the head, a hand, a foot...
 //! - [`library`]: a folder of clips and its `library.toml`.
 
+pub mod action;
 pub mod author;
 pub mod bvh;
 pub mod camera;

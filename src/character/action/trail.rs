@@ -1,0 +1,211 @@
+//! Recognising an action from a drag (the paper's section 5): the finger's
+//! trail (screen points with times) is compared with the action's
+//! trajectory projected to the screen, both taken relative to where they
+//! begin. Corresponding points are found by dynamic programming, and the
+//! cost is eq. 1 averaged over the corresponding pairs: position difference
+//! plus `h` times relative-time difference. The input may correspond to the
+//! beginning of the trajectory only: the action starts mid-drag.
+
+use glam::DVec3;
+
+use crate::input::calibration::ScreenPoint;
+
+/// A point of a trail or a projected trajectory: screen position and time
+/// in seconds from its start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrailPoint {
+    pub at: ScreenPoint,
+    pub t: f64,
+}
+
+/// The best correspondence of a trail with a trajectory.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Match {
+    /// Eq. 1 averaged over the corresponding pairs (px).
+    pub cost: f64,
+    /// Fraction of the trajectory the trail corresponds to (0..1).
+    pub coverage: f64,
+}
+
+/// Match `trail` against the beginning of `trajectory` (both with at least
+/// one point). `h` weighs time against position (px per second).
+#[must_use]
+pub fn match_trail(trail: &[TrailPoint], trajectory: &[TrailPoint], h: f64) -> Option<Match> {
+    let (n, m) = (trail.len(), trajectory.len());
+    if n == 0 || m == 0 {
+        return None;
+    }
+    let (p0, q0) = (trail[0], trajectory[0]);
+    let cost = |i: usize, j: usize| {
+        let a = trail[i];
+        let b = trajectory[j];
+        let dx = (a.at.x - p0.at.x) - (b.at.x - q0.at.x);
+        let dy = (a.at.y - p0.at.y) - (b.at.y - q0.at.y);
+        dx.hypot(dy) + h * ((a.t - p0.t) - (b.t - q0.t)).abs()
+    };
+    // sum[i][j]: least summed cost of a path from (0, 0) to (i, j);
+    // len[i][j]: its number of pairs.
+    let mut sum = vec![f64::INFINITY; n * m];
+    let mut len = vec![0u32; n * m];
+    for i in 0..n {
+        for j in 0..m {
+            let c = cost(i, j);
+            if i == 0 && j == 0 {
+                sum[0] = c;
+                len[0] = 1;
+                continue;
+            }
+            let mut best = (f64::INFINITY, 0u32);
+            for (pi, pj) in [
+                (i.wrapping_sub(1), j),
+                (i, j.wrapping_sub(1)),
+                (i.wrapping_sub(1), j.wrapping_sub(1)),
+            ] {
+                if pi < n && pj < m && sum[pi * m + pj] < best.0 {
+                    best = (sum[pi * m + pj], len[pi * m + pj]);
+                }
+            }
+            sum[i * m + j] = best.0 + c;
+            len[i * m + j] = best.1 + 1;
+        }
+    }
+    // The whole trail against the trajectory's best prefix.
+    let last = n - 1;
+    (0..m)
+        .map(|j| {
+            let k = last * m + j;
+            (j, sum[k] / f64::from(len[k].max(1)))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(j, avg)| Match {
+            cost: avg,
+            coverage: if m == 1 {
+                1.0
+            } else {
+                j as f64 / (m - 1) as f64
+            },
+        })
+}
+
+/// Thresholds of recognition, all in the configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StartRule {
+    /// Eq. 1's time weight (px per second).
+    pub h: f64,
+    /// Cost threshold for a drag at rest (px)...
+    pub base_threshold_px: f64,
+    /// ...growing with drag speed (px of threshold per px/s of speed).
+    pub speed_gain: f64,
+    /// A trail shorter than this never starts an action (px).
+    pub min_trail_px: f64,
+    /// The trail must correspond to more than this part of the trajectory.
+    pub min_coverage: f64,
+    /// The action's direction must be more than this from the eye vector
+    /// (degrees).
+    pub min_view_angle_deg: f64,
+}
+
+impl Default for StartRule {
+    fn default() -> Self {
+        Self {
+            h: 100.0,
+            base_threshold_px: 12.0,
+            speed_gain: 0.04,
+            min_trail_px: 40.0,
+            min_coverage: 0.5,
+            min_view_angle_deg: 45.0,
+        }
+    }
+}
+
+/// Length of a trail (px) and its mean speed (px/s).
+#[must_use]
+pub fn length_and_speed(trail: &[TrailPoint]) -> (f64, f64) {
+    let len: f64 = trail.windows(2).map(|w| w[0].at.distance(w[1].at)).sum();
+    let time = match (trail.first(), trail.last()) {
+        (Some(a), Some(b)) => (b.t - a.t).max(1e-6),
+        _ => 1.0,
+    };
+    (len, len / time)
+}
+
+/// The angle (degrees) between an action's representative direction and
+/// the eye vector, as a line: 0 when the action moves straight along the
+/// line of sight, 90 across it.
+#[must_use]
+pub fn view_angle_deg(direction: DVec3, eye: DVec3) -> f64 {
+    let a = direction.angle_between(eye).to_degrees();
+    a.min(180.0 - a)
+}
+
+impl StartRule {
+    /// Whether a drag with this match starts the action.
+    #[must_use]
+    pub fn starts(&self, m: &Match, trail: &[TrailPoint], view_angle_deg: f64) -> bool {
+        let (len, speed) = length_and_speed(trail);
+        len >= self.min_trail_px
+            && m.coverage > self.min_coverage
+            && view_angle_deg > self.min_view_angle_deg
+            && m.cost < self.base_threshold_px + self.speed_gain * speed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(from: (f64, f64), to: (f64, f64), duration: f64, n: usize) -> Vec<TrailPoint> {
+        (0..n)
+            .map(|i| {
+                let s = i as f64 / (n - 1) as f64;
+                TrailPoint {
+                    at: ScreenPoint::new(
+                        from.0 + (to.0 - from.0) * s,
+                        from.1 + (to.1 - from.1) * s,
+                    ),
+                    t: duration * s,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_beginning_of_a_trajectory_matches_with_its_coverage() {
+        // A punch: 300 px to the right in 0.5 s.
+        let punch = line((100.0, 200.0), (400.0, 200.0), 0.5, 21);
+        // The finger has done the first 60 % of it, somewhere else on screen.
+        let drag = line((500.0, 100.0), (680.0, 100.0), 0.3, 10);
+        let m = match_trail(&drag, &punch, 100.0).unwrap();
+        // Only the two samplings differ (20 px against 15 px steps).
+        assert!(m.cost < 8.0, "{m:?}");
+        assert!((m.coverage - 0.6).abs() < 0.06, "{m:?}");
+        // The other way is far off.
+        let back = line((500.0, 100.0), (320.0, 100.0), 0.3, 10);
+        assert!(match_trail(&back, &punch, 100.0).unwrap().cost > 50.0);
+        // Same path at half the speed: the time term grows.
+        let slow = line((500.0, 100.0), (680.0, 100.0), 0.6, 10);
+        let ms = match_trail(&slow, &punch, 100.0).unwrap();
+        assert!(ms.cost > m.cost + 5.0, "{ms:?} vs {m:?}");
+    }
+
+    #[test]
+    fn start_rule_checks_length_coverage_view_and_speed() {
+        let rule = StartRule::default();
+        let punch = line((100.0, 200.0), (400.0, 200.0), 0.5, 21);
+        let drag = line((500.0, 100.0), (680.0, 100.0), 0.3, 10);
+        let m = match_trail(&drag, &punch, rule.h).unwrap();
+        assert!(rule.starts(&m, &drag, 80.0));
+        assert!(
+            !rule.starts(&m, &drag, 30.0),
+            "seen end-on, the action is excluded"
+        );
+        let short = line((500.0, 100.0), (520.0, 100.0), 0.05, 4);
+        let ms = match_trail(&short, &punch, rule.h).unwrap();
+        assert!(
+            !rule.starts(&ms, &short, 80.0),
+            "too short and too little of the trajectory"
+        );
+        assert!((view_angle_deg(DVec3::Z, DVec3::NEG_Z) - 0.0).abs() < 1e-9);
+        assert!((view_angle_deg(DVec3::X, DVec3::NEG_Z) - 90.0).abs() < 1e-9);
+    }
+}
