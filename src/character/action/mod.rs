@@ -4,8 +4,11 @@
 //! - [`timeline`]: the generalized time of a playing action, its condition
 //!   segments, and the event stream (started, stopped, finished,
 //!   cancelled).
+//! - [`model`]: action models (learned model, average trajectory,
+//!   direction, duration) and recognition among them.
 //! - [`trail`]: matching a finger's trail against an action's projected
 //!   trajectory by dynamic programming (eq. 1), and the start conditions.
 
+pub mod model;
 pub mod timeline;
 pub mod trail;
