@@ -160,6 +160,20 @@ enum EvalCommand {
         #[arg(long, default_value_t = 200)]
         frames: usize,
     },
+    /// Action control: replay held-out clips' primary-part paths as drags
+    /// and print one JSON object (trials, correct, wrong_action, missed,
+    /// false_trigger_slow, decided_at)
+    Actions {
+        /// Library folder (with library.toml)
+        #[arg(long)]
+        library: PathBuf,
+        /// Folder of held-out clips named <action>_*.bvh
+        #[arg(long)]
+        test: PathBuf,
+        /// Seed of the noise and the slow drags
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -278,6 +292,14 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
             scale_to_m,
         } => convert_bvh(&file, &out, scale_to_m),
         Command::Bake { library, force } => bake(&library, force),
+        Command::Eval {
+            what:
+                EvalCommand::Actions {
+                    library,
+                    test,
+                    seed,
+                },
+        } => eval_actions(&library, &test, seed),
         Command::Eval {
             what:
                 EvalCommand::Pose {
@@ -445,6 +467,52 @@ fn load_model(
         }
     }
     Ok((lib, model))
+}
+
+fn eval_actions(library: &Path, test_dir: &Path, seed: u64) -> Result<(), Failure> {
+    use marionette::character::action::{eval, model::ActionModel, trail::StartRule};
+    use marionette::character::library::Library;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let actions: Vec<ActionModel> = lib
+        .actions
+        .iter()
+        .map(|a| ActionModel::build(&lib, a))
+        .collect();
+    let mut files: Vec<PathBuf> = std::fs::read_dir(test_dir)
+        .map_err(|e| {
+            Failure::new(
+                exit::NOINPUT,
+                format!("cannot list {}: {e}", test_dir.display()),
+            )
+        })?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
+        .collect();
+    files.sort();
+    let mut clips = Vec::new();
+    for f in &files {
+        let stem = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let Some(action) = actions
+            .iter()
+            .map(|a| a.def.name.clone())
+            .filter(|n| stem.starts_with(&format!("{n}_")))
+            .max_by_key(String::len)
+        else {
+            tracing::warn!(file = %f.display(), "not named after an action of the library (<action>_*.bvh); skipped");
+            continue;
+        };
+        let (_, clip) = read_clip(f, lib.clips.values().next().map(|c| c.scale_to_m))?;
+        clips.push((action, clip));
+    }
+    let tests: Vec<(String, &marionette::character::motion::Clip)> =
+        clips.iter().map(|(a, c)| (a.clone(), c)).collect();
+    let result = eval::eval_actions(&actions, &tests, &StartRule::default(), seed);
+    let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
 fn bake(library: &Path, force: bool) -> Result<(), Failure> {

@@ -105,3 +105,78 @@ fn a_quick_drag_along_a_punch_starts_the_punch() {
         "{r:?}"
     );
 }
+
+#[test]
+fn held_out_variants_are_recognised_and_slow_drags_are_not() {
+    use marionette::character::action::eval::eval_actions;
+    use marionette::character::author::compile::{FPS, frames};
+    use marionette::character::author::rig;
+    use marionette::character::author::score::{Kind, Score, Variant};
+    use marionette::character::motion::{Clip, ImportSettings};
+    let (_, actions) = setup();
+    // Variants the library does not have: a little slower, wider, higher,
+    // and each mirrored action a little faster.
+    let src = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library-src");
+    let mut clips: Vec<(String, Clip)> = Vec::new();
+    let skeleton = rig::skeleton();
+    let translates: Vec<bool> = (0..skeleton.len()).map(|i| i == 0).collect();
+    for entry in std::fs::read_dir(&src).unwrap() {
+        let score = Score::load(&entry.unwrap().path()).unwrap();
+        let Kind::Action { name, .. } = &score.kind else {
+            continue;
+        };
+        let mut variants = vec![(
+            name.clone(),
+            Variant {
+                file: String::new(),
+                speed: 0.9,
+                reach: 1.05,
+                lift: 0.03,
+                mirror: false,
+                action: None,
+                primary: None,
+            },
+        )];
+        for v in score
+            .variants
+            .iter()
+            .filter(|v| v.mirror && v.action.is_some())
+        {
+            let other = v.action.clone().unwrap();
+            if variants.iter().all(|(n, _)| *n != other) {
+                variants.push((
+                    other,
+                    Variant {
+                        speed: 1.1,
+                        reach: 0.95,
+                        lift: 0.0,
+                        ..v.clone()
+                    },
+                ));
+            }
+        }
+        for (action, v) in variants {
+            let text = marionette::character::bvh::write(
+                &skeleton,
+                &translates,
+                &frames(&score, &v),
+                1.0 / FPS,
+            );
+            let file =
+                marionette::character::bvh::parse(&text, std::path::Path::new("held-out.bvh"))
+                    .unwrap();
+            clips.push((
+                action,
+                Clip::from_bvh(file, &ImportSettings::default()).unwrap(),
+            ));
+        }
+    }
+    assert!(clips.len() >= 12);
+    let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();
+    let r = eval_actions(&actions, &tests, &Default::default(), 1);
+    eprintln!("{r:?}");
+    assert_eq!(r.trials, clips.len() * 6);
+    assert!(r.correct >= 0.85, "{r:?}");
+    assert!(r.wrong_action <= 0.05, "{r:?}");
+    assert!(r.false_trigger_slow <= 0.05, "{r:?}");
+}

@@ -9,6 +9,7 @@
 //! - [`trail`]: matching a finger's trail against an action's projected
 //!   trajectory by dynamic programming (eq. 1), and the start conditions.
 
+pub mod eval;
 pub mod model;
 pub mod timeline;
 pub mod trail;

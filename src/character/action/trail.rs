@@ -108,9 +108,9 @@ pub struct StartRule {
 impl Default for StartRule {
     fn default() -> Self {
         Self {
-            h: 100.0,
-            base_threshold_px: 12.0,
-            speed_gain: 0.04,
+            h: 50.0,
+            base_threshold_px: 18.0,
+            speed_gain: 0.07,
             min_trail_px: 40.0,
             min_coverage: 0.5,
             min_view_angle_deg: 45.0,

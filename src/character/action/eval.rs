@@ -1,0 +1,174 @@
+//! `marionette eval actions`: how reliably drags start the right action.
+//!
+//! For each test clip `<action>_*.bvh` (clips not in the library), the
+//! primary part's true path is projected from a side camera and from a 45°
+//! front-side camera and replayed as a finger trail at ×0.7, ×1 and ×1.5 of
+//! its speed with 2 px of noise, one point per frame, until an action
+//! starts. Slow posing drags (paths of each primary part at under a third
+//! of the action's speed, in random directions) must start nothing.
+
+use glam::{DQuat, DVec3};
+use serde::Serialize;
+
+use super::model::{ActionModel, recognize};
+use super::trail::{StartRule, TrailPoint};
+use crate::character::camera::Camera;
+use crate::character::motion::Clip;
+use crate::character::posing::sample::{Anchor, Placement};
+use crate::character::roles::Role;
+use crate::character::skeleton::forward_kinematics;
+use crate::input::calibration::ScreenPoint;
+
+/// What `eval actions` prints.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ActionEval {
+    pub trials: usize,
+    pub correct: f64,
+    pub wrong_action: f64,
+    pub missed: f64,
+    pub false_trigger_slow: f64,
+    /// Mean fraction of the true trajectory seen when the action started.
+    pub decided_at: f64,
+}
+
+/// A small deterministic generator for the noise.
+struct Lcg(u64);
+
+impl Lcg {
+    fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn noise(&mut self, px: f64) -> f64 {
+        (self.unit() * 2.0 - 1.0) * px
+    }
+}
+
+fn camera(angle_deg: f64, at: &Placement, chest_height: f64) -> Camera {
+    let dir = DQuat::from_rotation_y(at.yaw + angle_deg.to_radians()) * DVec3::Z;
+    let target = at.position + DVec3::Y * chest_height;
+    Camera {
+        eye: target + dir * 3.0,
+        target,
+        fov_y_deg: 45.0,
+        width: 1280.0,
+        height: 720.0,
+    }
+}
+
+/// Feed a trail point by point; the first recognition decides.
+fn first_recognition(
+    actions: &[ActionModel],
+    role: Role,
+    trail: &[TrailPoint],
+    cam: &Camera,
+    at: &Placement,
+    rule: &StartRule,
+) -> Option<(usize, usize)> {
+    (2..=trail.len())
+        .find_map(|n| recognize(actions, role, &trail[..n], cam, at, rule).map(|r| (r.action, n)))
+}
+
+/// Run the evaluation: `tests` are `(action name, clip)`.
+#[must_use]
+pub fn eval_actions(
+    actions: &[ActionModel],
+    tests: &[(String, &Clip)],
+    rule: &StartRule,
+    seed: u64,
+) -> ActionEval {
+    let mut rng = Lcg(seed ^ 0x9e37_79b9_7f4a_7c15);
+    let (mut trials, mut correct, mut wrong, mut missed) = (0usize, 0usize, 0usize, 0usize);
+    let mut decided = Vec::new();
+    let (mut slow_trials, mut slow_triggers) = (0usize, 0usize);
+    for (name, clip) in tests {
+        let Some(model) = actions.iter().find(|a| a.def.name == *name) else {
+            continue;
+        };
+        let role = model.def.primary;
+        let at = Placement {
+            anchor: Anchor::ClipStart,
+            ..Placement::of(&clip.skeleton, &clip.roles, &clip.frames[0])
+        };
+        let path: Vec<DVec3> = clip
+            .frames
+            .iter()
+            .map(|f| forward_kinematics(&clip.skeleton, f).positions[clip.roles.get(role)])
+            .collect();
+        let chest = forward_kinematics(&clip.skeleton, &clip.frames[0]).positions
+            [clip.roles.get(Role::Chest)]
+        .y;
+        for angle in [90.0, 45.0] {
+            let cam = camera(angle, &at, chest);
+            for speed in [0.7, 1.0, 1.5] {
+                let trail: Vec<TrailPoint> = path
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(k, p)| {
+                        cam.project(*p).map(|s| TrailPoint {
+                            at: ScreenPoint::new(s.x + rng.noise(2.0), s.y + rng.noise(2.0)),
+                            t: k as f64 * clip.frame_time / speed,
+                        })
+                    })
+                    .collect();
+                trials += 1;
+                match first_recognition(actions, role, &trail, &cam, &at, rule) {
+                    Some((a, n)) if actions[a].def.name == *name => {
+                        correct += 1;
+                        decided.push(n as f64 / trail.len().max(1) as f64);
+                    }
+                    Some(_) => wrong += 1,
+                    None => missed += 1,
+                }
+                // A slow posing drag of the same part: as long, in a random
+                // direction, at under a third of the speed.
+                let len: f64 = trail.windows(2).map(|w| w[0].at.distance(w[1].at)).sum();
+                let dir = rng.unit() * std::f64::consts::TAU;
+                let duration = trail.last().map_or(1.0, |p| p.t) * (3.0 + rng.unit() * 2.0);
+                let start = trail
+                    .first()
+                    .map_or(ScreenPoint::new(640.0, 360.0), |p| p.at);
+                let steps = (duration / clip.frame_time).ceil().max(2.0) as usize;
+                let slow: Vec<TrailPoint> = (0..=steps)
+                    .map(|k| {
+                        let s = k as f64 / steps as f64;
+                        let wobble = (s * std::f64::consts::PI * 2.0).sin() * 0.15 * len;
+                        TrailPoint {
+                            at: ScreenPoint::new(
+                                start.x + dir.cos() * len * s - dir.sin() * wobble + rng.noise(2.0),
+                                start.y + dir.sin() * len * s + dir.cos() * wobble + rng.noise(2.0),
+                            ),
+                            t: s * duration,
+                        }
+                    })
+                    .collect();
+                slow_trials += 1;
+                if first_recognition(actions, role, &slow, &cam, &at, rule).is_some() {
+                    slow_triggers += 1;
+                }
+            }
+        }
+    }
+    let frac = |a: usize, b: usize| {
+        if b == 0 {
+            0.0
+        } else {
+            (a as f64 / b as f64 * 1000.0).round() / 1000.0
+        }
+    };
+    ActionEval {
+        trials,
+        correct: frac(correct, trials),
+        wrong_action: frac(wrong, trials),
+        missed: frac(missed, trials),
+        false_trigger_slow: frac(slow_triggers, slow_trials),
+        decided_at: if decided.is_empty() {
+            0.0
+        } else {
+            (decided.iter().sum::<f64>() / decided.len() as f64 * 1000.0).round() / 1000.0
+        },
+    }
+}
