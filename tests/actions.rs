@@ -180,3 +180,76 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
     assert!(r.wrong_action <= 0.05, "{r:?}");
     assert!(r.false_trigger_slow <= 0.05, "{r:?}");
 }
+
+#[test]
+fn a_punch_follows_the_finger_then_finishes_by_itself() {
+    use marionette::character::action::player::ActionPlayer;
+    use marionette::character::action::timeline::{ActionEvent, Status};
+    use marionette::character::posing::synth::{Constraint, Target};
+    use marionette::character::skeleton::forward_kinematics;
+    let (lib, actions) = setup();
+    let punch = actions
+        .iter()
+        .position(|a| a.def.name == "punch_right")
+        .unwrap();
+    let at = Placement {
+        position: DVec3::ZERO,
+        yaw: 0.0,
+        anchor: Anchor::ClipStart,
+    };
+    let side = camera_at(90.0);
+    let roles = lib.clips["punch_right_a.bvh"].roles.clone();
+    let mut events = Vec::new();
+    let mut player = ActionPlayer::start(&actions, punch, 0.28, at, 10.0, &mut events);
+    // The finger goes on along the punch's path; a second finger holds the
+    // left hand where it guards.
+    let path = actions[punch].projected(&side, &at);
+    let guard = DVec3::new(0.12, 1.30, 0.26);
+    let mut hand_z = Vec::new();
+    // The strike: generalized times 0.29 to 0.48.
+    for point in &path[9..16] {
+        let touches = [
+            Constraint {
+                role: Role::RightHand,
+                target: Target::Ray(side.ray(point.at)),
+            },
+            Constraint {
+                role: Role::LeftHand,
+                target: Target::Point(guard),
+            },
+        ];
+        let pose = player.step(&lib, &actions, &touches, false, 1.0 / 30.0, &mut events);
+        let w = forward_kinematics(&lib.skeleton, &pose);
+        assert!(w.positions.iter().all(|p| p.is_finite()));
+        hand_z.push(w.positions[roles.get(Role::RightHand)].z);
+        let held = (w.positions[roles.get(Role::LeftHand)] - guard).length();
+        assert!(
+            held < 0.02,
+            "the held hand is {held:.3} m from where it is held"
+        );
+    }
+    assert!(
+        hand_z.windows(2).all(|w| w[1] >= w[0] - 0.01),
+        "the fist goes out with the finger: {hand_z:?}"
+    );
+    assert!(
+        hand_z[hand_z.len() - 1] - hand_z[0] > 0.1,
+        "the fist travels forward: {hand_z:?}"
+    );
+    assert!(player.time() > 0.35, "{}", player.time());
+    // The fingers lift in the strike: the punch completes by itself.
+    let mut frames = 0;
+    while player.status() == Status::Playing && frames < 200 {
+        let pose = player.step(&lib, &actions, &[], false, 1.0 / 30.0, &mut events);
+        assert!(
+            forward_kinematics(&lib.skeleton, &pose)
+                .positions
+                .iter()
+                .all(|p| p.is_finite())
+        );
+        frames += 1;
+    }
+    assert_eq!(player.status(), Status::Finished);
+    assert!(matches!(events.first(), Some(ActionEvent::Started { time_s, .. }) if *time_s == 10.0));
+    assert!(matches!(events.last(), Some(ActionEvent::Finished { .. })));
+}

@@ -6,10 +6,12 @@
 //!   cancelled).
 //! - [`model`]: action models (learned model, average trajectory,
 //!   direction, duration) and recognition among them.
+//! - [`player`]: playing an action under the fingers.
 //! - [`trail`]: matching a finger's trail against an action's projected
 //!   trajectory by dynamic programming (eq. 1), and the start conditions.
 
 pub mod eval;
 pub mod model;
+pub mod player;
 pub mod timeline;
 pub mod trail;

@@ -1,0 +1,146 @@
+//! Playing an action (the paper's section 5): each frame the action's
+//! learned model turns the touches into sample weights; their weighted
+//! generalized time drives the [`ActionTimeline`]; the weights, gathered per
+//! sample motion (clip), blend each clip's posture at the current time.
+//! When every finger lifts the last weights are kept. Fingers on other parts
+//! still constrain them through IK. At either end the caller returns to
+//! posing.
+
+use std::collections::BTreeMap;
+
+use super::model::ActionModel;
+use super::timeline::{ActionEvent, ActionTimeline, Drive, Status};
+use crate::character::library::Library;
+use crate::character::posing::model::LearnedModel;
+use crate::character::posing::sample::{Placement, samples_of};
+use crate::character::posing::synth::{Constraint, SynthOptions, apply_ik, blend, choose};
+use crate::character::skeleton::Pose;
+
+/// An action being played.
+#[derive(Clone, Debug)]
+pub struct ActionPlayer {
+    action: usize,
+    timeline: ActionTimeline,
+    /// Weight of each of the action's clips, kept when the fingers lift.
+    clip_weights: Vec<f64>,
+    at: Placement,
+}
+
+impl ActionPlayer {
+    /// Start action `action` (index into `actions`) at generalized time
+    /// `t0`, the character placed at `at` (clip-start anchoring).
+    #[must_use]
+    pub fn start(
+        actions: &[ActionModel],
+        action: usize,
+        t0: f64,
+        at: Placement,
+        time_s: f64,
+        events: &mut Vec<ActionEvent>,
+    ) -> Self {
+        let a = &actions[action];
+        let n = a.def.clips.len().max(1);
+        Self {
+            action,
+            timeline: ActionTimeline::start(a.def.clone(), a.duration, t0, time_s, events),
+            clip_weights: vec![1.0 / n as f64; n],
+            at,
+        }
+    }
+
+    #[must_use]
+    pub fn status(&self) -> Status {
+        self.timeline.status()
+    }
+
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.timeline.time()
+    }
+
+    /// One frame: `constraints` are the current touches (the primary part's
+    /// among them while its finger is down; empty when every finger has
+    /// lifted), `resting` whether the fingers stand still.
+    pub fn step(
+        &mut self,
+        lib: &Library,
+        actions: &[ActionModel],
+        constraints: &[Constraint],
+        resting: bool,
+        dt: f64,
+        events: &mut Vec<ActionEvent>,
+    ) -> Pose {
+        let a = &actions[self.action];
+        let roles = &lib.clips[&a.def.clips[0]].roles;
+        let primary_down = constraints.iter().any(|c| c.role == a.def.primary);
+        let target = if primary_down {
+            let weights = choose(
+                &a.model,
+                roles,
+                constraints,
+                &self.at,
+                &SynthOptions::default(),
+            );
+            self.clip_weights = per_clip(&a.model, &weights, a.def.clips.len());
+            Some(
+                weights
+                    .iter()
+                    .map(|(i, w)| a.model.samples[*i].time * w)
+                    .sum::<f64>(),
+            )
+        } else {
+            None
+        };
+        self.timeline.step(dt, Drive { target, resting }, events);
+        let mut pose = self.pose_at(lib, a, self.timeline.time());
+        // Other fingers still hold their parts.
+        let others: Vec<Constraint> = constraints
+            .iter()
+            .copied()
+            .filter(|c| c.role != a.def.primary)
+            .collect();
+        if !others.is_empty() {
+            apply_ik(
+                &lib.skeleton,
+                roles,
+                &mut pose,
+                &others,
+                None,
+                SynthOptions::default().max_ik_m,
+            );
+        }
+        pose
+    }
+
+    /// The blend of each clip's posture at generalized time `t`.
+    fn pose_at(&self, lib: &Library, a: &ActionModel, t: f64) -> Pose {
+        let mut samples = Vec::new();
+        let mut weights = Vec::new();
+        for (ci, name) in a.def.clips.iter().enumerate() {
+            let Some(clip) = lib.clips.get(name) else {
+                continue;
+            };
+            let frame = (t * (clip.frames.len().saturating_sub(1)) as f64).round() as usize;
+            samples.extend(samples_of(ci, clip, std::iter::once(frame)));
+            weights.push((
+                samples.len() - 1,
+                self.clip_weights.get(ci).copied().unwrap_or(0.0),
+            ));
+        }
+        let model = LearnedModel::with_coords(samples, vec![[0.0, 0.0]; weights.len()]);
+        weights.sort_by(|x, y| y.1.total_cmp(&x.1));
+        blend(&lib.skeleton, &model, &weights, &self.at)
+    }
+}
+
+/// Sample weights gathered per clip and normalised.
+fn per_clip(model: &LearnedModel, weights: &[(usize, f64)], clips: usize) -> Vec<f64> {
+    let mut by: BTreeMap<usize, f64> = BTreeMap::new();
+    for (i, w) in weights {
+        *by.entry(model.samples[*i].clip).or_default() += w;
+    }
+    let total: f64 = by.values().sum();
+    (0..clips)
+        .map(|c| by.get(&c).copied().unwrap_or(0.0) / total.max(1e-12))
+        .collect()
+}
