@@ -299,7 +299,7 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
                     test,
                     seed,
                 },
-        } => eval_actions(&library, &test, seed),
+        } => eval_actions(config, &library, &test, seed),
         Command::Eval {
             what:
                 EvalCommand::Pose {
@@ -469,8 +469,13 @@ fn load_model(
     Ok((lib, model))
 }
 
-fn eval_actions(library: &Path, test_dir: &Path, seed: u64) -> Result<(), Failure> {
-    use marionette::character::action::{eval, model::ActionModel, trail::StartRule};
+fn eval_actions(
+    config: &Config,
+    library: &Path,
+    test_dir: &Path,
+    seed: u64,
+) -> Result<(), Failure> {
+    use marionette::character::action::{eval, model::ActionModel};
     use marionette::character::library::Library;
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
     let actions: Vec<ActionModel> = lib
@@ -510,7 +515,7 @@ fn eval_actions(library: &Path, test_dir: &Path, seed: u64) -> Result<(), Failur
     }
     let tests: Vec<(String, &marionette::character::motion::Clip)> =
         clips.iter().map(|(a, c)| (a.clone(), c)).collect();
-    let result = eval::eval_actions(&actions, &tests, &StartRule::default(), seed);
+    let result = eval::eval_actions(&actions, &tests, &config.action.rule(), seed);
     let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }

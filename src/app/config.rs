@@ -44,7 +44,56 @@ pub enum ConfigError {
 pub struct Config {
     pub display: DisplayConfig,
     pub input: InputConfig,
+    pub action: ActionConfig,
     pub log: LogConfig,
+}
+
+/// `[action]`: when a drag starts an action (the paper's section 5).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ActionConfig {
+    /// Weight of time against position in the trail match (px per second).
+    pub h: f64,
+    /// Match cost under which a drag at rest starts an action (px).
+    pub threshold_px: f64,
+    /// How much the threshold grows per px/s of drag speed.
+    pub threshold_per_speed: f64,
+    /// Shortest drag that can start an action (px).
+    pub min_trail_px: f64,
+    /// Part of the action's trajectory the drag must cover (0..1).
+    pub min_coverage: f64,
+    /// Actions moving within this angle of the line of sight are not
+    /// started from this view (degrees).
+    pub min_view_angle_deg: f64,
+}
+
+impl Default for ActionConfig {
+    fn default() -> Self {
+        let r = crate::character::action::trail::StartRule::default();
+        Self {
+            h: r.h,
+            threshold_px: r.base_threshold_px,
+            threshold_per_speed: r.speed_gain,
+            min_trail_px: r.min_trail_px,
+            min_coverage: r.min_coverage,
+            min_view_angle_deg: r.min_view_angle_deg,
+        }
+    }
+}
+
+impl ActionConfig {
+    /// The start rule these settings make.
+    #[must_use]
+    pub fn rule(&self) -> crate::character::action::trail::StartRule {
+        crate::character::action::trail::StartRule {
+            h: self.h,
+            base_threshold_px: self.threshold_px,
+            speed_gain: self.threshold_per_speed,
+            min_trail_px: self.min_trail_px,
+            min_coverage: self.min_coverage,
+            min_view_angle_deg: self.min_view_angle_deg,
+        }
+    }
 }
 
 /// `[display]`
@@ -252,6 +301,27 @@ impl Config {
                         "must be 6 finite numbers [a, b, c, d, e, f] with a·e − b·d ≠ 0 (identity is [1, 0, 0, 0, 1, 0]), found {:?}",
                         dev.calibration
                     ),
+                ));
+            }
+        }
+        let a = &self.action;
+        for (key, v, lo, hi) in [
+            ("action.h", a.h, 0.0, 10_000.0),
+            ("action.threshold_px", a.threshold_px, 0.0, 1_000.0),
+            (
+                "action.threshold_per_speed",
+                a.threshold_per_speed,
+                0.0,
+                10.0,
+            ),
+            ("action.min_trail_px", a.min_trail_px, 0.0, 2_000.0),
+            ("action.min_coverage", a.min_coverage, 0.0, 1.0),
+            ("action.min_view_angle_deg", a.min_view_angle_deg, 0.0, 90.0),
+        ] {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(invalid(
+                    key,
+                    format!("must be between {lo} and {hi}, found {v}"),
                 ));
             }
         }
