@@ -18,3 +18,4 @@ pub mod posing;
 pub mod roles;
 pub mod sheet;
 pub mod skeleton;
+pub mod tracking;
