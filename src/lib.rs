@@ -17,6 +17,8 @@
 //! - [`character`] holds the motion data the method learns from: skeletons,
 //!   BVH, body-part roles, motion libraries and the authoring of the default
 //!   library. Pure.
+//! - [`render`] draws the character and the overlays with wgpu, into
+//!   offscreen images (headless) or onto the display.
 //! - [`app`] is the application edge: configuration, exit codes, logging.
 //!
 //! Conventions, stated once: time is in microseconds from the events' own
@@ -26,3 +28,4 @@
 pub mod app;
 pub mod character;
 pub mod input;
+pub mod render;

@@ -1,0 +1,114 @@
+//! The GPU: a Vulkan adapter chosen from what the machine offers (a real
+//! GPU first, else Mesa's lavapipe on the CPU), its device and queue. What
+//! was chosen is logged, so that an operator can see in the journal whether
+//! the kiosk runs on the GPU or on the CPU.
+
+use thiserror::Error;
+
+/// Why the renderer could not start.
+#[derive(Debug, Error)]
+pub enum GpuError {
+    /// No Vulkan adapter at all: no driver, or no ICD installed.
+    #[error(
+        "no Vulkan adapter found (install a Vulkan driver; without a GPU: \
+         apt-get install mesa-vulkan-drivers)"
+    )]
+    NoAdapter,
+    /// The adapter refused to give a device.
+    #[error("the Vulkan adapter {adapter} refused a device: {source}")]
+    Device {
+        adapter: String,
+        #[source]
+        source: wgpu::RequestDeviceError,
+    },
+    /// The device went away or failed while rendering.
+    #[error("the GPU device was lost or failed: {0}")]
+    Lost(String),
+}
+
+/// Which adapters to accept.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// A real GPU if there is one, else a CPU renderer.
+    #[default]
+    Auto,
+    /// Only a CPU renderer (lavapipe): reproducible images for tests.
+    Cpu,
+}
+
+/// An adapter, its device and queue.
+#[derive(Debug)]
+pub struct Gpu {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+}
+
+impl Gpu {
+    /// Open the best Vulkan adapter allowed by `choice`.
+    pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        for a in &adapters {
+            let i = a.get_info();
+            tracing::debug!(name = %i.name, kind = ?i.device_type, driver = %i.driver, "Vulkan adapter offered");
+        }
+        let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Other => 3,
+            wgpu::DeviceType::Cpu => 4,
+        };
+        adapters.retain(|a| {
+            choice == AdapterChoice::Auto || a.get_info().device_type == wgpu::DeviceType::Cpu
+        });
+        adapters.sort_by_key(rank);
+        let adapter = adapters.into_iter().next().ok_or(GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("marionette"),
+            required_features: wgpu::Features::empty(),
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|source| GpuError::Device {
+            adapter: info.name.clone(),
+            source,
+        })?;
+        tracing::info!(
+            adapter = %info.name,
+            kind = ?info.device_type,
+            driver = %format!("{} {}", info.driver, info.driver_info),
+            "rendering with Vulkan"
+        );
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// Whether the adapter renders on the CPU.
+    #[must_use]
+    pub fn is_cpu(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The most samples per pixel up to `wanted` that `format` supports.
+    #[must_use]
+    pub fn sample_count(&self, format: wgpu::TextureFormat, wanted: u32) -> u32 {
+        let flags = self.adapter.get_texture_format_features(format).flags;
+        [16, 8, 4, 2]
+            .into_iter()
+            .find(|&n| n <= wanted && flags.sample_count_supported(n))
+            .unwrap_or(1)
+    }
+}

@@ -1,0 +1,10 @@
+//! Rendering with wgpu: the GPU and adapter choice ([`gpu`]), CPU geometry
+//! ([`mesh`]), composing a frame from the character and the overlays
+//! ([`scene`]), the pipelines ([`renderer`], WGSL in `shaders/`) and
+//! offscreen output read back as images ([`headless`]).
+
+pub mod gpu;
+pub mod headless;
+pub mod mesh;
+pub mod renderer;
+pub mod scene;

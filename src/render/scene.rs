@@ -1,0 +1,366 @@
+//! Composing a frame: the character's posture as a smooth body of capsules
+//! (limbs that join without gaps, a head, hands and shoes), the camera and
+//! output rotation as matrices, and the overlays (a mark under every
+//! finger, the held parts highlighted, action trajectories, a status line).
+//! Pure: it builds a [`DrawList`] for the renderer.
+
+use glam::{DVec3, Mat4, Vec3, Vec4};
+
+use super::mesh::{Mesh, Overlay, text_width};
+use super::renderer::DrawList;
+use crate::character::camera::Camera;
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Skeleton, WorldPose};
+use crate::input::calibration::{Rotation, ScreenPoint};
+
+/// Linear RGB of the background the floor fades into.
+pub const BACKGROUND: [f32; 3] = [0.035, 0.045, 0.07];
+/// Direction towards the key light (normalised when used).
+pub const LIGHT: Vec3 = Vec3::new(0.45, 1.0, 0.6);
+
+const SHIRT: [f32; 3] = [0.09, 0.26, 0.55];
+const SKIN: [f32; 3] = [0.78, 0.52, 0.36];
+const TROUSERS: [f32; 3] = [0.16, 0.16, 0.19];
+const SHOES: [f32; 3] = [0.06, 0.05, 0.05];
+const HELD: [f32; 3] = [1.0, 0.45, 0.08];
+
+/// Where the picture goes: the camera (in picture pixels) and how the
+/// picture is turned on the output.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    pub camera: Camera,
+    pub rotation: Rotation,
+}
+
+impl View {
+    /// Clip-space turn of the picture on the output (clockwise).
+    #[must_use]
+    pub fn rotation_matrix(&self) -> Mat4 {
+        let (c0, c1) = match self.rotation {
+            Rotation::R0 => (Vec4::X, Vec4::Y),
+            Rotation::R90 => (-Vec4::Y, Vec4::X),
+            Rotation::R180 => (-Vec4::X, -Vec4::Y),
+            Rotation::R270 => (Vec4::Y, -Vec4::X),
+        };
+        Mat4::from_cols(c0, c1, Vec4::Z, Vec4::W)
+    }
+
+    /// World → clip.
+    #[must_use]
+    pub fn view_proj(&self) -> Mat4 {
+        let c = &self.camera;
+        let proj = glam::camera::rh::proj::directx::perspective(
+            (c.fov_y_deg as f32).to_radians(),
+            (c.width / c.height) as f32,
+            0.05,
+            200.0,
+        );
+        let view =
+            glam::camera::rh::view::look_at_mat4(c.eye.as_vec3(), c.target.as_vec3(), Vec3::Y);
+        self.rotation_matrix() * proj * view
+    }
+
+    /// Picture pixels → clip.
+    #[must_use]
+    pub fn screen(&self) -> Mat4 {
+        let (w, h) = (self.camera.width as f32, self.camera.height as f32);
+        let ortho = Mat4::from_cols(
+            Vec4::new(2.0 / w, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, -2.0 / h, 0.0, 0.0),
+            Vec4::Z,
+            Vec4::new(-1.0, 1.0, 0.0, 1.0),
+        );
+        self.rotation_matrix() * ortho
+    }
+
+    /// A draw list with nothing in it yet.
+    #[must_use]
+    pub fn empty(&self, floor: bool) -> DrawList {
+        DrawList {
+            view_proj: self.view_proj(),
+            screen: self.screen(),
+            eye: self.camera.eye.as_vec3(),
+            light: LIGHT.normalize(),
+            background: BACKGROUND,
+            fog_start: 8.0,
+            floor,
+            ..DrawList::default()
+        }
+    }
+}
+
+/// What a finger is doing, for its mark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FingerUse {
+    /// Holds a body part.
+    Part(crate::character::roles::Role),
+    /// Turns, tilts or zooms the camera.
+    Camera,
+}
+
+/// A mark under a finger.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FingerMark {
+    pub at: ScreenPoint,
+    pub usage: FingerUse,
+}
+
+/// An action's trajectory as seen from the camera (the paper's Fig. 4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrajectoryMark {
+    pub points: Vec<ScreenPoint>,
+    /// Whether a drag along it can start the action from this view.
+    pub executable: bool,
+}
+
+/// Everything drawn over the picture.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Marks {
+    pub fingers: Vec<FingerMark>,
+    pub trajectories: Vec<TrajectoryMark>,
+    pub status: Option<String>,
+}
+
+/// A body segment: which part it belongs to, for highlighting.
+struct Segment {
+    part: Role,
+    a: DVec3,
+    b: DVec3,
+    r: f64,
+    color: [f32; 3],
+}
+
+/// Positions along the joint chain from ancestor `from` down to `to`.
+fn chain(skeleton: &Skeleton, world: &WorldPose, from: usize, to: usize) -> Vec<DVec3> {
+    let mut joints = vec![to];
+    let mut j = to;
+    while j != from {
+        match skeleton.joints[j].parent {
+            Some(p) => {
+                joints.push(p);
+                j = p;
+            }
+            None => return vec![world.positions[from], world.positions[to]],
+        }
+    }
+    joints.reverse();
+    joints.into_iter().map(|j| world.positions[j]).collect()
+}
+
+/// The point past a joint: its first child, else its End Site, else
+/// `fallback` from it.
+fn tip(skeleton: &Skeleton, world: &WorldPose, joint: usize, fallback: DVec3) -> DVec3 {
+    skeleton
+        .children(joint)
+        .next()
+        .map(|c| world.positions[c])
+        .or_else(|| world.end_site(skeleton, joint))
+        .filter(|p| (*p - world.positions[joint]).length() > 0.02)
+        .unwrap_or(world.positions[joint] + fallback)
+}
+
+fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> Vec<Segment> {
+    let p = |r: Role| world.positions[roles.get(r)];
+    let mut out = Vec::new();
+    let push_chain =
+        |out: &mut Vec<Segment>, part: Role, from: Role, to: Role, r: f64, color: [f32; 3]| {
+            let pts = chain(skeleton, world, roles.get(from), roles.get(to));
+            for w in pts.windows(2) {
+                out.push(Segment {
+                    part,
+                    a: w[0],
+                    b: w[1],
+                    r,
+                    color,
+                });
+            }
+        };
+    // Trunk: spine, a wide chest and hips.
+    push_chain(
+        &mut out,
+        Role::Chest,
+        Role::Pelvis,
+        Role::Chest,
+        0.115,
+        SHIRT,
+    );
+    push_chain(&mut out, Role::Head, Role::Chest, Role::Neck, 0.06, SHIRT);
+    push_chain(&mut out, Role::Head, Role::Neck, Role::Head, 0.05, SKIN);
+    for (shoulder, elbow, hand, hip, knee, foot) in [
+        (
+            Role::LeftShoulder,
+            Role::LeftElbow,
+            Role::LeftHand,
+            Role::LeftHip,
+            Role::LeftKnee,
+            Role::LeftFoot,
+        ),
+        (
+            Role::RightShoulder,
+            Role::RightElbow,
+            Role::RightHand,
+            Role::RightHip,
+            Role::RightKnee,
+            Role::RightFoot,
+        ),
+    ] {
+        push_chain(&mut out, Role::Chest, Role::Chest, shoulder, 0.075, SHIRT);
+        push_chain(&mut out, elbow, shoulder, elbow, 0.056, SHIRT);
+        push_chain(&mut out, hand, elbow, hand, 0.045, SKIN);
+        push_chain(&mut out, Role::Pelvis, Role::Pelvis, hip, 0.095, TROUSERS);
+        push_chain(&mut out, knee, hip, knee, 0.078, TROUSERS);
+        push_chain(&mut out, foot, knee, foot, 0.058, TROUSERS);
+        // A mitten past the wrist, along the forearm or the hand's bones.
+        let forearm = (p(hand) - p(elbow)).normalize_or_zero();
+        let h = p(hand);
+        let end = tip(skeleton, world, roles.get(hand), forearm * 0.08);
+        let along = (end - h).normalize_or(forearm);
+        out.push(Segment {
+            part: hand,
+            a: h,
+            b: h + along * 0.07,
+            r: 0.047,
+            color: SKIN,
+        });
+        // A shoe from the ankle to the toes, resting on its sole.
+        let f = p(foot);
+        let facing = (p(knee) - p(hip)).cross(p(Role::LeftHip) - p(Role::RightHip));
+        let fallback = DVec3::new(facing.x, 0.0, facing.z).normalize_or(DVec3::Z) * 0.14;
+        let toe = tip(skeleton, world, roles.get(foot), fallback);
+        let r = 0.045;
+        out.push(Segment {
+            part: foot,
+            a: f,
+            b: toe.with_y(toe.y.max(r)),
+            r,
+            color: SHOES,
+        });
+    }
+    // Chest across the shoulders and hips across the hip joints, so that
+    // the trunk reads as a body and not a stick.
+    out.push(Segment {
+        part: Role::Chest,
+        a: p(Role::LeftShoulder),
+        b: p(Role::RightShoulder),
+        r: 0.075,
+        color: SHIRT,
+    });
+    out.push(Segment {
+        part: Role::Chest,
+        a: (p(Role::Chest) * 0.7 + p(Role::Pelvis) * 0.3),
+        b: (p(Role::Chest) * 0.7 + p(Role::Pelvis) * 0.3),
+        r: 0.14,
+        color: SHIRT,
+    });
+    out.push(Segment {
+        part: Role::Pelvis,
+        a: p(Role::LeftHip),
+        b: p(Role::RightHip),
+        r: 0.1,
+        color: TROUSERS,
+    });
+    // The head: a sphere above the head joint, along the neck.
+    let up = (p(Role::Head) - p(Role::Neck)).normalize_or(DVec3::Y);
+    let head_tip = tip(skeleton, world, roles.get(Role::Head), up * 0.2);
+    let centre = p(Role::Head) + (head_tip - p(Role::Head)) * 0.45;
+    out.push(Segment {
+        part: Role::Head,
+        a: centre,
+        b: centre,
+        r: 0.105,
+        color: SKIN,
+    });
+    out
+}
+
+/// Which segments glow when a finger holds `role`.
+fn highlights(part: Role, held: &[Role]) -> bool {
+    held.contains(&part)
+}
+
+/// The character's body as a mesh; parts in `held` are highlighted.
+#[must_use]
+pub fn body_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose, held: &[Role]) -> Mesh {
+    let mut mesh = Mesh::default();
+    for s in segments(skeleton, roles, world) {
+        let glow = highlights(s.part, held);
+        let c = if glow { HELD } else { s.color };
+        mesh.capsule(
+            s.a.as_vec3(),
+            s.b.as_vec3(),
+            s.r as f32,
+            [c[0], c[1], c[2], if glow { 1.0 } else { 0.0 }],
+        );
+    }
+    mesh
+}
+
+/// The overlays of one frame.
+#[must_use]
+pub fn overlay(marks: &Marks, width: f64) -> Overlay {
+    let mut o = Overlay::default();
+    for t in &marks.trajectories {
+        let pts: Vec<[f32; 2]> = t.points.iter().map(|p| [p.x as f32, p.y as f32]).collect();
+        let color = if t.executable {
+            [0.85, 0.03, 0.02, 0.9]
+        } else {
+            [1.0, 0.42, 0.62, 0.75]
+        };
+        o.polyline(&pts, 5.0, color);
+        if pts.len() >= 2 {
+            let n = pts.len();
+            o.arrow_head(pts[n.saturating_sub(4)], pts[n - 1], 18.0, color);
+        }
+    }
+    for f in &marks.fingers {
+        let c = [f.at.x as f32, f.at.y as f32];
+        let ring = match f.usage {
+            FingerUse::Part(_) => [1.0, 0.45, 0.08, 0.95],
+            FingerUse::Camera => [0.55, 0.75, 1.0, 0.9],
+        };
+        o.disc(c, 34.0, [0.0, 0.0, 0.0, 0.22]);
+        o.ring(c, 34.0, 5.0, ring);
+        o.disc(c, 5.0, ring);
+    }
+    if let Some(text) = &marks.status {
+        let scale = 2.0;
+        let w = text_width(text, scale).min(width as f32) + 24.0;
+        o.rect(0.0, 0.0, w, 8.0 * scale + 16.0, [0.0, 0.0, 0.0, 0.55]);
+        o.text(12.0, 8.0, scale, text, [0.95, 0.95, 0.95, 1.0]);
+    }
+    o
+}
+
+/// The character with its overlays.
+#[must_use]
+pub fn compose(
+    view: &View,
+    skeleton: &Skeleton,
+    roles: &RoleMap,
+    world: &WorldPose,
+    held: &[Role],
+    marks: &Marks,
+) -> DrawList {
+    let mut list = view.empty(true);
+    list.body = body_mesh(skeleton, roles, world, held);
+    list.overlay = overlay(marks, view.camera.width);
+    list
+}
+
+/// The bare scene benchmarks compare with: `n` lit boxes, no floor, no
+/// shadow, no overlays.
+#[must_use]
+pub fn boxes(view: &View, n: usize) -> DrawList {
+    let mut list = view.empty(false);
+    let cols = (n as f64).sqrt().ceil() as usize;
+    for i in 0..n {
+        let (cx, cz) = ((i % cols) as f32, (i / cols) as f32);
+        let c = Vec3::new(
+            (cx - cols as f32 / 2.0) * 0.5,
+            0.8,
+            (cz - cols as f32 / 2.0) * 0.5,
+        );
+        list.body.cuboid(c, Vec3::splat(0.15), [0.5, 0.6, 0.7, 0.0]);
+    }
+    list
+}

@@ -1,0 +1,211 @@
+//! Golden-image tests: fixed scenes rendered for real with lavapipe (the
+//! CPU Vulkan driver, so that images do not depend on the machine's GPU)
+//! and compared with stored PNGs in tests/golden. A failure writes the
+//! actual frame and a difference image to target/golden-failures.
+//! `MARIONETTE_UPDATE_GOLDEN=1 cargo test --test render` rewrites them.
+
+use std::path::PathBuf;
+
+use glam::{DQuat, DVec3};
+use marionette::character::camera::Camera;
+use marionette::character::library::Library;
+use marionette::character::roles::Role;
+use marionette::character::skeleton::forward_kinematics;
+use marionette::input::calibration::{Rotation, ScreenPoint};
+use marionette::render::gpu::{AdapterChoice, Gpu};
+use marionette::render::headless::{Headless, Image};
+use marionette::render::scene::{self, FingerMark, FingerUse, Marks, TrajectoryMark, View};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn library() -> Library {
+    Library::load(&root().join("assets/library")).expect("default library")
+}
+
+fn camera(w: f64, h: f64) -> Camera {
+    let target = DVec3::new(0.0, 0.95, 0.0);
+    let dir = DQuat::from_rotation_y(0.45) * DVec3::new(0.0, 0.22, 1.0).normalize();
+    Camera {
+        eye: target + dir * 3.6,
+        target,
+        fov_y_deg: 40.0,
+        width: w,
+        height: h,
+    }
+}
+
+fn headless(w: u32, h: u32) -> Headless {
+    let gpu = Gpu::new(AdapterChoice::Cpu)
+        .expect("a CPU Vulkan adapter (lavapipe): apt-get install mesa-vulkan-drivers");
+    Headless::new(gpu, w, h, 4)
+}
+
+/// Per-pixel comparison: a pixel differs when a channel is off by more than
+/// 24 of 255; at most 0.3% of the pixels may differ, and the mean absolute
+/// difference must stay under 1.0.
+fn compare(name: &str, actual: &Image) {
+    let golden = root().join("tests/golden").join(format!("{name}.png"));
+    if std::env::var_os("MARIONETTE_UPDATE_GOLDEN").is_some() || !golden.exists() {
+        assert!(
+            std::env::var_os("MARIONETTE_UPDATE_GOLDEN").is_some(),
+            "{} is missing: run MARIONETTE_UPDATE_GOLDEN=1 cargo test --test render",
+            golden.display()
+        );
+        actual.write_png(&golden).unwrap();
+        return;
+    }
+    let expected = Image::read_png(&golden).unwrap();
+    assert_eq!(
+        (expected.width, expected.height),
+        (actual.width, actual.height),
+        "{name}: size"
+    );
+    let mut diff = Image::filled(actual.width, actual.height, [0, 0, 0, 255]);
+    let (mut differing, mut total) = (0usize, 0u64);
+    for (i, (a, e)) in actual
+        .rgba
+        .chunks(4)
+        .zip(expected.rgba.chunks(4))
+        .enumerate()
+    {
+        let d = (0..3).map(|c| a[c].abs_diff(e[c])).max().unwrap();
+        total += u64::from(d);
+        if d > 24 {
+            differing += 1;
+        }
+        let v = (u16::from(d) * 4).min(255) as u8;
+        diff.rgba[i * 4..i * 4 + 3].copy_from_slice(&[v, v, v]);
+    }
+    let n = (actual.width * actual.height) as usize;
+    let mean = total as f64 / n as f64;
+    let frac = differing as f64 / n as f64;
+    if frac > 0.003 || mean > 1.0 {
+        let out = root().join("target/golden-failures");
+        std::fs::create_dir_all(&out).unwrap();
+        actual.write_png(&out.join(format!("{name}.png"))).unwrap();
+        diff.write_png(&out.join(format!("{name}-difference.png")))
+            .unwrap();
+        panic!(
+            "{name}: {:.2}% of pixels differ, mean difference {mean:.2}; see {}",
+            frac * 100.0,
+            out.display()
+        );
+    }
+}
+
+#[test]
+fn rest_pose() {
+    // The character at rest: standing, arms down (the first frame of the
+    // stance clip).
+    let lib = library();
+    let clip = &lib.clips["pose_stance.bvh"];
+    let world = forward_kinematics(&clip.skeleton, &clip.frames[0]);
+    let view = View {
+        camera: camera(640.0, 360.0),
+        rotation: Rotation::R0,
+    };
+    let list = scene::compose(
+        &view,
+        &clip.skeleton,
+        &clip.roles,
+        &world,
+        &[],
+        &Marks::default(),
+    );
+    let mut h = headless(640, 360);
+    let img = h.render(&list).unwrap();
+    compare("rest_pose", &img);
+}
+
+/// A posture from the library with two held parts, finger marks, both
+/// kinds of trajectories and a status line.
+fn held_scene(view: &View) -> marionette::render::renderer::DrawList {
+    let lib = library();
+    let clip = &lib.clips["pose_reach_front_right.bvh"];
+    let pose = &clip.frames[clip.frames.len() / 2];
+    let world = forward_kinematics(&clip.skeleton, pose);
+    let cam = &view.camera;
+    let at = |r: Role| cam.project(world.positions[clip.roles.get(r)]).unwrap();
+    let hand = at(Role::RightHand);
+    let foot = at(Role::LeftFoot);
+    let arc = |from: ScreenPoint, dx: f64, dy: f64| -> Vec<ScreenPoint> {
+        (0..24)
+            .map(|k| {
+                let s = f64::from(k) / 23.0;
+                ScreenPoint::new(
+                    from.x + dx * s,
+                    from.y + dy * s - (s * std::f64::consts::PI).sin() * 40.0,
+                )
+            })
+            .collect()
+    };
+    let marks = Marks {
+        fingers: vec![
+            FingerMark {
+                at: hand,
+                usage: FingerUse::Part(Role::RightHand),
+            },
+            FingerMark {
+                at: foot,
+                usage: FingerUse::Part(Role::LeftFoot),
+            },
+            FingerMark {
+                at: ScreenPoint::new(cam.width * 0.85, cam.height * 0.8),
+                usage: FingerUse::Camera,
+            },
+        ],
+        trajectories: vec![
+            TrajectoryMark {
+                points: arc(hand, 160.0, -20.0),
+                executable: true,
+            },
+            TrajectoryMark {
+                points: arc(hand, -20.0, 120.0),
+                executable: false,
+            },
+        ],
+        status: Some("posing | right_hand, left_foot held | 12.3 ms".into()),
+    };
+    scene::compose(
+        view,
+        &clip.skeleton,
+        &clip.roles,
+        &world,
+        &[Role::RightHand, Role::LeftFoot],
+        &marks,
+    )
+}
+
+#[test]
+fn two_held_parts_with_overlays() {
+    let view = View {
+        camera: camera(640.0, 360.0),
+        rotation: Rotation::R0,
+    };
+    let mut h = headless(640, 360);
+    compare("two_held_parts", &h.render(&held_scene(&view)).unwrap());
+}
+
+#[test]
+fn rotated_output() {
+    // A portrait picture on a landscape panel turned 90° clockwise.
+    let view = View {
+        camera: camera(360.0, 640.0),
+        rotation: Rotation::R90,
+    };
+    let mut h = headless(640, 360);
+    let img = h.render(&held_scene(&view)).unwrap();
+    compare("rotated_90", &img);
+    // The status text (top left of the picture) lands along the right edge
+    // of the output, from its top.
+    let text = |x0: u32, x1: u32, y0: u32, y1: u32| {
+        (y0..y1)
+            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.pixel(x, y)[..3].iter().all(|&c| c > 200))
+            .count()
+    };
+    assert!(text(612, 636, 0, 200) > 100, "no text along the right edge");
+    assert_eq!(text(0, 40, 0, 200), 0, "text on the left edge");
+}
