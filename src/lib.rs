@@ -17,6 +17,8 @@
 //! - [`character`] holds the motion data the method learns from: skeletons,
 //!   BVH, body-part roles, motion libraries and the authoring of the default
 //!   library. Pure.
+//! - [`control`] turns touches into the character's motion and the view
+//!   (posing, action and tracking control; the camera rig). Pure.
 //! - [`render`] draws the character and the overlays with wgpu, into
 //!   offscreen images (headless) or onto the display.
 //! - [`app`] is the application edge: configuration, exit codes, logging.
@@ -27,5 +29,6 @@
 
 pub mod app;
 pub mod character;
+pub mod control;
 pub mod input;
 pub mod render;

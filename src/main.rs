@@ -33,25 +33,40 @@ enum Command {
     /// Replay the bundled demo recording through the input stack and print
     /// what it does
     Demo {
-        /// Folder for the demo's output files
+        /// Where the frames, contact sheet and summary go.
         #[arg(long, default_value = "demo-out")]
         out: PathBuf,
+        /// Frames written per second of recording.
+        #[arg(long, default_value_t = 10.0)]
+        fps: f64,
     },
-    /// Describe an evemu recording or a BVH motion file as one JSON object
     Inspect {
         /// An evemu recording, or a .bvh file
         file: PathBuf,
     },
     /// Replay a recording through the input stack
     Replay {
-        /// An evemu recording
         file: PathBuf,
-        /// Print the touch frames as JSON lines (time, contacts with id,
-        /// raw and screen position)
+        /// Print every touch frame as a JSON line.
         #[arg(long)]
         contacts: bool,
+        /// Run the whole pipeline into images (needs --out).
+        #[arg(long, requires = "out")]
+        headless: bool,
+        /// Where the frames, contact sheet and summary go.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Frames written per second of recording.
+        #[arg(long, default_value_t = 10.0)]
+        fps: f64,
     },
-    /// Record a device's events to an evemu file (stop with Ctrl-C)
+    /// Write the motion the character performs for a recording as BVH
+    /// (the library's skeleton, at its frame rate).
+    ExportBvh {
+        file: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
     Record {
         /// Device node [default: the first touchscreen found]
         #[arg(long)]
@@ -271,9 +286,20 @@ fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
 
 fn run(command: Command, config: &Config) -> Result<(), Failure> {
     match command {
-        Command::Demo { out } => demo(config, &out),
+        Command::Demo { out, fps } => demo(config, &out, fps),
         Command::Inspect { file } => inspect(&file),
-        Command::Replay { file, contacts } => replay(config, &file, contacts),
+        Command::Replay {
+            file,
+            headless: true,
+            out: Some(out),
+            fps,
+            ..
+        } => {
+            let rec = Recording::read_file(&file)?;
+            show(config, &rec, &out, fps)
+        }
+        Command::Replay { file, contacts, .. } => replay(config, &file, contacts),
+        Command::ExportBvh { file, out } => export_bvh(config, &file, &out),
         Command::Record {
             device,
             out,
@@ -631,35 +657,93 @@ fn replay(config: &Config, file: &Path, contacts: bool) -> Result<(), Failure> {
     out.flush().map_err(stdout_error)
 }
 
-fn demo(config: &Config, out_dir: &Path) -> Result<(), Failure> {
+/// The character: the configured library, its posing model (baked or from
+/// the cache) and its action models.
+fn character(
+    config: &Config,
+) -> Result<std::sync::Arc<marionette::control::controller::Character>, Failure> {
+    let dir = config.character.library_dir();
+    let (lib, model) = load_model(&dir, false)?;
+    Ok(std::sync::Arc::new(
+        marionette::control::controller::Character::new(lib, model),
+    ))
+}
+
+/// A recording through the whole pipeline into images.
+fn show(config: &Config, rec: &Recording, out: &Path, fps: f64) -> Result<(), Failure> {
+    use marionette::app::headless;
+    let ch = character(config)?;
+    let frames = pipeline::replay(rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let opts = headless::Options {
+        out: Some(out.to_owned()),
+        fps,
+        until: Some(pipeline::summarize(rec).0.duration_s),
+        ..headless::Options::default()
+    };
+    let summary =
+        headless::run(ch, config, frames, &opts).map_err(|e| Failure::new(e.exit_code(), e))?;
+    writeln!(std::io::stdout(), "{summary}").map_err(stdout_error)
+}
+
+fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Failure> {
     // The recording is built into the binary: the demo works from anywhere.
-    let rec = Recording::parse(
-        DEMO_RECORDING,
-        Path::new("assets/recordings/demo-two-hands.evemu"),
-    )?;
+    let rec = Recording::parse(DEMO_RECORDING, Path::new("assets/recordings/demo.evemu"))?;
+    let (summary, _) = pipeline::summarize(&rec);
+    writeln!(
+        std::io::stdout(),
+        "demo: assets/recordings/demo.evemu ({:.1} s, {} finger contacts)",
+        summary.duration_s,
+        summary.touch_sequences
+    )
+    .map_err(stdout_error)?;
+    show(config, &rec, out_dir, fps)
+}
+
+fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(), Failure> {
+    use marionette::app::headless;
+    let rec = Recording::read_file(file)?;
+    let ch = character(config)?;
     let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
-    std::fs::create_dir_all(out_dir).map_err(|e| {
-        Failure::new(
-            exit::CANTCREAT,
-            format!("cannot create {}: {e}", out_dir.display()),
-        )
-    })?;
-    let path = out_dir.join("contacts.jsonl");
-    let mut text = String::new();
-    for f in &frames {
-        text.push_str(&serde_json::to_string(f).map_err(|e| Failure::new(exit::FAILURE, e))?);
-        text.push('\n');
-    }
-    std::fs::write(&path, text).map_err(|e| {
-        Failure::new(
-            exit::CANTCREAT,
-            format!("cannot write {}: {e}", path.display()),
-        )
-    })?;
-    let summary = pipeline::demo_summary(&rec, &frames, config);
-    let mut stdout = std::io::stdout().lock();
-    write!(stdout, "{summary}").map_err(stdout_error)?;
-    writeln!(stdout, "touch frames written to {}", path.display()).map_err(stdout_error)
+    let frame_time = ch
+        .lib
+        .clips
+        .values()
+        .next()
+        .map_or(1.0 / 30.0, |c| c.frame_time);
+    let opts = headless::Options {
+        tick_hz: 1.0 / frame_time,
+        keep_poses: true,
+        until: Some(pipeline::summarize(&rec).0.duration_s),
+        ..headless::Options::default()
+    };
+    let summary = headless::run(ch.clone(), config, frames, &opts)
+        .map_err(|e| Failure::new(e.exit_code(), e))?;
+    let translates: Vec<bool> = (0..ch.lib.skeleton.len()).map(|j| j == 0).collect();
+    let text = marionette::character::bvh::write(
+        &ch.lib.skeleton,
+        &translates,
+        &summary.poses,
+        frame_time,
+    );
+    let tmp = out.with_extension("bvh.tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|()| std::fs::rename(&tmp, out))
+        .map_err(|e| {
+            Failure::new(
+                exit::CANTCREAT,
+                format!("cannot write {}: {e}", out.display()),
+            )
+        })?;
+    writeln!(
+        std::io::stdout(),
+        "wrote {} frames ({:.1} s at {:.0} fps, {} actions) to {}",
+        summary.poses.len(),
+        summary.duration_s,
+        1.0 / frame_time,
+        summary.actions.len(),
+        out.display()
+    )
+    .map_err(stdout_error)
 }
 
 fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failure> {
@@ -704,7 +788,7 @@ fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failu
     writeln!(stdout, "sheets written to {}", out.display()).map_err(stdout_error)
 }
 
-const DEMO_RECORDING: &str = include_str!("../assets/recordings/demo-two-hands.evemu");
+const DEMO_RECORDING: &str = include_str!("../assets/recordings/demo.evemu");
 
 fn list_devices(config: &Config, json: bool) -> Result<(), Failure> {
     let found = live::list_devices(config).map_err(|e| Failure::new(e.exit_code(), e))?;

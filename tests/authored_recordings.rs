@@ -33,6 +33,17 @@ fn demo_recording_is_regenerated_identically() {
     check(&path, &synth::demo_two_hands());
 }
 
+#[test]
+fn character_demo_recording_is_regenerated_identically() {
+    // Authored against the default library's character: the drags start on
+    // the body parts and follow the actions' trajectories.
+    let config = marionette::app::config::Config::default();
+    let settings = marionette::control::controller::Settings::from_config(&config);
+    let synth = marionette::control::demo::author_demo(common::character(), settings, &config);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/recordings/demo.evemu");
+    check(&path, &synth);
+}
+
 /// Four fingers moving for 600 frames with no time between them: played
 /// through uinput this overflows the evdev buffer of a reader that is not
 /// scheduled in time (a real SYN_DROPPED); then they rest and lift.

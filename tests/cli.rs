@@ -141,23 +141,6 @@ fn replay_contacts_are_json_lines_in_screen_pixels() {
 }
 
 #[test]
-fn demo_runs_and_writes_its_files() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = marionette(&["demo", "--out", dir.path().to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8(out.stdout).unwrap();
-    assert!(
-        stdout.contains("9 finger contacts, at most 2 at once"),
-        "{stdout}"
-    );
-    assert!(Path::new(&dir.path().join("contacts.jsonl")).is_file());
-}
-
-#[test]
 fn list_devices_reports_an_empty_or_missing_folder_clearly() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("m.toml");

@@ -45,7 +45,53 @@ pub struct Config {
     pub display: DisplayConfig,
     pub input: InputConfig,
     pub action: ActionConfig,
+    pub character: CharacterConfig,
     pub log: LogConfig,
+}
+
+/// `[character]`: the motion library and how fingers and the camera behave.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CharacterConfig {
+    /// Folder of the motion library (with its `library.toml`); empty for
+    /// the default library shipped with marionette.
+    pub library: PathBuf,
+    /// A finger within this distance of a body part grabs it (px).
+    pub pick_radius_px: f64,
+    /// The camera eases back to its home view after this long without a
+    /// touch (s).
+    pub camera_home_after_s: f64,
+}
+
+impl Default for CharacterConfig {
+    fn default() -> Self {
+        let s = crate::control::controller::Settings::default();
+        Self {
+            library: PathBuf::new(),
+            pick_radius_px: s.pick_radius_px,
+            camera_home_after_s: s.home_after_s,
+        }
+    }
+}
+
+impl CharacterConfig {
+    /// Where the library is: the configured folder, else the shipped
+    /// default library (installed, else next to the source tree).
+    #[must_use]
+    pub fn library_dir(&self) -> PathBuf {
+        if !self.library.as_os_str().is_empty() {
+            return self.library.clone();
+        }
+        let installed = Path::new("/usr/share/marionette/library");
+        if installed.join("library.toml").exists() {
+            return installed.to_owned();
+        }
+        let here = Path::new("assets/library");
+        if here.join("library.toml").exists() {
+            return here.to_owned();
+        }
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library")
+    }
 }
 
 /// `[action]`: when a drag starts an action (the paper's section 5).
@@ -107,6 +153,13 @@ pub struct DisplayConfig {
     pub height: u32,
     /// Clockwise turn of the picture on the panel: 0, 90, 180 or 270.
     pub rotation: u32,
+    /// Samples per pixel for anti-aliasing: 1, 2, 4 or 8 (fewer when the
+    /// adapter cannot).
+    pub samples: u32,
+    /// Show the trajectories of the actions a held part can start.
+    pub trajectories: bool,
+    /// Show a status line (mode, action, frame time).
+    pub status_line: bool,
 }
 
 impl Default for DisplayConfig {
@@ -115,6 +168,9 @@ impl Default for DisplayConfig {
             width: 1280,
             height: 720,
             rotation: 0,
+            samples: 4,
+            trajectories: true,
+            status_line: true,
         }
     }
 }
@@ -125,9 +181,18 @@ impl DisplayConfig {
         Rotation::from_degrees(i64::from(self.rotation)).unwrap_or_default()
     }
 
-    /// Picture size in pixels.
+    /// Picture size in pixels: the output's, turned by the rotation.
     #[must_use]
     pub fn size(&self) -> (u32, u32) {
+        match self.rotation() {
+            Rotation::R90 | Rotation::R270 => (self.height, self.width),
+            Rotation::R0 | Rotation::R180 => (self.width, self.height),
+        }
+    }
+
+    /// Output size in pixels (before rotation).
+    #[must_use]
+    pub fn output_size(&self) -> (u32, u32) {
         (self.width, self.height)
     }
 }
@@ -267,6 +332,29 @@ impl Config {
                 ),
             ));
         }
+        if ![1, 2, 4, 8].contains(&d.samples) {
+            return Err(invalid(
+                "display.samples",
+                format!("must be 1, 2, 4 or 8, found {}", d.samples),
+            ));
+        }
+        let c = &self.character;
+        for (key, v, lo, hi) in [
+            ("character.pick_radius_px", c.pick_radius_px, 1.0, 500.0),
+            (
+                "character.camera_home_after_s",
+                c.camera_home_after_s,
+                0.0,
+                3600.0,
+            ),
+        ] {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(invalid(
+                    key,
+                    format!("must be between {lo} and {hi}, found {v}"),
+                ));
+            }
+        }
         if !(50..=60_000).contains(&self.input.rescan_interval_ms) {
             return Err(invalid(
                 "input.rescan_interval_ms",
@@ -366,8 +454,11 @@ mod tests {
     #[test]
     fn shipped_example_is_valid_and_complete() {
         let text = include_str!("../../config/marionette.toml");
-        let c = parse(text).unwrap();
+        let mut c = parse(text).unwrap();
         assert_eq!(c.input.device.len(), 1);
+        // Every other key shows its default.
+        c.input.device.clear();
+        assert_eq!(c, Config::default());
     }
 
     #[test]

@@ -2,5 +2,6 @@
 
 pub mod config;
 pub mod exit;
+pub mod headless;
 pub mod logging;
 pub mod signals;

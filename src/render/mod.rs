@@ -3,6 +3,7 @@
 //! ([`scene`]), the pipelines ([`renderer`], WGSL in `shaders/`) and
 //! offscreen output read back as images ([`headless`]).
 
+pub mod contact;
 pub mod gpu;
 pub mod headless;
 pub mod mesh;

@@ -22,3 +22,18 @@ pub fn shared_dir() -> PathBuf {
 pub fn data_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")
 }
+
+/// The default library's character (library, posing model, action models),
+/// built once per test binary.
+pub fn character() -> std::sync::Arc<marionette::control::controller::Character> {
+    use std::sync::{Arc, OnceLock};
+    static CH: OnceLock<Arc<marionette::control::controller::Character>> = OnceLock::new();
+    CH.get_or_init(|| {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+        let lib = marionette::character::library::Library::load(&dir).expect("default library");
+        let (_, samples) = marionette::character::posing::model::posing_samples(&lib);
+        let model = marionette::character::posing::model::LearnedModel::build(samples);
+        Arc::new(marionette::control::controller::Character::new(lib, model))
+    })
+    .clone()
+}

@@ -48,6 +48,12 @@ impl ActionPlayer {
         }
     }
 
+    /// Which action (index into the action models).
+    #[must_use]
+    pub fn action(&self) -> usize {
+        self.action
+    }
+
     #[must_use]
     pub fn status(&self) -> Status {
         self.timeline.status()

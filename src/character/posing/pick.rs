@@ -8,7 +8,7 @@ use crate::input::calibration::ScreenPoint;
 
 /// The body parts a finger can grab, and the bone that leads to each (so
 /// that a touch on the forearm grabs the hand).
-const GRABBABLE: [(Role, Option<Role>); 10] = [
+const GRABBABLE: [(Role, Option<Role>); 11] = [
     (Role::Head, Some(Role::Neck)),
     (Role::LeftHand, Some(Role::LeftElbow)),
     (Role::RightHand, Some(Role::RightElbow)),
@@ -19,6 +19,7 @@ const GRABBABLE: [(Role, Option<Role>); 10] = [
     (Role::LeftKnee, None),
     (Role::RightKnee, None),
     (Role::Chest, Some(Role::Pelvis)),
+    (Role::Pelvis, None),
 ];
 
 fn segment_distance(p: ScreenPoint, a: ScreenPoint, b: ScreenPoint) -> f64 {

@@ -1,0 +1,406 @@
+//! The headless presenter: a recording replayed through the whole pipeline
+//! (tracker, calibration, controller, renderer) into PNG frames, a contact
+//! sheet and a summary. `marionette demo` and `marionette replay
+//! --headless` use it; so do the tests.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::Serialize;
+use thiserror::Error;
+
+use super::config::Config;
+use crate::character::action::timeline::ActionEvent;
+use crate::control::controller::{Character, Controller, Mode, Settings};
+use crate::control::ticker::Ticker;
+use crate::input::pipeline::ScreenFrame;
+use crate::render::contact;
+use crate::render::gpu::{AdapterChoice, Gpu, GpuError};
+use crate::render::headless::{Headless, Image};
+use crate::render::scene::{self, View};
+
+/// Why a headless run stopped.
+#[derive(Debug, Error)]
+pub enum HeadlessError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl HeadlessError {
+    /// The exit code (sysexits) for systemd and scripts.
+    #[must_use]
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Self::Gpu(_) => super::exit::UNAVAILABLE,
+            Self::Write { .. } => super::exit::CANTCREAT,
+        }
+    }
+}
+
+/// How to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Where frames, the contact sheet and the summary go; `None` steps the
+    /// controller without rendering (poses only).
+    pub out: Option<PathBuf>,
+    /// Controller steps per second.
+    pub tick_hz: f64,
+    /// Frames written per second of recording.
+    pub fps: f64,
+    /// Keep going this long after the last touch (s)...
+    pub tail_s: f64,
+    /// ...and at least until this time (the recording's end, s).
+    pub until: Option<f64>,
+    /// Thumbnails on the contact sheet.
+    pub sheet_frames: usize,
+    pub adapter: AdapterChoice,
+    /// Keep every stepped posture in [`Summary::poses`].
+    pub keep_poses: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            out: None,
+            tick_hz: 30.0,
+            fps: 10.0,
+            tail_s: 1.0,
+            until: None,
+            sheet_frames: 16,
+            adapter: AdapterChoice::Auto,
+            keep_poses: false,
+        }
+    }
+}
+
+/// An action as it happened.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ActionRecord {
+    pub action: String,
+    pub started_s: f64,
+    /// `finished`, `cancelled`, or `playing` at the end of the replay.
+    pub outcome: String,
+    pub ended_s: Option<f64>,
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Summary {
+    pub duration_s: f64,
+    pub touch_frames: usize,
+    pub steps: usize,
+    pub frames_written: usize,
+    pub actions: Vec<ActionRecord>,
+    /// Body parts fingers held.
+    pub parts_held: Vec<String>,
+    /// Most parts held at once.
+    pub most_held_at_once: usize,
+    /// Whether fingers on empty space moved the camera.
+    pub camera_moved: bool,
+    /// Render plus readback, per written frame (ms; 0 without rendering).
+    pub frame_ms_mean: f64,
+    pub frame_ms_max: f64,
+    /// FNV-1a digest of every posture stepped: equal digests, equal runs.
+    pub pose_digest: String,
+    pub sheet: Option<PathBuf>,
+    /// Where the frames, sheet and summary are.
+    pub out: Option<PathBuf>,
+    /// Every stepped posture, with [`Options::keep_poses`].
+    #[serde(skip)]
+    pub poses: Vec<crate::character::skeleton::Pose>,
+}
+
+fn digest(hash: &mut u64, ctl: &Controller) {
+    let pose = ctl.pose();
+    let values = pose
+        .rotations
+        .iter()
+        .flat_map(|q| q.to_array())
+        .chain(pose.translations.iter().flat_map(|t| t.to_array()));
+    for v in values {
+        for b in v.to_bits().to_le_bytes() {
+            *hash ^= u64::from(b);
+            *hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}
+
+/// The status line for the picture: recording time, mode, held parts.
+fn status(ctl: &Controller, t: f64) -> String {
+    let held: Vec<&str> = ctl.held().iter().map(|r| r.name()).collect();
+    let mode = match ctl.action() {
+        Some((name, time)) => format!("action {name} {:>3.0}%", time * 100.0),
+        None => "posing".to_owned(),
+    };
+    let mut s = format!("{t:6.2} s | {mode}");
+    if !held.is_empty() {
+        s.push_str(" | holding ");
+        s.push_str(&held.join(", "));
+    }
+    s
+}
+
+fn label(ctl: &Controller, t: f64) -> String {
+    match ctl.action() {
+        Some((name, _)) => format!("{t:.1}s {name}"),
+        None if !ctl.held().is_empty() => format!("{t:.1}s posing {}", ctl.held().len()),
+        None if ctl.touching_camera() => format!("{t:.1}s camera"),
+        None => format!("{t:.1}s"),
+    }
+}
+
+fn write(path: &Path, img: &Image) -> Result<(), HeadlessError> {
+    img.write_png(path).map_err(|source| HeadlessError::Write {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// What a step shows, for choosing the contact sheet's frames.
+#[derive(Clone, Debug, PartialEq)]
+enum Shows {
+    Rest,
+    Action(String),
+    Posing(usize),
+    Camera,
+}
+
+/// Steps worth a thumbnail: a dry run of the same controller finds the
+/// stretches where something happens (an action, a pose held, the camera
+/// moving) and takes one step from each (60% into it), plus the first and
+/// last steps; evenly thinned to `max`.
+fn key_steps(ctl: &Controller, ticker: &Ticker, end: f64, max: usize) -> Vec<usize> {
+    let (mut ctl, mut ticker) = (ctl.clone(), ticker.clone());
+    let mut runs: Vec<(Shows, usize, usize)> = Vec::new();
+    let mut step = 0;
+    let mut orbit = ctl.rig.orbit;
+    loop {
+        let t = ticker.step(&mut ctl);
+        step += 1;
+        let shows = match ctl.action() {
+            Some((name, _)) => Shows::Action(name.to_owned()),
+            None if !ctl.held().is_empty() => Shows::Posing(ctl.held().len()),
+            None if ctl.rig.orbit != orbit => Shows::Camera,
+            None => Shows::Rest,
+        };
+        orbit = ctl.rig.orbit;
+        match runs.last_mut() {
+            Some((s, _, last)) if *s == shows => *last = step,
+            _ => runs.push((shows, step, step)),
+        }
+        if t >= end {
+            break;
+        }
+    }
+    let mut keys: Vec<usize> = runs
+        .iter()
+        .filter(|(s, a, b)| *s != Shows::Rest && b - a >= 3)
+        .map(|(_, a, b)| a + (b - a) * 6 / 10)
+        .collect();
+    keys.insert(0, 1);
+    keys.push(step);
+    if keys.len() > max.max(2) {
+        let n = keys.len();
+        let m = max.max(2);
+        keys = (0..m).map(|i| keys[i * (n - 1) / (m - 1)]).collect();
+    }
+    keys.dedup();
+    keys
+}
+
+/// Replay `frames` (touch frames in picture pixels, times in seconds).
+pub fn run(
+    ch: Arc<Character>,
+    config: &Config,
+    frames: Vec<ScreenFrame>,
+    opts: &Options,
+) -> Result<Summary, HeadlessError> {
+    let settings = Settings::from_config(config);
+    let (pw, ph) = config.display.size();
+    let (ow, oh) = config.display.output_size();
+    let mut ctl = Controller::new(ch, settings, f64::from(pw), f64::from(ph), 0.0);
+    let touch_frames = frames.len();
+    let mut ticker = Ticker::new(frames, opts.tick_hz);
+    let end = (ticker.end() + opts.tail_s).max(opts.until.unwrap_or(0.0));
+    let mut headless = match &opts.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir.join("frames")).map_err(|source| HeadlessError::Write {
+                path: dir.join("frames"),
+                source,
+            })?;
+            let gpu = Gpu::new(opts.adapter)?;
+            let h = Headless::new(gpu, ow, oh, config.display.samples);
+            tracing::info!(
+                width = ow,
+                height = oh,
+                samples = h.renderer.samples(),
+                "rendering headless"
+            );
+            Some(h)
+        }
+        None => None,
+    };
+    let every = (opts.tick_hz / opts.fps.max(1e-3)).round().max(1.0) as usize;
+    let mut summary = Summary {
+        touch_frames,
+        ..Summary::default()
+    };
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    let mut held_ever = BTreeSet::new();
+    let mut thumbs: Vec<(Image, String, f64)> = Vec::new();
+    let mut times = Vec::new();
+    let key = if opts.out.is_some() {
+        key_steps(&ctl, &ticker, end, opts.sheet_frames)
+    } else {
+        Vec::new()
+    };
+    let home = ctl.rig.orbit;
+    loop {
+        let t = ticker.step(&mut ctl);
+        summary.steps += 1;
+        digest(&mut hash, &ctl);
+        if opts.keep_poses {
+            summary.poses.push(ctl.pose().clone());
+        }
+        let held = ctl.held();
+        summary.most_held_at_once = summary.most_held_at_once.max(held.len());
+        held_ever.extend(held.iter().map(|r| r.name().to_owned()));
+        if ctl.rig.orbit != home && !matches!(ctl.mode(), Mode::Action(_)) {
+            summary.camera_moved |= (ctl.rig.orbit.yaw - home.yaw).abs() > 0.05
+                || (ctl.rig.orbit.distance - home.distance).abs() > 0.05;
+        }
+        for e in ctl.take_events() {
+            match e {
+                ActionEvent::Started { action, time_s } => summary.actions.push(ActionRecord {
+                    action,
+                    started_s: time_s,
+                    outcome: "playing".into(),
+                    ended_s: None,
+                }),
+                ActionEvent::Finished { time_s, .. } | ActionEvent::Cancelled { time_s, .. } => {
+                    if let Some(r) = summary.actions.last_mut() {
+                        r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
+                            "finished".into()
+                        } else {
+                            "cancelled".into()
+                        };
+                        r.ended_s = Some(time_s);
+                    }
+                }
+                _ => {}
+            }
+        }
+        if let (Some(h), Some(dir)) = (headless.as_mut(), opts.out.as_ref()) {
+            let is_key = key.binary_search(&summary.steps).is_ok();
+            if summary.steps % every == 0 || is_key {
+                let view = View {
+                    camera: ctl.rig.camera(),
+                    rotation: config.display.rotation(),
+                };
+                let mut marks = ctl.marks(config.display.trajectories);
+                if config.display.status_line {
+                    marks.status = Some(status(&ctl, t));
+                }
+                let ch = ctl.character();
+                let list = scene::compose(
+                    &view,
+                    &ch.lib.skeleton,
+                    &ch.roles,
+                    ctl.world(),
+                    &held,
+                    &marks,
+                );
+                let started = std::time::Instant::now();
+                let img = h.render(&list)?;
+                times.push(started.elapsed().as_secs_f64() * 1e3);
+                let n = summary.frames_written;
+                write(&dir.join(format!("frames/frame-{n:05}.png")), &img)?;
+                if is_key {
+                    thumbs.push((img, label(&ctl, t), t));
+                }
+                summary.frames_written += 1;
+            }
+        }
+        if t >= end {
+            summary.duration_s = t;
+            break;
+        }
+    }
+    summary.parts_held = held_ever.into_iter().collect();
+    summary.pose_digest = format!("{hash:016x}");
+    if !times.is_empty() {
+        summary.frame_ms_mean = times.iter().sum::<f64>() / times.len() as f64;
+        summary.frame_ms_max = times.iter().copied().fold(0.0, f64::max);
+    }
+    if let Some(dir) = &opts.out {
+        if !thumbs.is_empty() {
+            let list: Vec<(&Image, String)> =
+                thumbs.iter().map(|(i, l, _)| (i, l.clone())).collect();
+            let sheet_img = contact::sheet(&list, 4, 4);
+            let path = dir.join("contact-sheet.png");
+            write(&path, &sheet_img)?;
+            summary.sheet = Some(path);
+        }
+        summary.out = Some(dir.clone());
+        let path = dir.join("summary.json");
+        let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        std::fs::write(&path, json + "\n")
+            .map_err(|source| HeadlessError::Write { path, source })?;
+    }
+    Ok(summary)
+}
+
+impl std::fmt::Display for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "replayed {:.1} s: {} touch frames, {} controller steps",
+            self.duration_s, self.touch_frames, self.steps
+        )?;
+        writeln!(
+            f,
+            "posing: parts held {} (at most {} at once); camera moved: {}",
+            if self.parts_held.is_empty() {
+                "none".to_owned()
+            } else {
+                self.parts_held.join(", ")
+            },
+            self.most_held_at_once,
+            if self.camera_moved { "yes" } else { "no" }
+        )?;
+        writeln!(f, "actions started by drags: {}", self.actions.len())?;
+        for a in &self.actions {
+            writeln!(
+                f,
+                "  {:6.2} s  {:<12} {}{}",
+                a.started_s,
+                a.action,
+                a.outcome,
+                a.ended_s
+                    .map(|e| format!(" at {e:.2} s"))
+                    .unwrap_or_default()
+            )?;
+        }
+        if self.frames_written > 0 {
+            writeln!(
+                f,
+                "frames: {} written, render + readback {:.1} ms mean, {:.1} ms max",
+                self.frames_written, self.frame_ms_mean, self.frame_ms_max
+            )?;
+        }
+        if let Some(s) = &self.sheet {
+            writeln!(f, "contact sheet: {}", s.display())?;
+        }
+        if let Some(o) = &self.out {
+            writeln!(f, "frames and summary.json in {}", o.display())?;
+        }
+        write!(f, "pose digest: {}", self.pose_digest)
+    }
+}

@@ -1,0 +1,559 @@
+//! The character controller: one call per frame turns the touches into the
+//! character's posture, following the paper. A finger that goes down on a
+//! body part holds it until it lifts (posing control, section 4); a drag
+//! that matches an action's trajectory starts the action, which the
+//! fingers then drive (action control, section 5), and at its end the
+//! character returns to posing; the output follows the target posture by
+//! acceleration-based tracking (section 6). Fingers on empty space move
+//! the camera. Time comes only from the frames and the caller's clock, so
+//! a replay gives the same postures every run.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use super::rig::Rig;
+use crate::character::action::model::{ActionModel, recognize};
+use crate::character::action::player::ActionPlayer;
+use crate::character::action::timeline::{ActionEvent, Status};
+use crate::character::action::trail::{StartRule, TrailPoint, view_angle_deg};
+use crate::character::library::Library;
+use crate::character::posing::model::LearnedModel;
+use crate::character::posing::pick::pick;
+use crate::character::posing::sample::{Anchor, Placement, pose_of, samples_of};
+use crate::character::posing::synth::{Constraint, SynthOptions, Target, synthesize};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
+use crate::character::tracking::accel::{AccelTracker, Gains};
+use crate::input::calibration::ScreenPoint;
+use crate::input::pipeline::ScreenFrame;
+use crate::input::touch::ContactId;
+use crate::render::scene::{FingerMark, FingerUse, Marks, TrajectoryMark};
+
+/// What the character is made of: the library, its posing model and its
+/// action models. Built once, shared by controllers.
+#[derive(Debug)]
+pub struct Character {
+    pub lib: Library,
+    pub roles: RoleMap,
+    pub posing: LearnedModel,
+    pub actions: Vec<ActionModel>,
+}
+
+impl Character {
+    /// Build the action models of `lib`; `posing` is its posing model.
+    #[must_use]
+    pub fn new(lib: Library, posing: LearnedModel) -> Self {
+        let actions = lib
+            .actions
+            .iter()
+            .map(|def| ActionModel::build(&lib, def))
+            .collect();
+        let roles = lib
+            .posing
+            .first()
+            .or_else(|| lib.clips.keys().next())
+            .and_then(|n| lib.clips.get(n))
+            .map(|c| c.roles.clone())
+            .unwrap_or_default();
+        Self {
+            lib,
+            roles,
+            posing,
+            actions,
+        }
+    }
+
+    /// The rest posture: the first frame of the first posing clip, standing
+    /// at `at`.
+    #[must_use]
+    pub fn rest_pose(&self, at: &Placement) -> Pose {
+        let clip = self.lib.posing.first().and_then(|n| self.lib.clips.get(n));
+        match clip.and_then(|c| samples_of(0, c, std::iter::once(0)).pop()) {
+            Some(s) => pose_of(&self.lib.skeleton, &s, at),
+            None => self.lib.skeleton.rest_pose(),
+        }
+    }
+}
+
+/// How the controller behaves; the recognition thresholds come from the
+/// configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub rule: StartRule,
+    /// A finger within this distance of a body part grabs it (px).
+    pub pick_radius_px: f64,
+    /// The camera eases back home after this long without a touch (s).
+    pub home_after_s: f64,
+    /// Tracking control settles in about this long (s).
+    pub settle_s: f64,
+    /// A finger resting this long starts a new drag for recognition (s).
+    pub rest_s: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            rule: StartRule::default(),
+            pick_radius_px: 45.0,
+            home_after_s: 8.0,
+            settle_s: 0.12,
+            rest_s: 0.8,
+        }
+    }
+}
+
+impl Settings {
+    /// The settings a configuration gives.
+    #[must_use]
+    pub fn from_config(config: &crate::app::config::Config) -> Self {
+        Self {
+            rule: config.action.rule(),
+            pick_radius_px: config.character.pick_radius_px,
+            home_after_s: config.character.camera_home_after_s,
+            ..Self::default()
+        }
+    }
+}
+
+/// What a finger holds.
+#[derive(Clone, Debug, PartialEq)]
+enum Grab {
+    Part {
+        role: Role,
+        at: ScreenPoint,
+        /// The drag since the finger last rested, for recognition.
+        trail: Vec<TrailPoint>,
+        trail_start: f64,
+        moved_at: f64,
+        moved: bool,
+    },
+    Camera {
+        at: ScreenPoint,
+    },
+}
+
+/// Posing, or playing an action.
+#[derive(Clone, Debug)]
+pub enum Mode {
+    Posing,
+    Action(ActionPlayer),
+}
+
+/// The controller's state between frames.
+#[derive(Clone)]
+pub struct Controller {
+    ch: Arc<Character>,
+    pub settings: Settings,
+    pub rig: Rig,
+    mode: Mode,
+    grabs: BTreeMap<ContactId, Grab>,
+    /// Where posing places its samples; moves when an action moved the
+    /// character.
+    at: Placement,
+    /// Foot positions kept while posing.
+    planted: Option<[DVec3; 2]>,
+    target: Pose,
+    tracker: AccelTracker,
+    world: WorldPose,
+    time: f64,
+    last_touch: f64,
+    events: Vec<ActionEvent>,
+}
+
+/// Longest tracking sub-step (s): explicit integration stays stable.
+const MAX_SUBSTEP: f64 = 0.004;
+
+impl Controller {
+    /// A character at rest at the origin facing +Z, seen in a picture of
+    /// `width` x `height` pixels, at time `t` (seconds).
+    #[must_use]
+    pub fn new(ch: Arc<Character>, settings: Settings, width: f64, height: f64, t: f64) -> Self {
+        let at = Placement {
+            position: DVec3::ZERO,
+            yaw: 0.0,
+            anchor: Anchor::ClipStart,
+        };
+        let pose = ch.rest_pose(&at);
+        let world = forward_kinematics(&ch.lib.skeleton, &pose);
+        Self {
+            settings,
+            rig: Rig::new(width, height),
+            mode: Mode::Posing,
+            grabs: BTreeMap::new(),
+            at,
+            planted: None,
+            tracker: AccelTracker::new(pose.clone()),
+            target: pose,
+            world,
+            time: t,
+            last_touch: t,
+            events: Vec::new(),
+            ch,
+        }
+    }
+
+    /// The character.
+    #[must_use]
+    pub fn character(&self) -> &Character {
+        &self.ch
+    }
+
+    /// The posture shown now.
+    #[must_use]
+    pub fn pose(&self) -> &Pose {
+        &self.tracker.pose
+    }
+
+    /// World transforms of the posture shown now.
+    #[must_use]
+    pub fn world(&self) -> &WorldPose {
+        &self.world
+    }
+
+    #[must_use]
+    pub fn mode(&self) -> &Mode {
+        &self.mode
+    }
+
+    /// The action playing, if any.
+    #[must_use]
+    pub fn action(&self) -> Option<(&str, f64)> {
+        match &self.mode {
+            Mode::Action(p) => Some((self.ch.actions[p.action()].def.name.as_str(), p.time())),
+            Mode::Posing => None,
+        }
+    }
+
+    /// Action events since the last call.
+    pub fn take_events(&mut self) -> Vec<ActionEvent> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// Body parts held by fingers.
+    #[must_use]
+    pub fn held(&self) -> Vec<Role> {
+        self.grabs
+            .values()
+            .filter_map(|g| match g {
+                Grab::Part { role, .. } => Some(*role),
+                Grab::Camera { .. } => None,
+            })
+            .collect()
+    }
+
+    /// Whether a finger on empty space is moving the camera.
+    #[must_use]
+    pub fn touching_camera(&self) -> bool {
+        self.grabs
+            .values()
+            .any(|g| matches!(g, Grab::Camera { .. }))
+    }
+
+    /// Seconds since the last touch.
+    #[must_use]
+    pub fn idle_s(&self) -> f64 {
+        if self.grabs.is_empty() {
+            self.time - self.last_touch
+        } else {
+            0.0
+        }
+    }
+
+    /// Where the character stands now (clip-start anchoring, for actions).
+    #[must_use]
+    pub fn placement_now(&self) -> Placement {
+        Placement {
+            anchor: Anchor::ClipStart,
+            ..Placement::of(&self.ch.lib.skeleton, &self.ch.roles, &self.target)
+        }
+    }
+
+    /// Apply one frame of touches (its time is `frame.t`).
+    pub fn touch(&mut self, frame: &ScreenFrame) {
+        let before: BTreeMap<ContactId, ScreenPoint> = self
+            .grabs
+            .iter()
+            .filter_map(|(id, g)| match g {
+                Grab::Camera { at } => Some((*id, *at)),
+                Grab::Part { .. } => None,
+            })
+            .collect();
+        let t = frame.t;
+        for c in &frame.contacts {
+            let p = c.screen;
+            if c.phase == crate::input::touch::Phase::Down {
+                let camera = self.rig.camera();
+                let role = pick(
+                    &camera,
+                    &self.ch.lib.skeleton,
+                    &self.ch.roles,
+                    &self.world,
+                    p,
+                    self.settings.pick_radius_px,
+                );
+                let grab = match role {
+                    Some(role) => {
+                        if matches!(self.mode, Mode::Posing) && self.held().is_empty() {
+                            self.begin_posing();
+                        }
+                        tracing::debug!(contact = c.id, role = role.name(), "finger holds a part");
+                        Grab::Part {
+                            role,
+                            at: p,
+                            trail: vec![TrailPoint { at: p, t: 0.0 }],
+                            trail_start: t,
+                            moved_at: t,
+                            moved: false,
+                        }
+                    }
+                    None => Grab::Camera { at: p },
+                };
+                self.grabs.insert(c.id, grab);
+            } else if c.phase.is_down() {
+                match self.grabs.get_mut(&c.id) {
+                    Some(Grab::Camera { at }) => *at = p,
+                    Some(Grab::Part {
+                        at,
+                        trail,
+                        trail_start,
+                        moved_at,
+                        moved,
+                        ..
+                    }) => {
+                        if p.distance(*at) > 0.5 {
+                            if t - *moved_at > self.settings.rest_s {
+                                // A pause: a new drag starts here.
+                                trail.clear();
+                                trail.push(TrailPoint { at: *at, t: 0.0 });
+                                *trail_start = *moved_at;
+                            }
+                            *moved_at = t;
+                            *moved = true;
+                            trail.push(TrailPoint {
+                                at: p,
+                                t: t - *trail_start,
+                            });
+                        }
+                        *at = p;
+                    }
+                    None => {}
+                }
+            } else {
+                self.grabs.remove(&c.id);
+            }
+        }
+        if !frame.contacts.is_empty() {
+            self.last_touch = t;
+        }
+        // Camera gestures from the fingers on empty space.
+        let moves: Vec<(ScreenPoint, ScreenPoint)> = self
+            .grabs
+            .iter()
+            .filter_map(|(id, g)| match g {
+                Grab::Camera { at } => before.get(id).map(|b| (*b, *at)),
+                Grab::Part { .. } => None,
+            })
+            .collect();
+        match moves.as_slice() {
+            [(a, b)] => self.rig.drag(b.x - a.x, b.y - a.y),
+            [(a0, a1), (b0, b1), ..] => {
+                let d0 = a0.distance(*b0);
+                let d1 = a1.distance(*b1);
+                let ang = |p: &ScreenPoint, q: &ScreenPoint| (q.y - p.y).atan2(q.x - p.x);
+                let twist = crate::character::posing::sample::wrap(ang(a1, b1) - ang(a0, b0));
+                if d0 > 10.0 {
+                    self.rig.pinch(d1 / d0, twist);
+                }
+            }
+            [] => {}
+        }
+    }
+
+    fn begin_posing(&mut self) {
+        let w = forward_kinematics(&self.ch.lib.skeleton, &self.target);
+        let r = &self.ch.roles;
+        self.planted = Some([
+            w.positions[r.get(Role::LeftFoot)],
+            w.positions[r.get(Role::RightFoot)],
+        ]);
+    }
+
+    fn constraints(&self, camera: &crate::character::camera::Camera) -> Vec<Constraint> {
+        self.grabs
+            .values()
+            .filter_map(|g| match g {
+                Grab::Part { role, at, .. } => Some(Constraint {
+                    role: *role,
+                    target: Target::Ray(camera.ray(*at)),
+                }),
+                Grab::Camera { .. } => None,
+            })
+            .collect()
+    }
+
+    /// Advance to time `t` (seconds): synthesise the target posture and
+    /// track it.
+    pub fn advance(&mut self, t: f64) {
+        let dt = (t - self.time).clamp(0.0, 0.25);
+        self.time = t;
+        let camera = self.rig.camera();
+        let constraints = self.constraints(&camera);
+        let moved = self
+            .grabs
+            .values()
+            .any(|g| matches!(g, Grab::Part { moved: true, .. }));
+        match &mut self.mode {
+            Mode::Posing => {
+                if let Some(player) = self.recognise(&camera, t) {
+                    self.mode = Mode::Action(player);
+                } else if !constraints.is_empty() {
+                    self.target = synthesize(
+                        &self.ch.lib.skeleton,
+                        &self.ch.roles,
+                        &self.ch.posing,
+                        &constraints,
+                        &self.at,
+                        self.planted,
+                        &SynthOptions::default(),
+                    );
+                }
+            }
+            Mode::Action(player) => {
+                self.target = player.step(
+                    &self.ch.lib,
+                    &self.ch.actions,
+                    &constraints,
+                    !moved,
+                    dt,
+                    &mut self.events,
+                );
+                if player.status() != Status::Playing {
+                    let placed = self.placement_now();
+                    self.at = placed;
+                    self.mode = Mode::Posing;
+                    if !self.held().is_empty() {
+                        self.begin_posing();
+                    }
+                    self.reset_trails(t);
+                }
+            }
+        }
+        for g in self.grabs.values_mut() {
+            if let Grab::Part { moved, .. } = g {
+                *moved = false;
+            }
+        }
+        let gains = Gains::critical(self.settings.settle_s);
+        let steps = (dt / MAX_SUBSTEP).ceil().max(1.0) as usize;
+        for _ in 0..steps {
+            self.tracker.step(&self.target, gains, dt / steps as f64);
+        }
+        self.world = forward_kinematics(&self.ch.lib.skeleton, &self.tracker.pose);
+        let idle = self.idle_s() > self.settings.home_after_s;
+        let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
+        self.rig.settle(floor, idle, dt);
+    }
+
+    /// Touches up to `t`, then advance to `t`.
+    pub fn step(&mut self, frames: &[ScreenFrame], t: f64) {
+        for f in frames {
+            self.touch(f);
+        }
+        self.advance(t);
+    }
+
+    fn reset_trails(&mut self, t: f64) {
+        for g in self.grabs.values_mut() {
+            if let Grab::Part {
+                at,
+                trail,
+                trail_start,
+                ..
+            } = g
+            {
+                trail.clear();
+                trail.push(TrailPoint { at: *at, t: 0.0 });
+                *trail_start = t;
+            }
+        }
+    }
+
+    /// A drag that starts an action, if any.
+    fn recognise(
+        &mut self,
+        camera: &crate::character::camera::Camera,
+        t: f64,
+    ) -> Option<ActionPlayer> {
+        let at = self.placement_now();
+        let found = self.grabs.values().find_map(|g| match g {
+            Grab::Part {
+                role,
+                trail,
+                moved: true,
+                ..
+            } if trail.len() >= 2 => recognize(
+                &self.ch.actions,
+                *role,
+                trail,
+                camera,
+                &at,
+                &self.settings.rule,
+            ),
+            _ => None,
+        })?;
+        let a = &self.ch.actions[found.action];
+        tracing::info!(
+            action = %a.def.name,
+            cost_px = found.matched.cost,
+            coverage = found.matched.coverage,
+            "drag recognised"
+        );
+        let player = ActionPlayer::start(
+            &self.ch.actions,
+            found.action,
+            found.matched.coverage,
+            at,
+            t,
+            &mut self.events,
+        );
+        self.reset_trails(t);
+        Some(player)
+    }
+
+    /// Finger marks and, while a part is held in posing, the trajectories
+    /// of the actions that part can start (executable ones marked).
+    #[must_use]
+    pub fn marks(&self, trajectories: bool) -> Marks {
+        let mut marks = Marks::default();
+        for g in self.grabs.values() {
+            marks.fingers.push(match g {
+                Grab::Part { role, at, .. } => FingerMark {
+                    at: *at,
+                    usage: FingerUse::Part(*role),
+                },
+                Grab::Camera { at } => FingerMark {
+                    at: *at,
+                    usage: FingerUse::Camera,
+                },
+            });
+        }
+        if trajectories && matches!(self.mode, Mode::Posing) {
+            let camera = self.rig.camera();
+            let at = self.placement_now();
+            let eye = camera.eye_vector();
+            for role in self.held() {
+                for a in self.ch.actions.iter().filter(|a| a.def.primary == role) {
+                    let dir = glam::DQuat::from_rotation_y(at.yaw) * a.direction;
+                    marks.trajectories.push(TrajectoryMark {
+                        points: a.projected(&camera, &at).iter().map(|p| p.at).collect(),
+                        executable: view_angle_deg(dir, eye)
+                            > self.settings.rule.min_view_angle_deg,
+                    });
+                }
+            }
+        }
+        marks
+    }
+}

@@ -1,0 +1,268 @@
+//! Authoring the bundled demo recording against the character itself: each
+//! gesture starts where the body part is at that moment, as the controller
+//! sees it, so the drags land on the parts and follow the actions'
+//! trajectories from the camera's view. The recording is plain evemu;
+//! `marionette demo` replays it like any other.
+
+use std::sync::Arc;
+
+use super::controller::{Character, Controller, Mode, Settings};
+use super::ticker::Ticker;
+use crate::app::config::Config;
+use crate::character::roles::Role;
+use crate::input::calibration::ScreenPoint;
+use crate::input::pipeline;
+use crate::input::synth::{Synth, panel};
+
+/// Frame interval of the authored panel (60 Hz).
+const DT_US: i64 = 16_667;
+const DT: f64 = DT_US as f64 / 1e6;
+/// Controller rate used while authoring (the demo's).
+pub const TICK_HZ: f64 = 30.0;
+/// Axis maximum of the authored panel.
+const MAX: i32 = 4095;
+
+struct Author<'a> {
+    synth: Synth,
+    ctl: Controller,
+    ticker: Ticker,
+    config: &'a Config,
+    width: f64,
+    height: f64,
+    time: f64,
+}
+
+impl Author<'_> {
+    /// Run the controller over what is authored so far.
+    fn sync(&mut self) {
+        let rec = self.synth.finish();
+        let frames = pipeline::replay(&rec, self.config).expect("the authored panel calibrates");
+        self.ticker.extend(frames);
+        while self.ticker.time() + 1.0 / TICK_HZ <= self.time + 1e-9 {
+            self.ticker.step(&mut self.ctl);
+        }
+    }
+
+    fn raw(&self, p: ScreenPoint) -> (i32, i32) {
+        let f = |v: f64, size: f64| ((v / size).clamp(0.0, 1.0) * f64::from(MAX)).round() as i32;
+        (f(p.x, self.width), f(p.y, self.height))
+    }
+
+    fn frame(&mut self) {
+        self.synth.frame(DT_US);
+        self.time += DT;
+    }
+
+    fn wait(&mut self, s: f64) {
+        let n = (s / DT).round() as usize;
+        for _ in 0..n {
+            self.frame();
+        }
+    }
+
+    /// Where a body part is on the screen now.
+    fn part(&mut self, role: Role) -> ScreenPoint {
+        self.sync();
+        let cam = self.ctl.rig.camera();
+        let p = self.ctl.world().positions[self.ctl.character().roles.get(role)];
+        cam.project(p)
+            .unwrap_or(ScreenPoint::new(self.width / 2.0, self.height / 2.0))
+    }
+
+    fn down(&mut self, slot: i32, p: ScreenPoint) {
+        let (x, y) = self.raw(p);
+        self.synth.down(slot, x, y);
+    }
+
+    fn to(&mut self, slot: i32, p: ScreenPoint) {
+        let (x, y) = self.raw(p);
+        self.synth.to(slot, x, y);
+    }
+
+    /// Move fingers along paths given as functions of 0..1, over `s`
+    /// seconds, easing in and out.
+    fn glide(&mut self, fingers: &[(i32, &dyn Fn(f64) -> ScreenPoint)], s: f64) {
+        let n = (s / DT).round().max(1.0) as usize;
+        for k in 1..=n {
+            let u = k as f64 / n as f64;
+            let e = u * u * (3.0 - 2.0 * u);
+            for (slot, path) in fingers {
+                self.to(*slot, path(e));
+            }
+            self.frame();
+        }
+    }
+
+    /// Drag an action's primary part along its trajectory as seen now, at
+    /// the action's own speed, then lift and wait for it to end.
+    fn action(&mut self, name: &str) {
+        let Some(index) = self
+            .ctl
+            .character()
+            .actions
+            .iter()
+            .position(|a| a.def.name == name)
+        else {
+            return;
+        };
+        let role = self.ctl.character().actions[index].def.primary;
+        let start = self.part(role);
+        let cam = self.ctl.rig.camera();
+        let at = self.ctl.placement_now();
+        let traj = self.ctl.character().actions[index].projected(&cam, &at);
+        let Some(first) = traj.first().copied() else {
+            return;
+        };
+        let (ox, oy) = (start.x - first.at.x, start.y - first.at.y);
+        self.down(0, start);
+        self.frame();
+        let end = traj.last().map_or(0.0, |p| p.t);
+        let mut t = 0.0;
+        while t < end {
+            t += DT;
+            let k = traj.partition_point(|p| p.t <= t).clamp(1, traj.len() - 1);
+            let (a, b) = (traj[k - 1], traj[k]);
+            let s = ((t - a.t) / (b.t - a.t).max(1e-9)).clamp(0.0, 1.0);
+            self.to(
+                0,
+                ScreenPoint::new(
+                    a.at.x + (b.at.x - a.at.x) * s + ox,
+                    a.at.y + (b.at.y - a.at.y) * s + oy,
+                ),
+            );
+            self.frame();
+        }
+        self.wait(0.1);
+        self.synth.up(0);
+        self.frame();
+        // Let it finish (at most 4 s), then a breath.
+        for _ in 0..40 {
+            self.wait(0.1);
+            self.sync();
+            if matches!(self.ctl.mode(), Mode::Posing) {
+                break;
+            }
+        }
+        self.wait(0.6);
+    }
+}
+
+/// The demo recording: six actions started by drags (punch, kick, wave,
+/// bow, jump, walk), posing with one finger and with two, a part pinned by
+/// one finger while another poses, camera turns and a pinch, and a rest
+/// while the camera eases home.
+#[must_use]
+pub fn author_demo(ch: Arc<Character>, settings: Settings, config: &Config) -> Synth {
+    let (width, height) = config.display.size();
+    let (width, height) = (f64::from(width), f64::from(height));
+    let mut a = Author {
+        synth: Synth::new(panel("marionette demo panel", 10, MAX)),
+        ctl: Controller::new(ch, settings, width, height, 0.0),
+        ticker: Ticker::new(Vec::new(), TICK_HZ),
+        config,
+        width,
+        height,
+        time: 0.0,
+    };
+    a.frame();
+    a.wait(0.8);
+    for name in [
+        "punch_left",
+        "kick_right",
+        "wave_left",
+        "bow",
+        "jump",
+        "walk",
+    ] {
+        a.action(name);
+    }
+    // One finger poses the right hand: up and out, held, let go.
+    let hand = a.part(Role::RightHand);
+    a.down(0, hand);
+    a.frame();
+    a.glide(
+        &[(0, &|u| {
+            ScreenPoint::new(hand.x - 90.0 * u, hand.y - 230.0 * u)
+        })],
+        1.8,
+    );
+    a.wait(0.5);
+    a.synth.up(0);
+    a.frame();
+    a.wait(0.6);
+    // Two fingers pose both hands.
+    let (l, r) = (a.part(Role::LeftHand), a.part(Role::RightHand));
+    a.down(0, l);
+    a.down(1, r);
+    a.frame();
+    a.glide(
+        &[
+            (0, &|u| ScreenPoint::new(l.x + 60.0 * u, l.y - 200.0 * u)),
+            (1, &|u| ScreenPoint::new(r.x - 40.0 * u, r.y + 140.0 * u)),
+        ],
+        1.8,
+    );
+    a.wait(0.4);
+    a.synth.up(0).up(1);
+    a.frame();
+    a.wait(0.6);
+    // A foot pinned by one finger while another moves the other hand around.
+    let foot = a.part(Role::LeftFoot);
+    a.down(0, foot);
+    a.frame();
+    a.wait(0.4);
+    // Holding the foot alone re-poses the body: find the hand afterwards.
+    let hand = a.part(Role::LeftHand);
+    a.down(1, hand);
+    a.frame();
+    a.glide(
+        &[
+            (0, &|_| foot),
+            (1, &|u| {
+                let ang = u * std::f64::consts::PI;
+                ScreenPoint::new(hand.x + 120.0 * ang.sin(), hand.y - 160.0 * u)
+            }),
+        ],
+        2.2,
+    );
+    a.wait(0.3);
+    a.synth.up(1);
+    a.frame();
+    a.synth.up(0);
+    a.frame();
+    a.wait(0.6);
+    // Camera: one finger on empty space turns the view, then two pinch and
+    // twist.
+    let empty = ScreenPoint::new(width * 0.12, height * 0.85);
+    a.down(0, empty);
+    a.frame();
+    a.glide(
+        &[(0, &|u| {
+            ScreenPoint::new(empty.x + 260.0 * u, empty.y - 40.0 * u)
+        })],
+        1.4,
+    );
+    a.synth.up(0);
+    a.frame();
+    a.wait(0.3);
+    let (c, d) = (
+        ScreenPoint::new(width * 0.15, height * 0.55),
+        ScreenPoint::new(width * 0.3, height * 0.55),
+    );
+    a.down(0, c);
+    a.down(1, d);
+    a.frame();
+    a.glide(
+        &[
+            (0, &|u| ScreenPoint::new(c.x - 60.0 * u, c.y + 30.0 * u)),
+            (1, &|u| ScreenPoint::new(d.x + 60.0 * u, d.y - 30.0 * u)),
+        ],
+        1.4,
+    );
+    a.synth.up(0).up(1);
+    a.frame();
+    a.wait(0.5);
+    // Idle: the camera eases back home.
+    a.wait(settings.home_after_s + 3.5);
+    a.synth
+}

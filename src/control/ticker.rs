@@ -1,0 +1,68 @@
+//! Fixed-rate stepping of a controller through recorded touch frames: each
+//! tick feeds the frames up to its time, then advances the controller to
+//! it. A touch's effect therefore shows in the first frame rendered after
+//! it, and a replay steps identically every run.
+
+use super::controller::Controller;
+use crate::input::pipeline::ScreenFrame;
+
+/// Steps a controller at `hz` through `frames` (times in seconds).
+#[derive(Clone, Debug)]
+pub struct Ticker {
+    frames: Vec<ScreenFrame>,
+    next: usize,
+    hz: f64,
+    tick: u64,
+}
+
+impl Ticker {
+    #[must_use]
+    pub fn new(frames: Vec<ScreenFrame>, hz: f64) -> Self {
+        Self {
+            frames,
+            next: 0,
+            hz,
+            tick: 0,
+        }
+    }
+
+    /// Time of the current tick (s).
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.tick as f64 / self.hz
+    }
+
+    /// Time of the last frame (s), or 0.
+    #[must_use]
+    pub fn end(&self) -> f64 {
+        self.frames.last().map_or(0.0, |f| f.t)
+    }
+
+    /// Frames fed so far.
+    #[must_use]
+    pub fn fed(&self) -> usize {
+        self.next
+    }
+
+    /// Replace the frames by a longer list with the same beginning (a
+    /// recording being authored).
+    pub fn extend(&mut self, frames: Vec<ScreenFrame>) {
+        self.frames = frames;
+    }
+
+    /// One tick: feed the frames due, advance the controller; returns the
+    /// tick's time.
+    pub fn step(&mut self, ctl: &mut Controller) -> f64 {
+        self.tick += 1;
+        let t = self.time();
+        while let Some(f) = self.frames.get(self.next) {
+            if f.t > t + 1e-9 {
+                break;
+            }
+            ctl.touch(f);
+            self.next += 1;
+        }
+        ctl.advance(t);
+        t
+    }
+}
