@@ -154,7 +154,7 @@ pub struct DisplayConfig {
     /// Clockwise turn of the picture on the panel: 0, 90, 180 or 270.
     pub rotation: u32,
     /// Samples per pixel for anti-aliasing: 1, 2, 4 or 8 (fewer when the
-    /// adapter cannot).
+    /// adapter cannot); 0 chooses: 4 on a GPU, 1 on a CPU renderer.
     pub samples: u32,
     /// Show the trajectories of the actions a held part can start.
     pub trajectories: bool,
@@ -168,7 +168,7 @@ impl Default for DisplayConfig {
             width: 1280,
             height: 720,
             rotation: 0,
-            samples: 4,
+            samples: 0,
             trajectories: true,
             status_line: true,
         }
@@ -332,10 +332,10 @@ impl Config {
                 ),
             ));
         }
-        if ![1, 2, 4, 8].contains(&d.samples) {
+        if ![0, 1, 2, 4, 8].contains(&d.samples) {
             return Err(invalid(
                 "display.samples",
-                format!("must be 1, 2, 4 or 8, found {}", d.samples),
+                format!("must be 0 (automatic), 1, 2, 4 or 8, found {}", d.samples),
             ));
         }
         let c = &self.character;

@@ -10,8 +10,8 @@ use thiserror::Error;
 pub enum GpuError {
     /// No Vulkan adapter at all: no driver, or no ICD installed.
     #[error(
-        "no Vulkan adapter found (install a Vulkan driver; without a GPU: \
-         apt-get install mesa-vulkan-drivers)"
+        "no Vulkan adapter found: install the Vulkan loader and a driver \
+         (without a GPU driver: apt-get install libvulkan1 mesa-vulkan-drivers)"
     )]
     NoAdapter,
     /// The adapter refused to give a device.

@@ -116,16 +116,21 @@ pub struct Headless {
     pub renderer: Renderer,
     size: (u32, u32),
     texture: wgpu::Texture,
-    view: wgpu::TextureView,
     readback: wgpu::Buffer,
     padded_row: u32,
 }
 
 impl Headless {
     /// Frames of `width` x `height` (the output's size, before rotation)
-    /// with up to `samples` samples per pixel.
+    /// with up to `samples` samples per pixel (0: 4 on a GPU, 1 on a CPU
+    /// renderer).
     #[must_use]
     pub fn new(gpu: Gpu, width: u32, height: u32, samples: u32) -> Self {
+        let samples = match samples {
+            0 if gpu.is_cpu() => 1,
+            0 => 4,
+            n => n,
+        };
         let renderer = Renderer::new(&gpu, FORMAT, samples);
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("offscreen"),
@@ -138,10 +143,11 @@ impl Headless {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
-        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
         let padded_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
@@ -154,7 +160,6 @@ impl Headless {
             renderer,
             size: (width, height),
             texture,
-            view,
             readback,
             padded_row,
         }
@@ -176,7 +181,7 @@ impl Headless {
                 label: Some("frame"),
             });
         self.renderer
-            .draw(&self.gpu, &mut encoder, &self.view, self.size, list);
+            .draw(&self.gpu, &mut encoder, &self.texture, list);
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
                 texture: &self.texture,

@@ -32,9 +32,9 @@ pub struct Mesh {
 }
 
 /// Segments around a capsule.
-const AROUND: usize = 20;
+const AROUND: usize = 16;
 /// Rings per hemisphere of a capsule.
-const RINGS: usize = 7;
+const RINGS: usize = 5;
 
 /// Any unit vector perpendicular to `axis`.
 fn perpendicular(axis: Vec3) -> Vec3 {
@@ -51,27 +51,42 @@ impl Mesh {
     /// when they coincide). Capsules that share an end point and radius join
     /// without a gap.
     pub fn capsule(&mut self, a: Vec3, b: Vec3, r: f32, color: [f32; 4]) {
+        self.capsule_with(a, b, r, color, AROUND, RINGS);
+    }
+
+    /// A capsule with `around` segments and `rings` rings per end (coarse
+    /// ones for shadows).
+    pub fn capsule_with(
+        &mut self,
+        a: Vec3,
+        b: Vec3,
+        r: f32,
+        color: [f32; 4],
+        around: usize,
+        rings_per_end: usize,
+    ) {
+        let (around_n, rings_n) = (around.max(3), rings_per_end.max(1));
         let axis = (b - a).try_normalize().unwrap_or(Vec3::Y);
         let u = perpendicular(axis);
         let v = axis.cross(u);
         let base = self.base();
-        // Rings from the pole at `a` to the pole at `b`: 0..=RINGS around
-        // `a` (latitude -90°..0°), then RINGS+1..=2*RINGS+1 around `b`.
-        let rings = 2 * RINGS + 2;
+        // Rings from the pole at `a` to the pole at `b`: 0..=rings_n around
+        // `a` (latitude -90°..0°), then rings_n+1..=2*rings_n+1 around `b`.
+        let rings = 2 * rings_n + 2;
         for ring in 0..rings {
-            let (centre, lat) = if ring <= RINGS {
+            let (centre, lat) = if ring <= rings_n {
                 (
                     a,
-                    -std::f32::consts::FRAC_PI_2 * (1.0 - ring as f32 / RINGS as f32),
+                    -std::f32::consts::FRAC_PI_2 * (1.0 - ring as f32 / rings_n as f32),
                 )
             } else {
                 (
                     b,
-                    std::f32::consts::FRAC_PI_2 * ((ring - RINGS - 1) as f32 / RINGS as f32),
+                    std::f32::consts::FRAC_PI_2 * ((ring - rings_n - 1) as f32 / rings_n as f32),
                 )
             };
-            for k in 0..=AROUND {
-                let theta = std::f32::consts::TAU * k as f32 / AROUND as f32;
+            for k in 0..=around_n {
+                let theta = std::f32::consts::TAU * k as f32 / around_n as f32;
                 let n = (u * theta.cos() + v * theta.sin()) * lat.cos() + axis * lat.sin();
                 self.vertices.push(Vertex3 {
                     pos: (centre + n * r).to_array(),
@@ -80,9 +95,9 @@ impl Mesh {
                 });
             }
         }
-        let row = (AROUND + 1) as u32;
+        let row = (around_n + 1) as u32;
         for ring in 0..(rings - 1) as u32 {
-            for k in 0..AROUND as u32 {
+            for k in 0..around_n as u32 {
                 let i0 = base + ring * row + k;
                 let i1 = i0 + row;
                 self.indices
@@ -149,25 +164,38 @@ impl Overlay {
         self.tri([x, y], [x + w, y + h], [x, y + h], color);
     }
 
+    /// Segments for a circle of radius `r` px (smooth, no more than needed).
+    fn segments(r: f32) -> usize {
+        ((r * 0.8) as usize).clamp(8, 48)
+    }
+
     /// A ring of outer radius `r` and width `w`.
     pub fn ring(&mut self, c: [f32; 2], r: f32, w: f32, color: [f32; 4]) {
-        const N: usize = 40;
+        let n = Self::segments(r);
         let inner = (r - w).max(0.0);
-        for k in 0..N {
-            let a0 = std::f32::consts::TAU * k as f32 / N as f32;
-            let a1 = std::f32::consts::TAU * (k + 1) as f32 / N as f32;
-            let p = |a: f32, rr: f32| [c[0] + a.cos() * rr, c[1] + a.sin() * rr];
-            self.tri(p(a0, inner), p(a0, r), p(a1, r), color);
-            self.tri(p(a0, inner), p(a1, r), p(a1, inner), color);
+        let p = |k: usize, rr: f32| {
+            let a = std::f32::consts::TAU * k as f32 / n as f32;
+            [c[0] + a.cos() * rr, c[1] + a.sin() * rr]
+        };
+        for k in 0..n {
+            self.tri(p(k, inner), p(k, r), p(k + 1, r), color);
+            self.tri(p(k, inner), p(k + 1, r), p(k + 1, inner), color);
         }
     }
 
     /// A filled disc.
     pub fn disc(&mut self, c: [f32; 2], r: f32, color: [f32; 4]) {
-        self.ring(c, r, r, color);
+        let n = Self::segments(r);
+        let p = |k: usize| {
+            let a = std::f32::consts::TAU * k as f32 / n as f32;
+            [c[0] + a.cos() * r, c[1] + a.sin() * r]
+        };
+        for k in 0..n {
+            self.tri(c, p(k), p(k + 1), color);
+        }
     }
 
-    /// A polyline of width `w` (round joints).
+    /// A polyline of width `w`.
     pub fn polyline(&mut self, points: &[[f32; 2]], w: f32, color: [f32; 4]) {
         for p in points.windows(2) {
             let (a, b) = (glam::Vec2::from(p[0]), glam::Vec2::from(p[1]));
@@ -188,8 +216,11 @@ impl Overlay {
                 color,
             );
         }
-        for p in points.iter().skip(1).take(points.len().saturating_sub(2)) {
-            self.disc(*p, w / 2.0, color);
+        // Round joints where a thick line would show notches.
+        if w > 8.0 {
+            for p in points.iter().skip(1).take(points.len().saturating_sub(2)) {
+                self.disc(*p, w / 2.0, color);
+            }
         }
     }
 
@@ -213,31 +244,57 @@ impl Overlay {
     /// at (`x`, `y`). Characters outside Basic Latin show as `?`.
     pub fn text(&mut self, x: f32, y: f32, scale: f32, text: &str, color: [f32; 4]) {
         for (i, ch) in text.chars().enumerate() {
-            let glyph = glyph(ch);
             let gx = x + i as f32 * 8.0 * scale;
-            for (row, bits) in glyph.iter().enumerate() {
-                // Runs of set bits become one rectangle each.
-                let mut col = 0;
-                while col < 8 {
-                    if bits & (1 << col) == 0 {
-                        col += 1;
-                        continue;
+            // Runs of set bits in a row, extended down while the rows below
+            // have the same run: one rectangle each.
+            let mut open: Vec<(u32, u32, usize, usize)> = Vec::new();
+            let mut done = Vec::new();
+            for (row, bits) in glyph(ch).iter().enumerate() {
+                let runs = runs(*bits);
+                let mut next = Vec::new();
+                for r in runs {
+                    match open.iter().position(|o| (o.0, o.1) == r) {
+                        Some(k) => {
+                            let mut o = open.remove(k);
+                            o.3 = row + 1;
+                            next.push(o);
+                        }
+                        None => next.push((r.0, r.1, row, row + 1)),
                     }
-                    let start = col;
-                    while col < 8 && bits & (1 << col) != 0 {
-                        col += 1;
-                    }
-                    self.rect(
-                        gx + start as f32 * scale,
-                        y + row as f32 * scale,
-                        (col - start) as f32 * scale,
-                        scale,
-                        color,
-                    );
                 }
+                done.append(&mut open);
+                open = next;
+            }
+            done.append(&mut open);
+            for (c0, c1, r0, r1) in done {
+                self.rect(
+                    gx + c0 as f32 * scale,
+                    y + r0 as f32 * scale,
+                    (c1 - c0) as f32 * scale,
+                    (r1 - r0) as f32 * scale,
+                    color,
+                );
             }
         }
     }
+}
+
+/// Runs of set bits (first, past-last column), leftmost bit first.
+fn runs(bits: u8) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    let mut col = 0;
+    while col < 8 {
+        if bits & (1 << col) == 0 {
+            col += 1;
+            continue;
+        }
+        let start = col;
+        while col < 8 && bits & (1 << col) != 0 {
+            col += 1;
+        }
+        out.push((start, col));
+    }
+    out
 }
 
 /// Width in pixels of `text` drawn at `scale`.

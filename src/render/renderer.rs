@@ -27,6 +27,8 @@ pub struct DrawList {
     pub floor: bool,
     /// Lit meshes: the character, or boxes.
     pub body: Mesh,
+    /// What casts the shadow on the floor (a coarse body).
+    pub shadow: Mesh,
     /// Marks, trajectories and text over the picture.
     pub overlay: Overlay,
 }
@@ -54,6 +56,15 @@ pub fn planar_shadow(light: Vec3, h: f32) -> Mat4 {
         Vec4::new(0.0, 0.0, 1.0, 0.0),
         Vec4::new(kx * h, h, kz * h, 1.0),
     )
+}
+
+fn clear(bg: [f32; 3]) -> wgpu::Color {
+    wgpu::Color {
+        r: f64::from(bg[0]),
+        g: f64::from(bg[1]),
+        b: f64::from(bg[2]),
+        a: 1.0,
+    }
 }
 
 /// A vertex or index buffer that grows when a frame needs more.
@@ -104,6 +115,14 @@ impl GrowBuffer {
     }
 }
 
+/// The floor as last drawn, reused while the view does not change (on
+/// single-sampled targets the floor is most of a frame's cost on a CPU
+/// renderer; the camera is still most of the time).
+struct FloorCache {
+    key: Vec<u8>,
+    texture: wgpu::Texture,
+}
+
 /// Depth-stencil and multisample attachments for one target size.
 struct Attachments {
     size: (u32, u32),
@@ -126,8 +145,105 @@ pub struct Renderer {
     floor_mesh: (wgpu::Buffer, wgpu::Buffer, u32),
     body_vertices: GrowBuffer,
     body_indices: GrowBuffer,
+    shadow_vertices: GrowBuffer,
+    shadow_indices: GrowBuffer,
     overlay_vertices: GrowBuffer,
     attachments: Option<Attachments>,
+    floor_cache: Option<FloorCache>,
+    /// The target last drawn with the floor cache, and what was drawn over
+    /// the floor there.
+    last: Option<(wgpu::Texture, Rect)>,
+}
+
+/// A pixel rectangle, `x1`/`y1` exclusive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Rect {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl Rect {
+    const EMPTY: Rect = Rect {
+        x0: u32::MAX,
+        y0: u32::MAX,
+        x1: 0,
+        y1: 0,
+    };
+
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.x0 >= self.x1 || self.y0 >= self.y1
+    }
+
+    #[must_use]
+    pub fn union(self, o: Rect) -> Rect {
+        if self.is_empty() {
+            return o;
+        }
+        if o.is_empty() {
+            return self;
+        }
+        Rect {
+            x0: self.x0.min(o.x0),
+            y0: self.y0.min(o.y0),
+            x1: self.x1.max(o.x1),
+            y1: self.y1.max(o.y1),
+        }
+    }
+
+    fn clamp(self, size: (u32, u32)) -> Rect {
+        Rect {
+            x0: self.x0.min(size.0),
+            y0: self.y0.min(size.1),
+            x1: self.x1.min(size.0),
+            y1: self.y1.min(size.1),
+        }
+    }
+}
+
+/// The output pixels the body, its shadow and the overlays cover (with a
+/// margin), from their vertices.
+#[must_use]
+pub fn damage(list: &DrawList, shadow_view_proj: Mat4, size: (u32, u32)) -> Rect {
+    let (w, h) = (size.0 as f32, size.1 as f32);
+    let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+    let mut add = |m: &Mat4, p: Vec4| {
+        let c = *m * p;
+        if c.w <= 1e-6 {
+            // Behind the eye: give up on bounds.
+            lo = glam::Vec2::splat(f32::MIN);
+            hi = glam::Vec2::splat(f32::MAX);
+            return;
+        }
+        let ndc = glam::Vec2::new(c.x / c.w, c.y / c.w);
+        let px = glam::Vec2::new((ndc.x + 1.0) * 0.5 * w, (1.0 - ndc.y) * 0.5 * h);
+        lo = lo.min(px);
+        hi = hi.max(px);
+    };
+    for v in &list.body.vertices {
+        add(&list.view_proj, Vec3::from(v.pos).extend(1.0));
+    }
+    if list.floor {
+        for v in &list.shadow.vertices {
+            add(&shadow_view_proj, Vec3::from(v.pos).extend(1.0));
+        }
+    }
+    for v in &list.overlay.vertices {
+        add(&list.screen, Vec4::new(v.pos[0], v.pos[1], 0.0, 1.0));
+    }
+    if lo.x > hi.x {
+        return Rect::EMPTY;
+    }
+    let lo = (lo - 3.0).max(glam::Vec2::ZERO).min(glam::Vec2::new(w, h));
+    let hi = (hi + 3.0).max(glam::Vec2::ZERO).min(glam::Vec2::new(w, h));
+    Rect {
+        x0: lo.x.floor() as u32,
+        y0: lo.y.floor() as u32,
+        x1: hi.x.ceil() as u32,
+        y1: hi.y.ceil() as u32,
+    }
 }
 
 /// Half-size of the floor square (m).
@@ -269,7 +385,7 @@ impl Renderer {
             "vs_shadow",
             "fs_shadow",
             v3,
-            None,
+            Some(wgpu::Face::Back),
             depth(false, wgpu::CompareFunction::LessEqual, shadow_stencil),
             blend,
         );
@@ -312,13 +428,121 @@ impl Renderer {
             floor_mesh: (floor_vb, floor_ib, ground.indices.len() as u32),
             body_vertices: GrowBuffer::new(device, "body vertices", wgpu::BufferUsages::VERTEX),
             body_indices: GrowBuffer::new(device, "body indices", wgpu::BufferUsages::INDEX),
+            shadow_vertices: GrowBuffer::new(device, "shadow vertices", wgpu::BufferUsages::VERTEX),
+            shadow_indices: GrowBuffer::new(device, "shadow indices", wgpu::BufferUsages::INDEX),
             overlay_vertices: GrowBuffer::new(
                 device,
                 "overlay vertices",
                 wgpu::BufferUsages::VERTEX,
             ),
             attachments: None,
+            floor_cache: None,
+            last: None,
         }
+    }
+
+    /// Copy the floor for this view into `target`, drawing it first when
+    /// the view changed.
+    fn floor_into(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::Texture,
+        key: Vec<u8>,
+        bg: [f32; 3],
+        damage: Rect,
+    ) -> Rect {
+        let size = (target.width(), target.height());
+        let full = Rect {
+            x0: 0,
+            y0: 0,
+            x1: size.0,
+            y1: size.1,
+        };
+        // Everything is new when the view or the target changed; else only
+        // where the character and overlays are and were.
+        let same_target = self.last.as_ref().is_some_and(|(t, _)| t == target);
+        let mut region = match (&self.last, same_target) {
+            (Some((_, last)), true) => damage.union(*last),
+            _ => full,
+        };
+        if self.floor_cache.as_ref().is_none_or(|c| c.key != key) {
+            region = full;
+            let texture = match self.floor_cache.take() {
+                Some(c) if (c.texture.width(), c.texture.height()) == size => c.texture,
+                _ => gpu.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("floor cache"),
+                    size: target.size(),
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: self.format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                }),
+            };
+            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            let depth = &self.attachments(gpu, size).depth;
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("floor"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear(bg)),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_pipeline(&self.floor);
+            pass.set_vertex_buffer(0, self.floor_mesh.0.slice(..));
+            pass.set_index_buffer(self.floor_mesh.1.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.floor_mesh.2, 0, 0..1);
+            drop(pass);
+            self.floor_cache = Some(FloorCache { key, texture });
+        }
+        let cache = &self.floor_cache.as_ref().expect("just drawn").texture;
+        let region = region.clamp(size);
+        if !region.is_empty() {
+            let origin = wgpu::Origin3d {
+                x: region.x0,
+                y: region.y0,
+                z: 0,
+            };
+            encoder.copy_texture_to_texture(
+                wgpu::TexelCopyTextureInfo {
+                    origin,
+                    ..cache.as_image_copy()
+                },
+                wgpu::TexelCopyTextureInfo {
+                    origin,
+                    ..target.as_image_copy()
+                },
+                wgpu::Extent3d {
+                    width: region.x1 - region.x0,
+                    height: region.y1 - region.y0,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        self.last = Some((target.clone(), damage));
+        region
     }
 
     /// Samples per pixel actually used.
@@ -362,15 +586,18 @@ impl Renderer {
         self.attachments.as_ref().expect("just made")
     }
 
-    /// Record the frame into `encoder`, drawing into `target` of `size`.
+    /// Record the frame into `encoder`, drawing into `target` (which
+    /// needs `RENDER_ATTACHMENT`, and `COPY_DST` for the floor cache).
     pub fn draw(
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        target: &wgpu::TextureView,
-        size: (u32, u32),
+        target: &wgpu::Texture,
         list: &DrawList,
     ) {
+        let size = (target.width(), target.height());
+        let target_view = target.create_view(&wgpu::TextureViewDescriptor::default());
+        let target = (target, &target_view);
         let shadow = planar_shadow(list.light, 0.002);
         let globals = Globals {
             view_proj: list.view_proj.to_cols_array_2d(),
@@ -393,10 +620,28 @@ impl Renderer {
             .write(gpu, bytemuck::cast_slice(&list.body.indices));
         self.overlay_vertices
             .write(gpu, bytemuck::cast_slice(&list.overlay.vertices));
+        self.shadow_vertices
+            .write(gpu, bytemuck::cast_slice(&list.shadow.vertices));
+        self.shadow_indices
+            .write(gpu, bytemuck::cast_slice(&list.shadow.indices));
+        let shadow_count = list.shadow.indices.len() as u32;
         let body_count = list.body.indices.len() as u32;
         let overlay_count = list.overlay.vertices.len() as u32;
         let bg = list.background;
+        let cached_floor = list.floor
+            && self.samples == 1
+            && target.0.usage().contains(wgpu::TextureUsages::COPY_DST);
+        let scissor = if cached_floor {
+            let mut key = bytemuck::bytes_of(&globals).to_vec();
+            key.extend_from_slice(bytemuck::cast_slice(&[size.0, size.1]));
+            let damage = damage(list, list.view_proj * shadow, size);
+            Some(self.floor_into(gpu, encoder, target.0, key, bg, damage))
+        } else {
+            self.last = None;
+            None
+        };
         let att = self.attachments(gpu, size);
+        let target = target.1;
         let (view, resolve) = match &att.msaa {
             Some(m) => (m, Some(target)),
             None => (target, None),
@@ -408,12 +653,11 @@ impl Renderer {
                 depth_slice: None,
                 resolve_target: resolve,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: f64::from(bg[0]),
-                        g: f64::from(bg[1]),
-                        b: f64::from(bg[2]),
-                        a: 1.0,
-                    }),
+                    load: if cached_floor {
+                        wgpu::LoadOp::Load
+                    } else {
+                        wgpu::LoadOp::Clear(clear(bg))
+                    },
                     store: if resolve.is_some() {
                         wgpu::StoreOp::Discard
                     } else {
@@ -437,11 +681,27 @@ impl Renderer {
             multiview_mask: None,
         });
         pass.set_bind_group(0, &self.bind_group, &[]);
-        if list.floor {
+        if let Some(r) = scissor {
+            if r.is_empty() {
+                return;
+            }
+            pass.set_scissor_rect(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+        }
+        if list.floor && !cached_floor {
             pass.set_pipeline(&self.floor);
             pass.set_vertex_buffer(0, self.floor_mesh.0.slice(..));
             pass.set_index_buffer(self.floor_mesh.1.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..self.floor_mesh.2, 0, 0..1);
+        }
+        if list.floor && shadow_count > 0 {
+            pass.set_pipeline(&self.shadow);
+            pass.set_stencil_reference(0);
+            pass.set_vertex_buffer(0, self.shadow_vertices.buffer.slice(..));
+            pass.set_index_buffer(
+                self.shadow_indices.buffer.slice(..),
+                wgpu::IndexFormat::Uint32,
+            );
+            pass.draw_indexed(0..shadow_count, 0, 0..1);
         }
         if body_count > 0 {
             pass.set_vertex_buffer(0, self.body_vertices.buffer.slice(..));
@@ -449,11 +709,6 @@ impl Renderer {
                 self.body_indices.buffer.slice(..),
                 wgpu::IndexFormat::Uint32,
             );
-            if list.floor {
-                pass.set_pipeline(&self.shadow);
-                pass.set_stencil_reference(0);
-                pass.draw_indexed(0..body_count, 0, 0..1);
-            }
             pass.set_pipeline(&self.lit);
             pass.draw_indexed(0..body_count, 0, 0..1);
         }

@@ -282,7 +282,22 @@ fn highlights(part: Role, held: &[Role]) -> bool {
 #[must_use]
 pub fn body_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose, held: &[Role]) -> Mesh {
     let mut mesh = Mesh::default();
+    body_into(&mut mesh, &segments(skeleton, roles, world), held);
+    mesh
+}
+
+/// A coarse body for the shadow: its outline is all that shows.
+#[must_use]
+pub fn shadow_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> Mesh {
+    let mut mesh = Mesh::default();
     for s in segments(skeleton, roles, world) {
+        mesh.capsule_with(s.a.as_vec3(), s.b.as_vec3(), s.r as f32, [0.0; 4], 10, 2);
+    }
+    mesh
+}
+
+fn body_into(mesh: &mut Mesh, segments: &[Segment], held: &[Role]) {
+    for s in segments {
         let glow = highlights(s.part, held);
         let c = if glow { HELD } else { s.color };
         mesh.capsule(
@@ -292,7 +307,6 @@ pub fn body_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose, held: 
             [c[0], c[1], c[2], if glow { 1.0 } else { 0.0 }],
         );
     }
-    mesh
 }
 
 /// The overlays of one frame.
@@ -342,7 +356,12 @@ pub fn compose(
     marks: &Marks,
 ) -> DrawList {
     let mut list = view.empty(true);
-    list.body = body_mesh(skeleton, roles, world, held);
+    let segs = segments(skeleton, roles, world);
+    body_into(&mut list.body, &segs, held);
+    for s in &segs {
+        list.shadow
+            .capsule_with(s.a.as_vec3(), s.b.as_vec3(), s.r as f32, [0.0; 4], 10, 2);
+    }
     list.overlay = overlay(marks, view.camera.width);
     list
 }

@@ -1,0 +1,124 @@
+//! Frame time, render plus readback, on the adapter the machine offers
+//! (lavapipe here): the character scene (body, shadow, floor, overlays)
+//! next to a bare scene of 21 lit boxes measured in the same run, at
+//! 1280x720 and 1920x1080. `cargo bench --bench render`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::{DQuat, DVec3};
+use marionette::character::camera::Camera;
+use marionette::character::library::Library;
+use marionette::character::roles::Role;
+use marionette::character::skeleton::forward_kinematics;
+use marionette::input::calibration::Rotation;
+use marionette::render::gpu::{AdapterChoice, Gpu};
+use marionette::render::headless::Headless;
+use marionette::render::scene::{self, FingerMark, FingerUse, Marks, TrajectoryMark, View};
+
+fn view(w: u32, h: u32) -> View {
+    let target = DVec3::new(0.0, 0.95, 0.0);
+    let dir = DQuat::from_rotation_y(1.0) * DVec3::new(0.0, 0.22, 1.0).normalize();
+    View {
+        camera: Camera {
+            eye: target + dir * 3.6,
+            target,
+            fov_y_deg: 40.0,
+            width: f64::from(w),
+            height: f64::from(h),
+        },
+        rotation: Rotation::R0,
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let lib =
+        Library::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
+            .unwrap();
+    let clip = &lib.clips["pose_reach_front_right.bvh"];
+    let world = forward_kinematics(&clip.skeleton, &clip.frames[clip.frames.len() / 2]);
+    let samples: u32 = std::env::var("MARIONETTE_BENCH_SAMPLES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(4);
+    let mut g = c.benchmark_group("frame");
+    g.sample_size(20);
+    for (w, h) in [(1280u32, 720u32), (1920, 1080)] {
+        let v = view(w, h);
+        let cam = &v.camera;
+        let at = |r: Role| cam.project(world.positions[clip.roles.get(r)]).unwrap();
+        let marks = Marks {
+            fingers: vec![
+                FingerMark {
+                    at: at(Role::RightHand),
+                    usage: FingerUse::Part(Role::RightHand),
+                },
+                FingerMark {
+                    at: at(Role::LeftFoot),
+                    usage: FingerUse::Part(Role::LeftFoot),
+                },
+            ],
+            trajectories: vec![TrajectoryMark {
+                points: (0..32)
+                    .map(|k| {
+                        let s = f64::from(k) / 31.0;
+                        let p = at(Role::RightHand);
+                        marionette::input::calibration::ScreenPoint::new(
+                            p.x + 200.0 * s,
+                            p.y - 80.0 * (s * 3.0).sin(),
+                        )
+                    })
+                    .collect(),
+                executable: true,
+            }],
+            status: Some("posing | holding right_hand, left_foot | 12.3 ms".into()),
+        };
+        let character = scene::compose(
+            &v,
+            &clip.skeleton,
+            &clip.roles,
+            &world,
+            &[Role::RightHand, Role::LeftFoot],
+            &marks,
+        );
+        let boxes = scene::boxes(&v, 21);
+        let gpu = Gpu::new(AdapterChoice::Auto).expect("a Vulkan adapter");
+        let name = gpu.info.name.clone();
+        let mut bare = Headless::new(gpu, w, h, 1);
+        g.bench_function(format!("{name} {w}x{h} bare 21 boxes"), |b| {
+            b.iter(|| bare.render(&boxes).unwrap())
+        });
+        let gpu = Gpu::new(AdapterChoice::Auto).unwrap();
+        let mut full = Headless::new(gpu, w, h, samples);
+        let n = full.renderer.samples();
+        g.bench_function(format!("{name} {w}x{h} character x{n}"), |b| {
+            b.iter(|| full.render(&character).unwrap())
+        });
+        // What the parts cost: without overlays, without floor and shadow.
+        let mut no_overlay = character.clone();
+        no_overlay.overlay = Default::default();
+        g.bench_function(format!("{name} {w}x{h} character x{n} no overlays"), |b| {
+            b.iter(|| full.render(&no_overlay).unwrap())
+        });
+        let mut no_floor = no_overlay.clone();
+        no_floor.floor = false;
+        g.bench_function(format!("{name} {w}x{h} character x{n} body only"), |b| {
+            b.iter(|| full.render(&no_floor).unwrap())
+        });
+        // Composing the scene on the CPU (body mesh, overlays) per frame.
+        g.bench_function(format!("{w}x{h} compose"), |b| {
+            b.iter(|| {
+                scene::compose(
+                    &v,
+                    &clip.skeleton,
+                    &clip.roles,
+                    &world,
+                    &[Role::RightHand],
+                    &marks,
+                )
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
