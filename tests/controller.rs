@@ -1,0 +1,182 @@
+//! The character controller driven by touch frames, as the kiosk and the
+//! headless presenter drive it: grabbing, pinning, camera gestures, and a
+//! touch's effect showing at the next step (the next rendered frame).
+
+mod common;
+
+use marionette::character::roles::Role;
+use marionette::control::controller::{Controller, Settings};
+use marionette::input::calibration::{RawPoint, ScreenPoint};
+use marionette::input::pipeline::{ScreenContact, ScreenFrame};
+use marionette::input::touch::{Phase, Tool};
+
+fn contact(id: u64, phase: Phase, at: ScreenPoint) -> ScreenContact {
+    ScreenContact {
+        id,
+        phase,
+        tool: Tool::Finger,
+        raw: RawPoint {
+            x: at.x as i32,
+            y: at.y as i32,
+        },
+        screen: at,
+    }
+}
+
+fn frame(t: f64, contacts: Vec<ScreenContact>) -> ScreenFrame {
+    ScreenFrame { t, contacts }
+}
+
+fn controller() -> Controller {
+    Controller::new(common::character(), Settings::default(), 1280.0, 720.0, 0.0)
+}
+
+fn screen_of(ctl: &Controller, role: Role) -> ScreenPoint {
+    let p = ctl.world().positions[ctl.character().roles.get(role)];
+    ctl.rig.camera().project(p).unwrap()
+}
+
+#[test]
+fn a_touch_shows_at_the_next_step() {
+    let mut ctl = controller();
+    ctl.advance(1.0 / 30.0);
+    let hand = screen_of(&ctl, Role::LeftHand);
+    let before = ctl.world().positions[ctl.character().roles.get(Role::LeftHand)];
+    // The finger goes down between two steps and moves in the next frame.
+    ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, hand)]));
+    ctl.advance(2.0 / 30.0);
+    assert_eq!(ctl.held(), vec![Role::LeftHand], "held at the next step");
+    assert_eq!(ctl.marks(true).fingers.len(), 1);
+    let up = ScreenPoint::new(hand.x + 40.0, hand.y - 120.0);
+    ctl.touch(&frame(0.07, vec![contact(1, Phase::Move, up)]));
+    ctl.advance(3.0 / 30.0);
+    let after = ctl.world().positions[ctl.character().roles.get(Role::LeftHand)];
+    assert!(
+        (after - before).length() > 0.01,
+        "the hand moved by {:.3} m at the next step",
+        (after - before).length()
+    );
+}
+
+#[test]
+fn a_held_part_stays_pinned_while_another_finger_poses() {
+    let mut ctl = controller();
+    ctl.advance(1.0 / 30.0);
+    let foot = screen_of(&ctl, Role::LeftFoot);
+    ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, foot)]));
+    for k in 2..20 {
+        ctl.touch(&frame(
+            f64::from(k) / 30.0,
+            vec![contact(1, Phase::Hold, foot)],
+        ));
+        ctl.advance(f64::from(k) / 30.0);
+    }
+    let hand = screen_of(&ctl, Role::RightHand);
+    ctl.touch(&frame(
+        0.7,
+        vec![contact(1, Phase::Hold, foot), contact(2, Phase::Down, hand)],
+    ));
+    let mut held_at = Vec::new();
+    for k in 22..80 {
+        let t = f64::from(k) / 30.0;
+        let s = f64::from(k - 22) / 58.0;
+        // A slow drag (posing, not an action).
+        let p = ScreenPoint::new(hand.x - 60.0 * s, hand.y - 120.0 * s);
+        ctl.touch(&frame(
+            t,
+            vec![contact(1, Phase::Hold, foot), contact(2, Phase::Move, p)],
+        ));
+        ctl.advance(t);
+        held_at.push(screen_of(&ctl, Role::LeftFoot));
+    }
+    assert!(ctl.action().is_none(), "a slow drag poses");
+    let mut held = ctl.held();
+    held.sort();
+    assert_eq!(held, vec![Role::RightHand, Role::LeftFoot]);
+    for p in &held_at[20..] {
+        assert!(
+            p.distance(foot) < 12.0,
+            "the pinned foot drifted {:.1} px from the finger",
+            p.distance(foot)
+        );
+    }
+}
+
+#[test]
+fn fingers_on_empty_space_turn_and_zoom_the_camera_within_limits() {
+    let mut ctl = controller();
+    ctl.advance(1.0 / 30.0);
+    let home = ctl.rig.orbit;
+    let a = ScreenPoint::new(100.0, 650.0);
+    ctl.touch(&frame(0.1, vec![contact(1, Phase::Down, a)]));
+    for k in 1..30 {
+        let p = ScreenPoint::new(100.0 + 20.0 * f64::from(k), 650.0 - 30.0 * f64::from(k));
+        ctl.touch(&frame(
+            0.1 + f64::from(k) / 60.0,
+            vec![contact(1, Phase::Move, p)],
+        ));
+    }
+    ctl.advance(0.7);
+    assert!(ctl.held().is_empty());
+    assert!((ctl.rig.orbit.yaw - home.yaw).abs() > 1.0, "turned");
+    // Dragging up tilts the view down to the horizon, and no further.
+    assert_eq!(
+        ctl.rig.orbit.pitch, ctl.rig.limits.min_pitch,
+        "tilt stops at its limit"
+    );
+    ctl.touch(&frame(0.8, vec![contact(1, Phase::Up, a)]));
+    // Two fingers spread far apart: zoom in, stopping at the limit.
+    let (l, r) = (
+        ScreenPoint::new(100.0, 600.0),
+        ScreenPoint::new(200.0, 600.0),
+    );
+    ctl.touch(&frame(
+        1.0,
+        vec![contact(2, Phase::Down, l), contact(3, Phase::Down, r)],
+    ));
+    ctl.touch(&frame(
+        1.1,
+        vec![
+            contact(2, Phase::Move, ScreenPoint::new(10.0, 600.0)),
+            contact(3, Phase::Move, ScreenPoint::new(1200.0, 600.0)),
+        ],
+    ));
+    ctl.advance(1.1);
+    assert_eq!(ctl.rig.orbit.distance, ctl.rig.limits.min_distance);
+    // The whole character stays in view.
+    for role in [Role::Head, Role::LeftFoot, Role::RightFoot] {
+        let p = screen_of(&ctl, role);
+        assert!(
+            p.x > 0.0 && p.x < 1280.0 && p.y > 0.0 && p.y < 720.0,
+            "{role:?} at {p:?}"
+        );
+    }
+    ctl.touch(&frame(
+        1.2,
+        vec![
+            contact(2, Phase::Up, ScreenPoint::new(10.0, 600.0)),
+            contact(3, Phase::Up, ScreenPoint::new(1200.0, 600.0)),
+        ],
+    ));
+    // Idle: the camera eases home.
+    let mut t = 1.2;
+    while t < 1.2 + ctl.settings.home_after_s + 4.0 {
+        t += 1.0 / 30.0;
+        ctl.advance(t);
+    }
+    assert!((ctl.rig.orbit.distance - home.distance).abs() < 0.05);
+    assert!((ctl.rig.orbit.pitch - home.pitch).abs() < 0.02);
+}
+
+#[test]
+fn a_cancelled_contact_lets_go() {
+    let mut ctl = controller();
+    ctl.advance(1.0 / 30.0);
+    let hand = screen_of(&ctl, Role::RightHand);
+    ctl.touch(&frame(0.05, vec![contact(1, Phase::Down, hand)]));
+    ctl.advance(0.1);
+    assert_eq!(ctl.held().len(), 1);
+    ctl.touch(&frame(0.12, vec![contact(1, Phase::Cancel, hand)]));
+    ctl.advance(0.15);
+    assert!(ctl.held().is_empty());
+}
