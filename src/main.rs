@@ -59,6 +59,13 @@ enum Command {
         /// Frames written per second of recording.
         #[arg(long, default_value_t = 10.0)]
         fps: f64,
+        /// Run the whole pipeline without rendering and write motion
+        /// quality metrics (JSON) to this file.
+        #[arg(long, value_name = "OUT.json", conflicts_with = "headless")]
+        metrics: Option<PathBuf>,
+        /// With --metrics: turn tracking control off, to compare.
+        #[arg(long, requires = "metrics")]
+        no_tracking: bool,
     },
     /// Write the motion the character performs for a recording as BVH
     /// (the library's skeleton, at its frame rate).
@@ -298,6 +305,12 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
             let rec = Recording::read_file(&file)?;
             show(config, &rec, &out, fps)
         }
+        Command::Replay {
+            file,
+            metrics: Some(out),
+            no_tracking,
+            ..
+        } => replay_metrics(config, &file, &out, no_tracking),
         Command::Replay { file, contacts, .. } => replay(config, &file, contacts),
         Command::ExportBvh { file, out } => export_bvh(config, &file, &out),
         Command::Record {
@@ -697,6 +710,72 @@ fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Failure> {
     )
     .map_err(stdout_error)?;
     show(config, &rec, out_dir, fps)
+}
+
+fn replay_metrics(
+    config: &Config,
+    file: &Path,
+    out: &Path,
+    no_tracking: bool,
+) -> Result<(), Failure> {
+    use marionette::app::headless;
+    let rec = Recording::read_file(file)?;
+    let ch = character(config)?;
+    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let opts = headless::Options {
+        keep_poses: true,
+        until: Some(pipeline::summarize(&rec).0.duration_s),
+        tracking: !no_tracking,
+        ..headless::Options::default()
+    };
+    let summary = headless::run(ch.clone(), config, frames, &opts)
+        .map_err(|e| Failure::new(e.exit_code(), e))?;
+    let m = marionette::control::metrics::measure(
+        &ch.lib.skeleton,
+        &ch.roles,
+        &summary.poses,
+        1.0 / opts.tick_hz,
+    );
+    let mut json = serde_json::to_value(&m).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    json["tracking"] = serde_json::Value::Bool(!no_tracking);
+    json["actions"] = summary
+        .actions
+        .iter()
+        .map(|a| {
+            serde_json::json!({
+                "name": a.action,
+                "start_s": a.started_s,
+                "end_s": a.ended_s,
+                "outcome": a.outcome,
+            })
+        })
+        .collect();
+    let text = serde_json::to_string_pretty(&json).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    let tmp = out.with_extension("json.tmp");
+    std::fs::write(&tmp, text + "\n")
+        .and_then(|()| std::fs::rename(&tmp, out))
+        .map_err(|e| {
+            Failure::new(
+                exit::CANTCREAT,
+                format!("cannot write {}: {e}", out.display()),
+            )
+        })?;
+    writeln!(
+        std::io::stdout(),
+        "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}; {} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}), ground penetration {:.1} mm, {} actions; written to {}",
+        m.frames,
+        m.nan_frames,
+        m.max_joint_speed_jump_rad_s,
+        m.worst_jump,
+        m.pops,
+        marionette::control::metrics::POP_RAD_S,
+        m.foot_skate_mm_per_frame,
+        m.foot_skate_max_mm,
+        m.ground_penetration_mm,
+        summary.actions.len(),
+        out.display()
+    )
+    .map_err(stdout_error)
 }
 
 fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(), Failure> {

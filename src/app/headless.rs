@@ -63,6 +63,8 @@ pub struct Options {
     pub adapter: AdapterChoice,
     /// Keep every stepped posture in [`Summary::poses`].
     pub keep_poses: bool,
+    /// Tracking control on (off: the output is the synthesised posture).
+    pub tracking: bool,
 }
 
 impl Default for Options {
@@ -76,6 +78,7 @@ impl Default for Options {
             sheet_frames: 16,
             adapter: AdapterChoice::Auto,
             keep_poses: false,
+            tracking: true,
         }
     }
 }
@@ -222,7 +225,10 @@ pub fn run(
     frames: Vec<ScreenFrame>,
     opts: &Options,
 ) -> Result<Summary, HeadlessError> {
-    let settings = Settings::from_config(config);
+    let mut settings = Settings::from_config(config);
+    if !opts.tracking {
+        settings.settle_s = 0.0;
+    }
     let (pw, ph) = config.display.size();
     let (ow, oh) = config.display.output_size();
     let mut ctl = Controller::new(ch, settings, f64::from(pw), f64::from(ph), 0.0);

@@ -86,7 +86,8 @@ pub struct Settings {
     pub pick_radius_px: f64,
     /// The camera eases back home after this long without a touch (s).
     pub home_after_s: f64,
-    /// Tracking control settles in about this long (s).
+    /// Tracking control settles in about this long (s); 0 turns tracking
+    /// off (the output is the synthesised posture).
     pub settle_s: f64,
     /// A finger resting this long starts a new drag for recognition (s).
     pub rest_s: f64,
@@ -156,11 +157,23 @@ pub struct Controller {
     planted: Option<[DVec3; 2]>,
     target: Pose,
     tracker: AccelTracker,
+    /// The tracked posture with supporting feet fixed: what is shown.
+    output: Pose,
+    /// Where each supporting foot (left, right) is held, while it is.
+    feet: [Option<DVec3>; 2],
+    /// The target's foot positions last step, for their speed.
+    last_feet: [DVec3; 2],
+    /// Ankle height standing at rest (m): a foot lower than this plus a
+    /// little is on the floor.
+    ankle_rest: f64,
     world: WorldPose,
     time: f64,
     last_touch: f64,
     events: Vec<ActionEvent>,
 }
+
+/// The longest drag kept for recognition (s): longer than any action.
+const MAX_TRAIL_S: f64 = 4.0;
 
 /// Longest tracking sub-step (s): explicit integration stays stable.
 const MAX_SUBSTEP: f64 = 0.004;
@@ -177,7 +190,15 @@ impl Controller {
         };
         let pose = ch.rest_pose(&at);
         let world = forward_kinematics(&ch.lib.skeleton, &pose);
+        let feet_now = [
+            world.positions[ch.roles.get(Role::LeftFoot)],
+            world.positions[ch.roles.get(Role::RightFoot)],
+        ];
         Self {
+            output: pose.clone(),
+            feet: [None; 2],
+            last_feet: feet_now,
+            ankle_rest: feet_now[0].y.min(feet_now[1].y),
             settings,
             rig: Rig::new(width, height),
             mode: Mode::Posing,
@@ -203,7 +224,7 @@ impl Controller {
     /// The posture shown now.
     #[must_use]
     pub fn pose(&self) -> &Pose {
-        &self.tracker.pose
+        &self.output
     }
 
     /// World transforms of the posture shown now.
@@ -249,6 +270,18 @@ impl Controller {
         self.grabs
             .values()
             .any(|g| matches!(g, Grab::Camera { .. }))
+    }
+
+    /// Trail points kept for recognition, over all fingers (bounded).
+    #[must_use]
+    pub fn trail_points(&self) -> usize {
+        self.grabs
+            .values()
+            .map(|g| match g {
+                Grab::Part { trail, .. } => trail.len(),
+                Grab::Camera { .. } => 0,
+            })
+            .sum()
     }
 
     /// Seconds since the last touch.
@@ -335,6 +368,17 @@ impl Controller {
                                 at: p,
                                 t: t - *trail_start,
                             });
+                            // Only the last seconds can start an action.
+                            let keep_from = t - *trail_start - MAX_TRAIL_S;
+                            let old = trail.partition_point(|q| q.t < keep_from);
+                            if old > 0 {
+                                trail.drain(..old);
+                                let shift = trail[0].t;
+                                for q in trail.iter_mut() {
+                                    q.t -= shift;
+                                }
+                                *trail_start += shift;
+                            }
                         }
                         *at = p;
                     }
@@ -445,15 +489,58 @@ impl Controller {
                 *moved = false;
             }
         }
-        let gains = Gains::critical(self.settings.settle_s);
-        let steps = (dt / MAX_SUBSTEP).ceil().max(1.0) as usize;
-        for _ in 0..steps {
-            self.tracker.step(&self.target, gains, dt / steps as f64);
+        if self.settings.settle_s > 0.0 {
+            let gains = Gains::critical(self.settings.settle_s);
+            let steps = (dt / MAX_SUBSTEP).ceil().max(1.0) as usize;
+            for _ in 0..steps {
+                self.tracker.step(&self.target, gains, dt / steps as f64);
+            }
+        } else {
+            // Tracking off: the output is the target.
+            self.tracker = AccelTracker::new(self.target.clone());
         }
-        self.world = forward_kinematics(&self.ch.lib.skeleton, &self.tracker.pose);
+        self.output = self.tracker.pose.clone();
+        self.fix_feet(dt);
+        self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
         let idle = self.idle_s() > self.settings.home_after_s;
         let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
         self.rig.settle(floor, idle, dt);
+    }
+
+    /// Foot contact and foot IK: a foot of the target posture that is near
+    /// the floor and nearly still carries the body; it is held where it was
+    /// when it came down while tracking moves the pelvis. Feet held by a
+    /// finger are the finger's.
+    fn fix_feet(&mut self, dt: f64) {
+        let sk = &self.ch.lib.skeleton;
+        let roles = &self.ch.roles;
+        let target = forward_kinematics(sk, &self.target);
+        let shown = forward_kinematics(sk, &self.output);
+        let held = self.held();
+        for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+            let p = target.positions[roles.get(role)];
+            let speed = if dt > 0.0 {
+                (p - self.last_feet[k]).length() / dt
+            } else {
+                0.0
+            };
+            self.last_feet[k] = p;
+            let support = p.y <= self.ankle_rest + 0.03 && speed < 0.3 && !held.contains(&role);
+            // A foot the target has moved away from is planted afresh.
+            let stays = |a: &DVec3| (*a - p).with_y(0.0).length() < 0.08;
+            self.feet[k] = if support {
+                Some(
+                    self.feet[k]
+                        .filter(stays)
+                        .unwrap_or(shown.positions[roles.get(role)]),
+                )
+            } else {
+                None
+            };
+        }
+        if self.feet.iter().any(Option::is_some) {
+            crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, self.feet);
+        }
     }
 
     /// Touches up to `t`, then advance to `t`.

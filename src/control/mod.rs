@@ -4,5 +4,6 @@
 
 pub mod controller;
 pub mod demo;
+pub mod metrics;
 pub mod rig;
 pub mod ticker;

@@ -2,8 +2,9 @@
 //!
 //! For each test clip `<action>_*.bvh` (clips not in the library), the
 //! primary part's true path is projected from a side camera and from a 45°
-//! front-side camera and replayed as a finger trail at ×0.7, ×1 and ×1.5 of
-//! its speed with 2 px of noise, one point per frame, until an action
+//! front-side camera (both on the primary part's side of the body) and
+//! replayed as a finger trail at ×0.7, ×1 and ×1.5 of its speed with 2 px
+//! of noise, one point per frame, until an action
 //! starts. Slow posing drags (paths of each primary part at under a third
 //! of the action's speed, in random directions) must start nothing.
 
@@ -101,7 +102,14 @@ pub fn eval_actions(
         let chest = forward_kinematics(&clip.skeleton, &clip.frames[0]).positions
             [clip.roles.get(Role::Chest)]
         .y;
-        for angle in [90.0, 45.0] {
+        // The cameras stand on the side of the primary part, as a visitor
+        // looking at the punching arm would: the far side's actions can be
+        // along the line of sight, which the start rule excludes by design.
+        let side = match role {
+            Role::RightHand | Role::RightFoot | Role::RightElbow | Role::RightKnee => -1.0,
+            _ => 1.0,
+        };
+        for angle in [90.0 * side, 45.0 * side] {
             let cam = camera(angle, &at, chest);
             for speed in [0.7, 1.0, 1.5] {
                 let trail: Vec<TrailPoint> = path

@@ -226,6 +226,19 @@ fn chain(skeleton: &Skeleton, roles: &RoleMap, role: Role) -> Vec<usize> {
     }
 }
 
+/// Foot IK: keep each foot given a position there, turning only knee and
+/// hip (the feet that carry the body stay put when the pelvis moves).
+pub fn plant_feet(skeleton: &Skeleton, roles: &RoleMap, pose: &mut Pose, at: [Option<DVec3>; 2]) {
+    let goals: Vec<(usize, Vec<usize>, DVec3)> =
+        [(Role::LeftFoot, at[0]), (Role::RightFoot, at[1])]
+            .into_iter()
+            .filter_map(|(r, p)| p.map(|p| (roles.get(r), chain(skeleton, roles, r), p)))
+            .collect();
+    if !goals.is_empty() {
+        ccd(skeleton, pose, &goals, 12);
+    }
+}
+
 /// CCD IK: move each effector towards its goal, turning the joints of its
 /// chain, nearest first. Turning a chain joint moves neither its ancestors
 /// nor their rotations, so one forward-kinematics pass per goal and sweep

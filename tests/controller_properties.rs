@@ -1,0 +1,145 @@
+//! Random multi-touch input for long stretches of simulated time: no panic,
+//! no NaN, bounded state. `PROPTEST_CASES=50 MARIONETTE_SIM_S=3600 cargo
+//! test --release --test controller_properties` for hours.
+
+mod common;
+
+use marionette::control::controller::{Controller, Settings};
+use marionette::input::calibration::{RawPoint, ScreenPoint};
+use marionette::input::pipeline::{ScreenContact, ScreenFrame};
+use marionette::input::touch::{Phase, Tool};
+use proptest::prelude::*;
+
+/// A small deterministic generator driven by the case's seed.
+struct Lcg(u64);
+
+impl Lcg {
+    fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn simulate(seed: u64, seconds: f64) {
+    let mut rng = Lcg(seed);
+    let mut ctl = Controller::new(common::character(), Settings::default(), 1280.0, 720.0, 0.0);
+    // Up to five fingers, each down or up, drifting, jumping, resting;
+    // some go down on body parts (aimed at projected joints), some on
+    // empty space; contacts are sometimes cancelled.
+    let mut fingers: Vec<Option<(u64, ScreenPoint, ScreenPoint)>> = vec![None; 5];
+    let mut next_id = 1u64;
+    let dt = 1.0 / 60.0;
+    let mut t = 0.0;
+    let mut step = 0u64;
+    while t < seconds {
+        t += dt;
+        step += 1;
+        let mut contacts = Vec::new();
+        for f in &mut fingers {
+            let r = rng.unit();
+            match f {
+                None if r < 0.01 => {
+                    let at = if rng.unit() < 0.6 {
+                        let w = ctl.world();
+                        let j = (rng.unit() * w.positions.len() as f64) as usize;
+                        ctl.rig
+                            .camera()
+                            .project(w.positions[j.min(w.positions.len() - 1)])
+                            .unwrap_or(ScreenPoint::new(640.0, 360.0))
+                    } else {
+                        ScreenPoint::new(rng.unit() * 1280.0, rng.unit() * 720.0)
+                    };
+                    let vel =
+                        ScreenPoint::new((rng.unit() - 0.5) * 2000.0, (rng.unit() - 0.5) * 2000.0);
+                    *f = Some((next_id, at, vel));
+                    contacts.push((next_id, Phase::Down, at));
+                    next_id += 1;
+                }
+                None => {}
+                Some((id, at, vel)) => {
+                    if r < 0.008 {
+                        let phase = if rng.unit() < 0.1 {
+                            Phase::Cancel
+                        } else {
+                            Phase::Up
+                        };
+                        contacts.push((*id, phase, *at));
+                        *f = None;
+                    } else if r < 0.3 {
+                        contacts.push((*id, Phase::Hold, *at));
+                    } else {
+                        if rng.unit() < 0.02 {
+                            vel.x = (rng.unit() - 0.5) * 3000.0;
+                            vel.y = (rng.unit() - 0.5) * 3000.0;
+                        }
+                        at.x = (at.x + vel.x * dt).clamp(0.0, 1280.0);
+                        at.y = (at.y + vel.y * dt).clamp(0.0, 720.0);
+                        contacts.push((*id, Phase::Move, *at));
+                    }
+                }
+            }
+        }
+        let frame = ScreenFrame {
+            t,
+            contacts: contacts
+                .into_iter()
+                .map(|(id, phase, at)| ScreenContact {
+                    id,
+                    phase,
+                    tool: Tool::Finger,
+                    raw: RawPoint {
+                        x: at.x as i32,
+                        y: at.y as i32,
+                    },
+                    screen: at,
+                })
+                .collect(),
+        };
+        ctl.touch(&frame);
+        if step % 2 == 0 {
+            ctl.advance(t);
+            let _ = ctl.take_events();
+            let pose = ctl.pose();
+            assert!(
+                pose.rotations
+                    .iter()
+                    .all(|q| q.to_array().iter().all(|v| v.is_finite()))
+                    && pose.translations.iter().all(|p| p.is_finite()),
+                "NaN at {t:.2} s (seed {seed})"
+            );
+            assert!(ctl.held().len() <= 5);
+            assert!(
+                ctl.trail_points() <= 5 * 400,
+                "trails grew to {} points",
+                ctl.trail_points()
+            );
+            let o = ctl.rig.orbit;
+            assert!(o.distance.is_finite() && o.yaw.is_finite() && o.pitch.is_finite());
+            // The character stays near the stage (walks move it a little).
+            let root = pose.translations[0];
+            assert!(root.length() < 50.0, "root at {root:?}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(4),
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn random_touches_never_break_the_controller(seed in any::<u64>()) {
+        let seconds = std::env::var("MARIONETTE_SIM_S")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(60.0);
+        simulate(seed, seconds);
+    }
+}
