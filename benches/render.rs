@@ -1,7 +1,9 @@
 //! Frame time, render plus readback, on the adapter the machine offers
 //! (lavapipe here): the character scene (body, shadow, floor, overlays)
 //! next to a bare scene of 21 lit boxes measured in the same run, at
-//! 1280x720 and 1920x1080. `cargo bench --bench render`.
+//! 1280x720 and 1920x1080, with the shipped automatic anti-aliasing (one
+//! sample per pixel on a CPU renderer, four on a GPU;
+//! `MARIONETTE_BENCH_SAMPLES=4` to force). `cargo bench --bench render`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DQuat, DVec3};
@@ -38,7 +40,7 @@ fn bench(c: &mut Criterion) {
     let samples: u32 = std::env::var("MARIONETTE_BENCH_SAMPLES")
         .ok()
         .and_then(|s| s.parse().ok())
-        .unwrap_or(4);
+        .unwrap_or(0);
     let mut g = c.benchmark_group("frame");
     g.sample_size(20);
     for (w, h) in [(1280u32, 720u32), (1920, 1080)] {
@@ -92,6 +94,20 @@ fn bench(c: &mut Criterion) {
         g.bench_function(format!("{name} {w}x{h} character x{n}"), |b| {
             b.iter(|| full.render(&character).unwrap())
         });
+        // The camera moving: the floor is drawn again every frame.
+        let mut turned = character.clone();
+        turned.view_proj *= glam::Mat4::from_rotation_y(0.01);
+        let mut flip = false;
+        g.bench_function(
+            format!("{name} {w}x{h} character x{n} camera moving"),
+            |b| {
+                b.iter(|| {
+                    flip = !flip;
+                    full.render(if flip { &turned } else { &character })
+                        .unwrap()
+                })
+            },
+        );
         // What the parts cost: without overlays, without floor and shadow.
         let mut no_overlay = character.clone();
         no_overlay.overlay = Default::default();
