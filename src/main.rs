@@ -712,29 +712,74 @@ fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Failure> {
     show(config, &rec, out_dir, fps)
 }
 
+/// A recording's postures, the controller stepped at `tick_hz` (0: the
+/// library's frame rate) up to the recording's end, without rendering.
+fn replay_poses(
+    config: &Config,
+    file: &Path,
+    tick_hz: f64,
+    tracking: bool,
+) -> Result<
+    (
+        std::sync::Arc<marionette::control::controller::Character>,
+        marionette::app::headless::Summary,
+        f64,
+    ),
+    Failure,
+> {
+    use marionette::app::headless;
+    let rec = Recording::read_file(file)?;
+    let ch = character(config)?;
+    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let tick_hz = if tick_hz > 0.0 {
+        tick_hz
+    } else {
+        1.0 / ch
+            .lib
+            .clips
+            .values()
+            .next()
+            .map_or(1.0 / 30.0, |c| c.frame_time)
+    };
+    let opts = headless::Options {
+        tick_hz,
+        keep_poses: true,
+        until: Some(pipeline::summarize(&rec).0.duration_s),
+        tracking,
+        ..headless::Options::default()
+    };
+    let summary = headless::run(ch.clone(), config, frames, &opts)
+        .map_err(|e| Failure::new(e.exit_code(), e))?;
+    Ok((ch, summary, tick_hz))
+}
+
+/// Write `text` to `out` through a temporary file renamed into place.
+fn write_atomically(out: &Path, text: &str) -> Result<(), Failure> {
+    let mut tmp = out.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, text)
+        .and_then(|()| std::fs::rename(&tmp, out))
+        .map_err(|e| {
+            Failure::new(
+                exit::CANTCREAT,
+                format!("cannot write {}: {e}", out.display()),
+            )
+        })
+}
+
 fn replay_metrics(
     config: &Config,
     file: &Path,
     out: &Path,
     no_tracking: bool,
 ) -> Result<(), Failure> {
-    use marionette::app::headless;
-    let rec = Recording::read_file(file)?;
-    let ch = character(config)?;
-    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
-    let opts = headless::Options {
-        keep_poses: true,
-        until: Some(pipeline::summarize(&rec).0.duration_s),
-        tracking: !no_tracking,
-        ..headless::Options::default()
-    };
-    let summary = headless::run(ch.clone(), config, frames, &opts)
-        .map_err(|e| Failure::new(e.exit_code(), e))?;
+    let (ch, summary, tick_hz) = replay_poses(config, file, 30.0, !no_tracking)?;
     let m = marionette::control::metrics::measure(
         &ch.lib.skeleton,
         &ch.roles,
         &summary.poses,
-        1.0 / opts.tick_hz,
+        1.0 / tick_hz,
     );
     let mut json = serde_json::to_value(&m).map_err(|e| Failure::new(exit::FAILURE, e))?;
     json["tracking"] = serde_json::Value::Bool(!no_tracking);
@@ -751,15 +796,7 @@ fn replay_metrics(
         })
         .collect();
     let text = serde_json::to_string_pretty(&json).map_err(|e| Failure::new(exit::FAILURE, e))?;
-    let tmp = out.with_extension("json.tmp");
-    std::fs::write(&tmp, text + "\n")
-        .and_then(|()| std::fs::rename(&tmp, out))
-        .map_err(|e| {
-            Failure::new(
-                exit::CANTCREAT,
-                format!("cannot write {}: {e}", out.display()),
-            )
-        })?;
+    write_atomically(out, &(text + "\n"))?;
     writeln!(
         std::io::stdout(),
         "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}; {} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}), ground penetration {:.1} mm, {} actions; written to {}",
@@ -779,46 +816,21 @@ fn replay_metrics(
 }
 
 fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(), Failure> {
-    use marionette::app::headless;
-    let rec = Recording::read_file(file)?;
-    let ch = character(config)?;
-    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
-    let frame_time = ch
-        .lib
-        .clips
-        .values()
-        .next()
-        .map_or(1.0 / 30.0, |c| c.frame_time);
-    let opts = headless::Options {
-        tick_hz: 1.0 / frame_time,
-        keep_poses: true,
-        until: Some(pipeline::summarize(&rec).0.duration_s),
-        ..headless::Options::default()
-    };
-    let summary = headless::run(ch.clone(), config, frames, &opts)
-        .map_err(|e| Failure::new(e.exit_code(), e))?;
+    let (ch, summary, tick_hz) = replay_poses(config, file, 0.0, true)?;
     let translates: Vec<bool> = (0..ch.lib.skeleton.len()).map(|j| j == 0).collect();
     let text = marionette::character::bvh::write(
         &ch.lib.skeleton,
         &translates,
         &summary.poses,
-        frame_time,
+        1.0 / tick_hz,
     );
-    let tmp = out.with_extension("bvh.tmp");
-    std::fs::write(&tmp, text)
-        .and_then(|()| std::fs::rename(&tmp, out))
-        .map_err(|e| {
-            Failure::new(
-                exit::CANTCREAT,
-                format!("cannot write {}: {e}", out.display()),
-            )
-        })?;
+    write_atomically(out, &text)?;
     writeln!(
         std::io::stdout(),
         "wrote {} frames ({:.1} s at {:.0} fps, {} actions) to {}",
         summary.poses.len(),
         summary.duration_s,
-        1.0 / frame_time,
+        tick_hz,
         summary.actions.len(),
         out.display()
     )

@@ -4,24 +4,12 @@
 
 mod common;
 
+use common::contact;
 use marionette::character::roles::Role;
 use marionette::control::controller::{Controller, Settings};
-use marionette::input::calibration::{RawPoint, ScreenPoint};
+use marionette::input::calibration::ScreenPoint;
 use marionette::input::pipeline::{ScreenContact, ScreenFrame};
-use marionette::input::touch::{Phase, Tool};
-
-fn contact(id: u64, phase: Phase, at: ScreenPoint) -> ScreenContact {
-    ScreenContact {
-        id,
-        phase,
-        tool: Tool::Finger,
-        raw: RawPoint {
-            x: at.x as i32,
-            y: at.y as i32,
-        },
-        screen: at,
-    }
-}
+use marionette::input::touch::Phase;
 
 fn frame(t: f64, contacts: Vec<ScreenContact>) -> ScreenFrame {
     ScreenFrame { t, contacts }

@@ -5,9 +5,9 @@
 mod common;
 
 use marionette::control::controller::{Controller, Settings};
-use marionette::input::calibration::{RawPoint, ScreenPoint};
-use marionette::input::pipeline::{ScreenContact, ScreenFrame};
-use marionette::input::touch::{Phase, Tool};
+use marionette::input::calibration::ScreenPoint;
+use marionette::input::pipeline::ScreenFrame;
+use marionette::input::touch::Phase;
 use proptest::prelude::*;
 
 /// A small deterministic generator driven by the case's seed.
@@ -86,16 +86,7 @@ fn simulate(seed: u64, seconds: f64) {
             t,
             contacts: contacts
                 .into_iter()
-                .map(|(id, phase, at)| ScreenContact {
-                    id,
-                    phase,
-                    tool: Tool::Finger,
-                    raw: RawPoint {
-                        x: at.x as i32,
-                        y: at.y as i32,
-                    },
-                    screen: at,
-                })
+                .map(|(id, phase, at)| common::contact(id, phase, at))
                 .collect(),
         };
         ctl.touch(&frame);

@@ -58,6 +58,48 @@ pub fn planar_shadow(light: Vec3, h: f32) -> Mat4 {
     )
 }
 
+/// A render pass into `color` (resolved into `color.1` when multisampled;
+/// the multisampled image is then not kept), with a cleared depth-stencil
+/// that is not kept either.
+fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: (&wgpu::TextureView, Option<&wgpu::TextureView>),
+    load: wgpu::LoadOp<wgpu::Color>,
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: color.0,
+            depth_slice: None,
+            resolve_target: color.1,
+            ops: wgpu::Operations {
+                load,
+                store: if color.1.is_some() {
+                    wgpu::StoreOp::Discard
+                } else {
+                    wgpu::StoreOp::Store
+                },
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(0),
+                store: wgpu::StoreOp::Discard,
+            }),
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
 fn clear(bg: [f32; 3]) -> wgpu::Color {
     wgpu::Color {
         r: f64::from(bg[0]),
@@ -483,37 +525,15 @@ impl Renderer {
             };
             let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
             let depth = &self.attachments(gpu, size).depth;
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("floor"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(clear(bg)),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = begin_pass(
+                encoder,
+                "floor",
+                (&view, None),
+                wgpu::LoadOp::Clear(clear(bg)),
+                depth,
+            );
             pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.set_pipeline(&self.floor);
-            pass.set_vertex_buffer(0, self.floor_mesh.0.slice(..));
-            pass.set_index_buffer(self.floor_mesh.1.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.floor_mesh.2, 0, 0..1);
+            self.draw_floor(&mut pass);
             drop(pass);
             self.floor_cache = Some(FloorCache { key, texture });
         }
@@ -543,6 +563,13 @@ impl Renderer {
         }
         self.last = Some((target.clone(), damage));
         region
+    }
+
+    fn draw_floor(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.floor);
+        pass.set_vertex_buffer(0, self.floor_mesh.0.slice(..));
+        pass.set_index_buffer(self.floor_mesh.1.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.floor_mesh.2, 0, 0..1);
     }
 
     /// Samples per pixel actually used.
@@ -646,40 +673,12 @@ impl Renderer {
             Some(m) => (m, Some(target)),
             None => (target, None),
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("scene"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: resolve,
-                ops: wgpu::Operations {
-                    load: if cached_floor {
-                        wgpu::LoadOp::Load
-                    } else {
-                        wgpu::LoadOp::Clear(clear(bg))
-                    },
-                    store: if resolve.is_some() {
-                        wgpu::StoreOp::Discard
-                    } else {
-                        wgpu::StoreOp::Store
-                    },
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &att.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let load = if cached_floor {
+            wgpu::LoadOp::Load
+        } else {
+            wgpu::LoadOp::Clear(clear(bg))
+        };
+        let mut pass = begin_pass(encoder, "scene", (view, resolve), load, &att.depth);
         pass.set_bind_group(0, &self.bind_group, &[]);
         if let Some(r) = scissor {
             if r.is_empty() {
@@ -688,10 +687,7 @@ impl Renderer {
             pass.set_scissor_rect(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
         }
         if list.floor && !cached_floor {
-            pass.set_pipeline(&self.floor);
-            pass.set_vertex_buffer(0, self.floor_mesh.0.slice(..));
-            pass.set_index_buffer(self.floor_mesh.1.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.floor_mesh.2, 0, 0..1);
+            self.draw_floor(&mut pass);
         }
         if list.floor && shadow_count > 0 {
             pass.set_pipeline(&self.shadow);

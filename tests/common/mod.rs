@@ -37,3 +37,21 @@ pub fn character() -> std::sync::Arc<marionette::control::controller::Character>
     })
     .clone()
 }
+
+/// A finger contact in picture pixels, for driving a controller directly.
+pub fn contact(
+    id: u64,
+    phase: marionette::input::touch::Phase,
+    at: marionette::input::calibration::ScreenPoint,
+) -> marionette::input::pipeline::ScreenContact {
+    marionette::input::pipeline::ScreenContact {
+        id,
+        phase,
+        tool: marionette::input::touch::Tool::Finger,
+        raw: marionette::input::calibration::RawPoint {
+            x: at.x as i32,
+            y: at.y as i32,
+        },
+        screen: at,
+    }
+}
