@@ -799,7 +799,7 @@ fn replay_metrics(
     write_atomically(out, &(text + "\n"))?;
     writeln!(
         std::io::stdout(),
-        "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}; {} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}), ground penetration {:.1} mm, {} actions; written to {}",
+        "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}; {} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}, {}), ground penetration {:.1} mm ({}), {} actions; written to {}",
         m.frames,
         m.nan_frames,
         m.max_joint_speed_jump_rad_s,
@@ -808,7 +808,9 @@ fn replay_metrics(
         marionette::control::metrics::POP_RAD_S,
         m.foot_skate_mm_per_frame,
         m.foot_skate_max_mm,
+        m.worst_skate,
         m.ground_penetration_mm,
+        m.worst_penetration,
         summary.actions.len(),
         out.display()
     )

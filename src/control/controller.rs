@@ -135,6 +135,14 @@ enum Grab {
     },
 }
 
+/// Where a foot is held while it carries the body, and where it was let
+/// go (with how much of that still shows) after it lifts.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct FootHold {
+    anchor: Option<DVec3>,
+    release: Option<(DVec3, f64)>,
+}
+
 /// Posing, or playing an action.
 #[derive(Clone, Debug)]
 pub enum Mode {
@@ -159,8 +167,8 @@ pub struct Controller {
     tracker: AccelTracker,
     /// The tracked posture with supporting feet fixed: what is shown.
     output: Pose,
-    /// Where each supporting foot (left, right) is held, while it is.
-    feet: [Option<DVec3>; 2],
+    /// Foot IK state, left and right.
+    feet: [FootHold; 2],
     /// The target's foot positions last step, for their speed.
     last_feet: [DVec3; 2],
     /// Ankle height standing at rest (m): a foot lower than this plus a
@@ -196,7 +204,7 @@ impl Controller {
         ];
         Self {
             output: pose.clone(),
-            feet: [None; 2],
+            feet: [FootHold::default(); 2],
             last_feet: feet_now,
             ankle_rest: feet_now[0].y.min(feet_now[1].y),
             settings,
@@ -428,10 +436,22 @@ impl Controller {
         self.grabs
             .values()
             .filter_map(|g| match g {
-                Grab::Part { role, at, .. } => Some(Constraint {
-                    role: *role,
-                    target: Target::Ray(camera.ray(*at)),
-                }),
+                Grab::Part { role, at, .. } => {
+                    let ray = camera.ray(*at);
+                    let target = if matches!(role, Role::LeftFoot | Role::RightFoot) {
+                        // A held foot goes where the finger points, but
+                        // never into the floor.
+                        let now = self.world.positions[self.ch.roles.get(*role)];
+                        let q = ray.closest(now);
+                        Target::Point(q.with_y(q.y.max(self.ankle_rest)))
+                    } else {
+                        Target::Ray(ray)
+                    };
+                    Some(Constraint {
+                        role: *role,
+                        target,
+                    })
+                }
                 Grab::Camera { .. } => None,
             })
             .collect()
@@ -517,6 +537,12 @@ impl Controller {
         let target = forward_kinematics(sk, &self.target);
         let shown = forward_kinematics(sk, &self.output);
         let held = self.held();
+        // Rates: a held foot follows a target that slides away (more than
+        // 2 cm) within about 0.15 s; a released foot returns to the tracked
+        // posture within about 0.1 s, never in one jump.
+        let follow = 1.0 - (-dt / 0.15).exp();
+        let fade = (-dt / 0.04).exp();
+        let mut goals = [None; 2];
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let p = target.positions[roles.get(role)];
             let speed = if dt > 0.0 {
@@ -526,20 +552,40 @@ impl Controller {
             };
             self.last_feet[k] = p;
             let support = p.y <= self.ankle_rest + 0.03 && speed < 0.3 && !held.contains(&role);
-            // A foot the target has moved away from is planted afresh.
-            let stays = |a: &DVec3| (*a - p).with_y(0.0).length() < 0.08;
-            self.feet[k] = if support {
-                Some(
-                    self.feet[k]
-                        .filter(stays)
-                        .unwrap_or(shown.positions[roles.get(role)]),
-                )
+            let tracked = shown.positions[roles.get(role)];
+            let foot = &mut self.feet[k];
+            if support {
+                let a = match foot.anchor {
+                    Some(a) => {
+                        let off = (p - a).with_y(0.0);
+                        if off.length() > 0.02 {
+                            a + off * follow
+                        } else {
+                            a
+                        }
+                    }
+                    // Where the foot is shown now: no jump.
+                    None => foot
+                        .release
+                        .map_or(tracked, |(r, w)| tracked + (r - tracked) * w),
+                };
+                // Height from the target (a heel may rise over planted toes).
+                foot.anchor = Some(a.with_y(p.y));
+                foot.release = None;
+                goals[k] = foot.anchor;
             } else {
-                None
-            };
+                if let Some(a) = foot.anchor.take() {
+                    foot.release = Some((a, 1.0));
+                }
+                foot.release = foot
+                    .release
+                    .map(|(r, w)| (r, w * fade))
+                    .filter(|(_, w)| *w > 0.02);
+                goals[k] = foot.release.map(|(r, w)| tracked + (r - tracked) * w);
+            }
         }
-        if self.feet.iter().any(Option::is_some) {
-            crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, self.feet);
+        if goals.iter().any(Option::is_some) {
+            crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
         }
     }
 

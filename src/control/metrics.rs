@@ -27,10 +27,13 @@ pub struct Metrics {
     pub pops: usize,
     /// Mean horizontal slide of planted feet per frame (mm)...
     pub foot_skate_mm_per_frame: f64,
-    /// ...and the largest (mm).
+    /// ...and the largest (mm), with the foot and time.
     pub foot_skate_max_mm: f64,
-    /// Deepest point of the body below the floor (mm; 0 if none).
+    pub worst_skate: String,
+    /// Deepest point of the body below the floor (mm; 0 if none), with the
+    /// joint and time.
     pub ground_penetration_mm: f64,
+    pub worst_penetration: String,
 }
 
 fn finite(p: &Pose) -> bool {
@@ -107,7 +110,7 @@ pub fn measure(skeleton: &Skeleton, roles: &RoleMap, poses: &[Pose], dt: f64) ->
         .collect();
     let feet = [roles.get(Role::LeftFoot), roles.get(Role::RightFoot)];
     let (mut sum, mut n) = (0.0, 0usize);
-    for pair in worlds.windows(2) {
+    for (k, pair) in worlds.windows(2).enumerate() {
         let (Some(a), Some(b)) = (&pair[0], &pair[1]) else {
             continue;
         };
@@ -117,17 +120,32 @@ pub fn measure(skeleton: &Skeleton, roles: &RoleMap, poses: &[Pose], dt: f64) ->
                 let mm = (sb - sa).with_y(0.0).length() * 1e3;
                 sum += mm;
                 n += 1;
-                m.foot_skate_max_mm = m.foot_skate_max_mm.max(mm);
+                if mm > m.foot_skate_max_mm {
+                    m.foot_skate_max_mm = mm;
+                    m.worst_skate = format!(
+                        "{} at {:.2} s",
+                        skeleton.joints[f].name,
+                        (k + 2) as f64 * dt
+                    );
+                }
             }
         }
     }
     m.foot_skate_mm_per_frame = if n == 0 { 0.0 } else { sum / n as f64 };
-    for w in worlds.iter().flatten() {
+    for (k, w) in worlds.iter().enumerate() {
+        let Some(w) = w else { continue };
         for i in 0..skeleton.len() {
             let y = w
                 .end_site(skeleton, i)
                 .map_or(w.positions[i].y, |e| e.y.min(w.positions[i].y));
-            m.ground_penetration_mm = m.ground_penetration_mm.max(-y * 1e3);
+            if -y * 1e3 > m.ground_penetration_mm {
+                m.ground_penetration_mm = -y * 1e3;
+                m.worst_penetration = format!(
+                    "{} at {:.2} s",
+                    skeleton.joints[i].name,
+                    (k + 1) as f64 * dt
+                );
+            }
         }
     }
     let r = |v: f64| (v * 1000.0).round() / 1000.0;

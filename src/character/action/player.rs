@@ -40,6 +40,27 @@ impl ActionPlayer {
     ) -> Self {
         let a = &actions[action];
         let n = a.def.clips.len().max(1);
+        // Started part-way (the drag already covered part of it): place the
+        // clips so that their posture at `t0` stands where the character
+        // stands, not where the clips' start would put it.
+        let mut at = at;
+        let mut off = glam::DVec3::ZERO;
+        let mut count = 0.0;
+        for clip in 0..a.def.clips.len() {
+            let nearest = a
+                .model
+                .samples
+                .iter()
+                .filter(|s| s.clip == clip)
+                .min_by(|x, y| (x.time - t0).abs().total_cmp(&(y.time - t0).abs()));
+            if let Some(s) = nearest {
+                off += glam::DVec3::new(s.root_offset.x, 0.0, s.root_offset.z);
+                count += 1.0;
+            }
+        }
+        if count > 0.0 {
+            at.position -= glam::DQuat::from_rotation_y(at.yaw) * (off / count);
+        }
         Self {
             action,
             timeline: ActionTimeline::start(a.def.clone(), a.duration, t0, time_s, events),
