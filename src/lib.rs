@@ -19,6 +19,7 @@
 //!   library. Pure.
 //! - [`control`] turns touches into the character's motion and the view
 //!   (posing, action and tracking control; the camera rig). Pure.
+//! - [`display`] talks to DRM/KMS outputs.
 //! - [`render`] draws the character and the overlays with wgpu, into
 //!   offscreen images (headless) or onto the display.
 //! - [`app`] is the application edge: configuration, exit codes, logging.
@@ -30,5 +31,6 @@
 pub mod app;
 pub mod character;
 pub mod control;
+pub mod display;
 pub mod input;
 pub mod render;

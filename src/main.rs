@@ -157,6 +157,15 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// List the DRM/KMS outputs: cards, connectors, their state and modes
+    ListOutputs {
+        /// One JSON object per connector
+        #[arg(long)]
+        json: bool,
+        /// Where the DRM device nodes are
+        #[arg(long, default_value = "/dev/dri")]
+        dir: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -325,6 +334,7 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
                 .map_err(|e| Failure::new(e.exit_code(), e))
         }
         Command::ListDevices { json } => list_devices(config, json),
+        Command::ListOutputs { json, dir } => list_outputs(&dir, json),
         Command::ConvertBvh {
             file,
             out,
@@ -882,6 +892,21 @@ fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failu
 }
 
 const DEMO_RECORDING: &str = include_str!("../assets/recordings/demo.evemu");
+
+fn list_outputs(dir: &Path, json: bool) -> Result<(), Failure> {
+    let found =
+        marionette::display::kms::list_outputs(dir).map_err(|e| Failure::new(e.exit_code(), e))?;
+    let mut out = std::io::stdout().lock();
+    for o in &found {
+        let line = if json {
+            serde_json::to_string(o).map_err(|e| Failure::new(exit::FAILURE, e))?
+        } else {
+            o.to_string()
+        };
+        writeln!(out, "{line}").map_err(stdout_error)?;
+    }
+    Ok(())
+}
 
 fn list_devices(config: &Config, json: bool) -> Result<(), Failure> {
     let found = live::list_devices(config).map_err(|e| Failure::new(e.exit_code(), e))?;

@@ -234,3 +234,18 @@ fn malformed_bvh_exits_65_naming_file_and_line() {
     let out = marionette(&["inspect", "/nonexistent/x.bvh"]);
     assert_eq!(out.status.code(), Some(66));
 }
+
+#[test]
+fn list_outputs_without_drm_devices_exits_69_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = marionette(&["list-outputs", "--dir", dir.path().to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(69));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no DRM devices"), "{err}");
+    // A file that is not a DRM device is refused, not a crash.
+    std::fs::write(dir.path().join("card0"), b"not a device").unwrap();
+    let out = marionette(&["list-outputs", "--dir", dir.path().to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(69));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("card0"), "{err}");
+}

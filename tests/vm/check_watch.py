@@ -65,6 +65,16 @@ if recorded != want:
                     + ("" if len(recorded) != len(want) else " (different contents)"))
 else:
     print(f"vm: record: the recording made in the VM replays identically ({len(recorded)} touch frames)")
+# list-outputs on the guest's virtio-vga: a connected connector whose
+# preferred mode is the device's default, 1280x800.
+outputs = [json.loads(l) for l in read("outputs.txt").splitlines() if l.startswith("{")]
+connected = [o for o in outputs if o["connected"]]
+preferred = [m for o in connected for m in o["modes"] if m["preferred"]]
+if not connected or (preferred[0]["width"], preferred[0]["height"]) != (1280, 800):
+    failures.append("list-outputs did not show a connected virtio-gpu output preferring 1280x800: " + read("outputs.txt"))
+else:
+    o = connected[0]
+    print(f"vm: list-outputs: {o['card']} ({o['driver']}) {o['name']} connected, {len(o['modes'])} modes, preferred {preferred[0]['width']}x{preferred[0]['height']}@{preferred[0]['refresh_hz']}")
 if "touchscreen" not in read("list.txt"):
     failures.append("list-devices did not show the touchscreen: " + read("list.txt"))
 print(f"vm: {len(added)} plugs, {len(removed)} unplugs, {len(want)} touch frames per plug")

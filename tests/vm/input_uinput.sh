@@ -35,17 +35,20 @@ fi
 [ -x "$bin" ] || { echo "vm test: $bin not built (cargo build)" >&2; exit 66; }
 [ -f "$rec" ] || { echo "vm test: recording $rec not found" >&2; exit 66; }
 
-# The kernel and its evdev/uinput modules, cached.
+# The kernel and its evdev/uinput modules, and virtio-gpu with what it
+# needs (a real KMS device for list-outputs), cached; in load order.
+modules="evdev uinput virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy_dev virtio_pci drm drm_kms_helper drm_shmem_helper virtio_dma_buf virtio-gpu"
 mkdir -p "$cache"
-if [ ! -f "$cache/vmlinuz" ] || [ ! -f "$cache/uinput.ko" ]; then
+if [ ! -f "$cache/vmlinuz" ] || [ ! -f "$cache/uinput.ko" ] || [ ! -f "$cache/virtio-gpu.ko" ]; then
     pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ {print $2; exit}')
     [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package (apt-get update first)" >&2; exit 69; }
     tmp=$(mktemp -d)
     (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
     dpkg -x "$tmp"/*.deb "$tmp/x"
     cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
-    for m in evdev uinput; do
+    for m in $modules; do
         f=$(find "$tmp/x/lib/modules" -name "$m.ko*" | head -n1)
+        [ -n "$f" ] || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
         case "$f" in
             *.xz) xz -dc "$f" > "$cache/$m.ko" ;;
             *.zst) zstd -qdc "$f" > "$cache/$m.ko" ;;
@@ -66,7 +69,8 @@ ldd "$bin" | awk '/=> \// {print $3} /^\t\// {print $1}' | while read -r lib; do
     mkdir -p "$ird$(dirname "$lib")"
     cp -L "$lib" "$ird$lib"
 done
-cp "$cache/evdev.ko" "$cache/uinput.ko" "$ird/modules/"
+for m in $modules; do cp "$cache/$m.ko" "$ird/modules/"; done
+echo "$modules" > "$ird/modules/order"
 cp "$rec" "$ird/rec.evemu"
 cp "$root/tests/data/burst-overflow.evemu" "$ird/burst.evemu"
 cp "$root/tests/data/unplug-mid-drag.evemu" "$ird/middrag.evemu"
@@ -80,8 +84,10 @@ cat > "$ird/init" <<'INIT'
 /bin/busybox --install -s /bin
 export PATH=/bin
 mount -t proc proc /proc; mount -t sysfs sys /sys; mount -t devtmpfs dev /dev
-insmod /modules/evdev.ko; insmod /modules/uinput.ko
+for k in $(cat /modules/order); do insmod /modules/$k.ko; done
 m="marionette --config /m.toml"
+# The virtio-vga display as a KMS device.
+$m list-outputs --json > /tmp/outputs.txt 2>&1; echo "outputs rc=$?" >> /tmp/rc
 $m watch --seconds 12 > /tmp/watch.jsonl 2> /tmp/watch.log &
 watcher=$!
 sleep 1
@@ -104,7 +110,7 @@ player=$!
 sleep 0.5
 $m record --out /tmp/recorded.evemu --seconds 3 2> /tmp/record.log; echo "record rc=$?" >> /tmp/rc
 wait $player; echo "play5 rc=$?" >> /tmp/rc
-for f in rc list.txt watch.log play1.log play2.log play3.log play4.log record.log recorded.evemu watch.jsonl; do
+for f in rc outputs.txt list.txt watch.log play1.log play2.log play3.log play4.log record.log recorded.evemu watch.jsonl; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f
@@ -113,6 +119,7 @@ chmod +x "$ird/init"
 (cd "$ird" && find . | cpio -o -H newc --quiet | gzip -1 > "$work/initrd.gz")
 
 timeout 300 qemu-system-x86_64 -accel tcg -cpu max -m 512 -smp 1 -nic none -display none \
+    -device virtio-vga \
     -serial "file:$work/console.log" -monitor none -no-reboot \
     -kernel "$cache/vmlinuz" -initrd "$work/initrd.gz" \
     -append "console=ttyS0 quiet panic=-1 rdinit=/init" || true

@@ -1,0 +1,4 @@
+//! Display outputs: DRM/KMS connectors and modes ([`kms`]). The headless
+//! presenter is `render::headless`.
+
+pub mod kms;
