@@ -1,5 +1,6 @@
-//! The whole controller step (touches → posing or action → tracking → foot
-//! IK) for one character and for four, with two fingers posing.
+//! The whole controller step (touches → posing or action → tracking with
+//! the ragdoll's physical effects → foot IK) for one character and for
+//! four, with two fingers posing.
 //! `cargo bench --bench controller`.
 
 use std::sync::Arc;

@@ -33,4 +33,5 @@ pub mod character;
 pub mod control;
 pub mod display;
 pub mod input;
+pub mod physics;
 pub mod render;

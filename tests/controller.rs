@@ -168,3 +168,141 @@ fn a_cancelled_contact_lets_go() {
     ctl.advance(0.15);
     assert!(ctl.held().is_empty());
 }
+
+/// Drag the right hand quickly outwards and let go while it still moves;
+/// the right shoulder's local rotation every step for `after_s` seconds
+/// after the release, and the steps' time.
+fn release_mid_swing(settings: Settings, after_s: f64) -> Vec<glam::DQuat> {
+    let mut ctl = Controller::new(common::character(), settings, 1280.0, 720.0, 0.0);
+    ctl.advance(1.0 / 30.0);
+    let hand = screen_of(&ctl, Role::RightHand);
+    ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, hand)]));
+    ctl.advance(2.0 / 30.0);
+    // Out to the side and up, about 260 px in 0.3 s; the finger lifts at
+    // full speed.
+    let steps = 9;
+    for k in 1..=steps {
+        let t = f64::from(2 + k) / 30.0;
+        let s = f64::from(k) / f64::from(steps);
+        let p = ScreenPoint::new(hand.x - 200.0 * s, hand.y - 170.0 * s);
+        ctl.touch(&frame(t, vec![contact(1, Phase::Move, p)]));
+        ctl.advance(t);
+    }
+    assert!(ctl.action().is_none(), "the drag poses: {:?}", ctl.action());
+    let t_up = f64::from(3 + steps) / 30.0;
+    ctl.touch(&frame(t_up, vec![contact(1, Phase::Up, hand)]));
+    let shoulder = ctl.character().roles.get(Role::RightShoulder);
+    let mut out = Vec::new();
+    let mut k = 0;
+    while f64::from(k) / 30.0 < after_s {
+        ctl.advance(t_up + f64::from(k) / 30.0);
+        out.push(ctl.pose().rotations[shoulder]);
+        k += 1;
+    }
+    out
+}
+
+/// Per-step turns of a joint (rotation vectors, rad) over a run.
+fn turns(r: &[glam::DQuat]) -> Vec<glam::DVec3> {
+    r.windows(2)
+        .map(|w| (w[1] * w[0].inverse()).to_scaled_axis())
+        .collect()
+}
+
+#[test]
+fn a_released_arm_keeps_swinging_and_settles() {
+    let on = release_mid_swing(Settings::default(), 4.0);
+    let off = release_mid_swing(
+        Settings {
+            physics: false,
+            ..Settings::default()
+        },
+        4.0,
+    );
+    let path = |t: &[glam::DVec3]| t.iter().map(|v| v.length()).sum::<f64>();
+    // From 0.3 s after the release (tracking alone has stopped by then).
+    let (on_t, off_t) = (turns(&on), turns(&off));
+    let (on_late, off_late) = (path(&on_t[9..]), path(&off_t[9..]));
+    assert!(
+        off_late < 0.01,
+        "without physics the arm stops: {off_late:.4} rad"
+    );
+    assert!(
+        on_late > 0.05,
+        "with physics the arm keeps swinging: {on_late:.4} rad after 0.3 s"
+    );
+    // And it settles: still over the last half second.
+    let last = on_t[on_t.len() - 15..]
+        .iter()
+        .map(|v| v.length() * 30.0)
+        .fold(0.0, f64::max);
+    assert!(last < 0.1, "still swinging at {last:.3} rad/s after 3.5 s");
+    eprintln!(
+        "after 0.3 s: {on_late:.3} rad with physics, {off_late:.4} without; last speed {last:.4} rad/s"
+    );
+}
+
+#[test]
+fn standing_still_stays_still() {
+    // The ragdoll standing on the floor adds nothing: no tremor.
+    let mut ctl = controller();
+    let mut r = Vec::new();
+    for k in 1..150 {
+        ctl.advance(f64::from(k) / 30.0);
+        r.push(ctl.pose().clone());
+    }
+    let first = &r[30];
+    for p in &r[30..] {
+        for (a, b) in p.rotations.iter().zip(&first.rotations) {
+            assert!(a.angle_between(*b) < 1e-3, "the resting character moves");
+        }
+    }
+}
+
+#[test]
+fn the_ragdoll_never_explodes() {
+    use marionette::character::skeleton::forward_kinematics;
+    use marionette::physics::ragdoll::{Ragdoll, RagdollSettings};
+    let ch = common::character();
+    let sk = &ch.lib.skeleton;
+    let rest = ch.rest_pose(&marionette::character::posing::sample::Placement {
+        position: glam::DVec3::ZERO,
+        yaw: 0.0,
+        anchor: marionette::character::posing::sample::Anchor::ClipStart,
+    });
+    let w = forward_kinematics(sk, &rest);
+    let mut ragdoll = Ragdoll::new(sk, &ch.roles, &w, &w, RagdollSettings::default());
+    assert!(ragdoll.segments().len() >= 14, "a segment per body part");
+    // A target that teleports 3 m away: the ragdoll is put back on the
+    // posture shown instead of being flung.
+    let mut far = rest.clone();
+    far.translations[0].x += 3.0;
+    let far_w = forward_kinematics(sk, &far);
+    ragdoll.step(&far_w, &w, 1.0 / 30.0);
+    assert_eq!(ragdoll.resets(), 1);
+    // A target that jumps between two postures every frame, with bad
+    // frame times in between: everything stays finite and near.
+    let mut bent = rest.clone();
+    for q in bent.rotations.iter_mut().skip(1) {
+        *q = glam::DQuat::from_rotation_x(1.2) * *q;
+    }
+    let bent_w = forward_kinematics(sk, &bent);
+    for k in 0..600 {
+        let target = if k % 2 == 0 { &bent_w } else { &w };
+        let dt = match k % 97 {
+            0 => f64::NAN,
+            1 => 0.0,
+            2 => 0.25,
+            _ => 1.0 / 30.0,
+        };
+        ragdoll.step(target, &w, dt);
+        for s in ragdoll.states() {
+            assert!(s.position.is_finite() && s.rotation.is_finite());
+            assert!(
+                s.position.length() < 3.0,
+                "a segment flew off: {:?}",
+                s.position
+            );
+        }
+    }
+}

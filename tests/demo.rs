@@ -179,3 +179,39 @@ fn export_bvh_writes_the_performed_motion() {
     let travel = (world.last().unwrap().positions[0] - world[0].positions[0]).length();
     assert!(travel > 0.3, "the character moved {travel:.2} m");
 }
+
+#[test]
+fn replay_metrics_meet_the_motion_targets_and_show_what_tracking_buys() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/recordings/demo.evemu");
+    let run = |name: &str, extra: &[&str]| -> serde_json::Value {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "replay",
+            rec.to_str().unwrap(),
+            "--metrics",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = marionette(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap()
+    };
+    let on = run("on.json", &[]);
+    let off = run("off.json", &["--no-tracking"]);
+    let f = |m: &serde_json::Value, k: &str| m[k].as_f64().unwrap();
+    // The targets: no NaN, no pop, planted feet skate at most 5 mm per
+    // frame, at most 5 mm into the floor; every action started finishes.
+    assert!(f(&on, "frames") > 1000.0);
+    assert_eq!(f(&on, "nan_frames"), 0.0);
+    assert_eq!(f(&on, "pops"), 0.0, "{}", on["pop_list"]);
+    assert!(f(&on, "max_joint_speed_jump_rad_s") <= 10.0);
+    assert!(f(&on, "foot_skate_mm_per_frame") <= 5.0, "{on}");
+    assert!(f(&on, "ground_penetration_mm") <= 5.0, "{on}");
+    let actions = on["actions"].as_array().unwrap();
+    assert!(actions.len() >= 6);
+    assert!(actions.iter().all(|a| a["outcome"] == "finished"), "{on}");
+    // Without tracking the switches between controllers pop.
+    assert!(f(&off, "pops") > 20.0, "{off}");
+    assert!(f(&off, "max_joint_speed_jump_rad_s") > 3.0 * f(&on, "max_joint_speed_jump_rad_s"));
+}

@@ -46,7 +46,36 @@ pub struct Config {
     pub input: InputConfig,
     pub action: ActionConfig,
     pub character: CharacterConfig,
+    pub tracking: TrackingConfig,
     pub log: LogConfig,
+}
+
+/// `[tracking]`: how the shown motion follows the synthesised one (the
+/// paper's section 6).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrackingConfig {
+    /// Acceleration-based tracking settles in about this long (s); 0 shows
+    /// the synthesised postures as they are.
+    pub settle_s: f64,
+    /// Add the ragdoll's physical effects to the untouched limbs.
+    pub physics: bool,
+    /// Attenuation of the accumulated effect per frame of 1/30 s (eq. 6).
+    pub s1: f64,
+    /// Share of the ragdoll's motion per frame of 1/30 s (eq. 6).
+    pub s2: f64,
+}
+
+impl Default for TrackingConfig {
+    fn default() -> Self {
+        let s = crate::control::controller::Settings::default();
+        Self {
+            settle_s: s.settle_s,
+            physics: s.physics,
+            s1: s.attenuation.s1,
+            s2: s.attenuation.s2,
+        }
+    }
 }
 
 /// `[character]`: the motion library and how fingers and the camera behave.
@@ -347,6 +376,19 @@ impl Config {
                 0.0,
                 3600.0,
             ),
+        ] {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(invalid(
+                    key,
+                    format!("must be between {lo} and {hi}, found {v}"),
+                ));
+            }
+        }
+        let t = &self.tracking;
+        for (key, v, lo, hi) in [
+            ("tracking.settle_s", t.settle_s, 0.0, 2.0),
+            ("tracking.s1", t.s1, 0.0, 0.95),
+            ("tracking.s2", t.s2, 0.0, 2.0),
         ] {
             if !(v.is_finite() && (lo..=hi).contains(&v)) {
                 return Err(invalid(

@@ -29,6 +29,8 @@ use crate::character::tracking::accel::{AccelTracker, Gains};
 use crate::input::calibration::ScreenPoint;
 use crate::input::pipeline::ScreenFrame;
 use crate::input::touch::ContactId;
+use crate::physics::effects::{Attenuation, Effects, free_regions};
+use crate::physics::ragdoll::{Ragdoll, RagdollSettings, Region};
 use crate::render::scene::{FingerMark, FingerUse, Marks, TrajectoryMark};
 
 /// What the character is made of: the library, its posing model and its
@@ -91,6 +93,11 @@ pub struct Settings {
     pub settle_s: f64,
     /// A finger resting this long starts a new drag for recognition (s).
     pub rest_s: f64,
+    /// Physics-based tracking: the ragdoll's physical effects (eq. 5–7)
+    /// are added to the tracked posture (needs tracking on).
+    pub physics: bool,
+    /// Attenuation of the physical effects (eq. 6).
+    pub attenuation: Attenuation,
 }
 
 impl Default for Settings {
@@ -101,6 +108,8 @@ impl Default for Settings {
             home_after_s: 8.0,
             settle_s: 0.12,
             rest_s: 0.8,
+            physics: true,
+            attenuation: Attenuation::default(),
         }
     }
 }
@@ -113,6 +122,12 @@ impl Settings {
             rule: config.action.rule(),
             pick_radius_px: config.character.pick_radius_px,
             home_after_s: config.character.camera_home_after_s,
+            settle_s: config.tracking.settle_s,
+            physics: config.tracking.physics,
+            attenuation: Attenuation {
+                s1: config.tracking.s1,
+                s2: config.tracking.s2,
+            },
             ..Self::default()
         }
     }
@@ -175,6 +190,11 @@ pub struct Controller {
     /// little is on the floor.
     ankle_rest: f64,
     world: WorldPose,
+    /// Physics-based tracking: the ragdoll and the effects taken from it.
+    ragdoll: Ragdoll,
+    effects: Effects,
+    /// The target switched controllers this step (its feet jumped).
+    switched: bool,
     time: f64,
     last_touch: f64,
     events: Vec<ActionEvent>,
@@ -182,6 +202,13 @@ pub struct Controller {
 
 /// The longest drag kept for recognition (s): longer than any action.
 const MAX_TRAIL_S: f64 = 4.0;
+
+/// The fastest a planted foot follows a target that slid away (m/s):
+/// 3 mm per frame at 30 Hz.
+const FOOT_CREEP_M_S: f64 = 0.09;
+
+/// A part this close to the floor touches it (m).
+const GROUND_CONTACT_M: f64 = 0.03;
 
 /// Longest tracking sub-step (s): explicit integration stays stable.
 const MAX_SUBSTEP: f64 = 0.004;
@@ -202,7 +229,16 @@ impl Controller {
             world.positions[ch.roles.get(Role::LeftFoot)],
             world.positions[ch.roles.get(Role::RightFoot)],
         ];
+        let ragdoll = Ragdoll::new(
+            &ch.lib.skeleton,
+            &ch.roles,
+            &world,
+            &world,
+            RagdollSettings::default(),
+        );
         Self {
+            ragdoll,
+            effects: Effects::new(settings.attenuation),
             output: pose.clone(),
             feet: [FootHold::default(); 2],
             last_feet: feet_now,
@@ -216,6 +252,7 @@ impl Controller {
             tracker: AccelTracker::new(pose.clone()),
             target: pose,
             world,
+            switched: false,
             time: t,
             last_touch: t,
             events: Vec::new(),
@@ -472,6 +509,7 @@ impl Controller {
             Mode::Posing => {
                 if let Some(player) = self.recognise(&camera, t) {
                     self.mode = Mode::Action(player);
+                    self.switched = true;
                 } else if !constraints.is_empty() {
                     self.target = synthesize(
                         &self.ch.lib.skeleton,
@@ -497,6 +535,7 @@ impl Controller {
                     let placed = self.placement_now();
                     self.at = placed;
                     self.mode = Mode::Posing;
+                    self.switched = true;
                     if !self.held().is_empty() {
                         self.begin_posing();
                     }
@@ -520,6 +559,9 @@ impl Controller {
             self.tracker = AccelTracker::new(self.target.clone());
         }
         self.output = self.tracker.pose.clone();
+        if self.settings.physics && self.settings.settle_s > 0.0 {
+            self.physical_effects(dt);
+        }
         self.fix_feet(dt);
         self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
         let idle = self.idle_s() > self.settings.home_after_s;
@@ -527,25 +569,77 @@ impl Controller {
         self.rig.settle(floor, idle, dt);
     }
 
+    /// Physics-based tracking: step the ragdoll towards the target and add
+    /// its physical effects to the regions no finger holds and that do not
+    /// touch the floor (eq. 5–7).
+    fn physical_effects(&mut self, dt: f64) {
+        let sk = &self.ch.lib.skeleton;
+        let roles = &self.ch.roles;
+        let target = forward_kinematics(sk, &self.target);
+        let shown = forward_kinematics(sk, &self.output);
+        let resets = self.ragdoll.resets();
+        self.ragdoll.step(&target, &shown, dt);
+        if self.ragdoll.resets() != resets {
+            self.effects.forget();
+        }
+        self.effects
+            .update(self.ragdoll.segments(), &self.ragdoll.states(), dt);
+        let held: Vec<Region> = self.held().into_iter().map(Region::of).collect();
+        let mut touching = Vec::new();
+        for (k, (role, region)) in [
+            (Role::LeftFoot, Region::LeftLeg),
+            (Role::RightFoot, Region::RightLeg),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let sole = crate::control::metrics::sole(sk, &shown, roles.get(role)).y;
+            if self.feet[k].anchor.is_some() || sole < GROUND_CONTACT_M {
+                touching.push(region);
+            }
+        }
+        for (role, region) in [
+            (Role::LeftHand, Region::LeftArm),
+            (Role::RightHand, Region::RightArm),
+            (Role::Head, Region::Torso),
+            (Role::Chest, Region::Torso),
+        ] {
+            if shown.positions[roles.get(role)].y < GROUND_CONTACT_M * 2.0 {
+                touching.push(region);
+            }
+        }
+        let pelvis_free = !self.held().contains(&Role::Pelvis);
+        self.effects
+            .set_active(free_regions(&held, &touching), pelvis_free, dt);
+        self.effects
+            .apply(sk, self.ragdoll.segments(), &mut self.output, &shown);
+    }
+
     /// Foot contact and foot IK: a foot of the target posture that is near
     /// the floor and nearly still carries the body; it is held where it was
     /// when it came down while tracking moves the pelvis. Feet held by a
-    /// finger are the finger's.
+    /// finger are the finger's. No sole goes below the floor.
     fn fix_feet(&mut self, dt: f64) {
         let sk = &self.ch.lib.skeleton;
         let roles = &self.ch.roles;
         let target = forward_kinematics(sk, &self.target);
         let shown = forward_kinematics(sk, &self.output);
         let held = self.held();
-        // Rates: a held foot follows a target that slides away (more than
-        // 2 cm) within about 0.15 s; a released foot returns to the tracked
-        // posture within about 0.1 s, never in one jump.
-        let follow = 1.0 - (-dt / 0.15).exp();
+        // A held foot whose target slid away (more than 2 cm) follows it at
+        // a walking foot's creep at most, so that a planted foot never
+        // skates visibly; a released foot returns to the tracked posture
+        // within about 0.1 s, never in one jump.
+        let creep = FOOT_CREEP_M_S * dt;
         let fade = (-dt / 0.04).exp();
+        let settle = 1.0 - (-dt / 0.06).exp();
+        let switched = std::mem::take(&mut self.switched);
         let mut goals = [None; 2];
-        for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+        let feet = [Role::LeftFoot, Role::RightFoot];
+        for (k, role) in feet.into_iter().enumerate() {
             let p = target.positions[roles.get(role)];
-            let speed = if dt > 0.0 {
+            // Across a switch of controller the target's feet jump: that
+            // is not the foot moving.
+            let speed = if dt > 0.0 && !switched {
                 (p - self.last_feet[k]).length() / dt
             } else {
                 0.0
@@ -559,7 +653,7 @@ impl Controller {
                     Some(a) => {
                         let off = (p - a).with_y(0.0);
                         if off.length() > 0.02 {
-                            a + off * follow
+                            a + off.clamp_length_max(creep)
                         } else {
                             a
                         }
@@ -569,8 +663,9 @@ impl Controller {
                         .release
                         .map_or(tracked, |(r, w)| tracked + (r - tracked) * w),
                 };
-                // Height from the target (a heel may rise over planted toes).
-                foot.anchor = Some(a.with_y(p.y));
+                // Height from the target (a heel may rise over planted
+                // toes), reached smoothly from where the foot came down.
+                foot.anchor = Some(a.with_y(a.y + (p.y - a.y) * settle));
                 foot.release = None;
                 goals[k] = foot.anchor;
             } else {
@@ -586,6 +681,51 @@ impl Controller {
         }
         if goals.iter().any(Option::is_some) {
             crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
+        }
+        // The floor: a sole below it (tracking straightens a leg before the
+        // pelvis rises, toes tip down) is lifted onto it: the leg bends,
+        // then the foot turns at the ankle so that its lowest point rests
+        // on the floor, as toes flatten on the ground.
+        let mut lifted = false;
+        let ankle_min = self.ankle_rest * 0.5;
+        let w = forward_kinematics(sk, &self.output);
+        for (k, role) in feet.into_iter().enumerate() {
+            let ankle = w.positions[roles.get(role)];
+            goals[k] = if ankle.y < ankle_min {
+                lifted = true;
+                Some(ankle.with_y(ankle_min))
+            } else {
+                goals[k].map(|_| ankle)
+            };
+        }
+        if lifted {
+            crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
+        }
+        for _ in 0..2 {
+            let w = forward_kinematics(sk, &self.output);
+            let mut turned = false;
+            for role in feet {
+                let j = roles.get(role);
+                let ankle = w.positions[j];
+                let v = crate::control::metrics::sole(sk, &w, j) - ankle;
+                let len = v.length();
+                if ankle.y + v.y >= -1e-4 || len < 1e-6 || v.with_y(0.0).length() < 1e-6 {
+                    continue;
+                }
+                let want = (-ankle.y / len).clamp(-1.0, 1.0).asin();
+                let turn = glam::DQuat::from_axis_angle(
+                    v.cross(DVec3::Y).normalize(),
+                    want - (v.y / len).asin(),
+                );
+                let parent = sk.joints[j]
+                    .parent
+                    .map_or(glam::DQuat::IDENTITY, |p| w.rotations[p]);
+                self.output.rotations[j] = (parent.inverse() * turn * w.rotations[j]).normalize();
+                turned = true;
+            }
+            if !turned {
+                break;
+            }
         }
     }
 

@@ -13,6 +13,9 @@ use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
 /// kicks) reach.
 pub const POP_RAD_S: f64 = 10.0;
 
+/// Pops listed by name at most.
+const MAX_LISTED: usize = 40;
+
 /// What `--metrics` writes (plus the actions, added by the caller).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Metrics {
@@ -23,8 +26,10 @@ pub struct Metrics {
     pub max_joint_speed_jump_rad_s: f64,
     /// Where it was: joint and time (s).
     pub worst_jump: String,
-    /// Frames whose speed jump exceeds [`POP_RAD_S`].
+    /// Frames whose speed jump exceeds [`POP_RAD_S`]...
     pub pops: usize,
+    /// ...the first of them: time (s), joint and jump (rad/s).
+    pub pop_list: Vec<String>,
     /// Mean horizontal slide of planted feet per frame (mm)...
     pub foot_skate_mm_per_frame: f64,
     /// ...and the largest (mm), with the foot and time.
@@ -44,7 +49,8 @@ fn finite(p: &Pose) -> bool {
 }
 
 /// The sole of a foot: its lowest point (ankle, toes, End Sites).
-fn sole(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> glam::DVec3 {
+#[must_use]
+pub fn sole(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> glam::DVec3 {
     let mut best = w.positions[ankle];
     for i in 0..skeleton.len() {
         if i != ankle && !skeleton.is_ancestor(ankle, i) {
@@ -86,10 +92,12 @@ pub fn measure(skeleton: &Skeleton, roles: &RoleMap, poses: &[Pose], dt: f64) ->
         let (Some(a), Some(b)) = (&w[0], &w[1]) else {
             continue;
         };
-        let mut frame_max = 0.0f64;
+        let mut frame_max = (0.0f64, 0usize);
         for (j, (x, y)) in a.iter().zip(b).enumerate() {
             let jump = (y - x).abs();
-            frame_max = frame_max.max(jump);
+            if jump > frame_max.0 {
+                frame_max = (jump, j);
+            }
             if jump > m.max_joint_speed_jump_rad_s {
                 m.max_joint_speed_jump_rad_s = jump;
                 m.worst_jump = format!(
@@ -99,7 +107,17 @@ pub fn measure(skeleton: &Skeleton, roles: &RoleMap, poses: &[Pose], dt: f64) ->
                 );
             }
         }
-        m.pops += usize::from(frame_max > POP_RAD_S);
+        if frame_max.0 > POP_RAD_S {
+            m.pops += 1;
+            if m.pop_list.len() < MAX_LISTED {
+                m.pop_list.push(format!(
+                    "{:.2} s {} {:.1} rad/s",
+                    (k + 2) as f64 * dt,
+                    skeleton.joints[frame_max.1].name,
+                    frame_max.0
+                ));
+            }
+        }
     }
     // Feet: planted while the sole is within 2 cm of the floor in both
     // frames; the floor is at 0.

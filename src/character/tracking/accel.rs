@@ -10,6 +10,17 @@ use glam::{DQuat, DVec3};
 
 use crate::character::skeleton::Pose;
 
+/// Default bound on the joints' acceleration (rad/s²): above what the
+/// library's quickest motions need (kicks and punches reach about
+/// 100 rad/s²), low enough that a jump in the target shows as a quick
+/// motion (at most 6.7 rad/s of speed change per 1/30 s frame) rather than
+/// a pop. With the default gains it causes no overshoot.
+pub const MAX_ACCEL: f64 = 200.0;
+
+/// Default bound on the pelvis's acceleration (m/s²): a jump's take-off
+/// needs about 2 g.
+pub const MAX_ACCEL_ROOT: f64 = 40.0;
+
 /// PD gains on accelerations.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gains {
@@ -17,6 +28,13 @@ pub struct Gains {
     pub k: f64,
     /// Damping, 1/s: acceleration per rad/s (or m/s) of velocity.
     pub d: f64,
+    /// Accelerations are bounded by this (rad/s², joints): a target that
+    /// jumps far (an action starting, a posture blend that switches) is
+    /// reached quickly but no joint's speed changes by more than this
+    /// times the frame time.
+    pub max_accel: f64,
+    /// The same for the pelvis position (m/s²).
+    pub max_accel_root: f64,
 }
 
 impl Gains {
@@ -27,6 +45,18 @@ impl Gains {
         Self {
             k: w * w,
             d: 2.0 * w,
+            max_accel: MAX_ACCEL,
+            max_accel_root: MAX_ACCEL_ROOT,
+        }
+    }
+
+    /// The same gains without saturation: the pure eq. 2–3.
+    #[must_use]
+    pub fn unlimited(self) -> Self {
+        Self {
+            max_accel: f64::INFINITY,
+            max_accel_root: f64::INFINITY,
+            ..self
         }
     }
 }
@@ -88,7 +118,8 @@ impl AccelTracker {
             .zip(&mut self.angular_velocity)
             .zip(&target.rotations)
         {
-            let acc = rotation_difference(*q, *qt) * gains.k - *w * gains.d;
+            let acc = (rotation_difference(*q, *qt) * gains.k - *w * gains.d)
+                .clamp_length_max(gains.max_accel);
             *w += acc * dt;
             let turn = *w * dt;
             let angle = turn.length();
@@ -97,7 +128,8 @@ impl AccelTracker {
             }
         }
         let p = self.pose.translations[0];
-        let acc = (target.translations[0] - p) * gains.k - self.root_velocity * gains.d;
+        let acc = ((target.translations[0] - p) * gains.k - self.root_velocity * gains.d)
+            .clamp_length_max(gains.max_accel_root);
         self.root_velocity += acc * dt;
         self.pose.translations[0] = p + self.root_velocity * dt;
         // Other joints' translations follow the target (bone offsets).
@@ -155,7 +187,7 @@ mod tests {
             } else {
                 pose(1.0, 0.0)
             };
-            t.step(&target, gains, dt);
+            t.step(&target, gains.unlimited(), dt);
             speeds.push(t.angular_velocity[1].length());
         }
         let max_jump = speeds
@@ -167,6 +199,34 @@ mod tests {
             "speed jumped {max_jump} rad/s in one frame"
         );
         assert!(speeds.iter().all(|s| s.is_finite()));
+    }
+
+    #[test]
+    fn bounded_accelerations_reach_far_targets_without_a_pop() {
+        // A target 2.5 rad away (an action starting far from the posture
+        // shown): the speed never changes by more than max_accel · dt in a
+        // frame, there is no overshoot, and it is reached within 0.5 s.
+        let gains = Gains::default();
+        let dt = 1.0 / 30.0;
+        let mut t = AccelTracker::new(pose(0.0, 0.0));
+        let target = pose(2.5, 0.3);
+        let mut last_speed = 0.0;
+        for frame in 0..30 {
+            for _ in 0..8 {
+                t.step(&target, gains, dt / 8.0);
+            }
+            let speed = t.angular_velocity[1].length();
+            assert!(
+                (speed - last_speed).abs() <= gains.max_accel * dt + 1e-9,
+                "frame {frame}: speed {last_speed} -> {speed}"
+            );
+            last_speed = speed;
+            let angle = t.pose.rotations[1].angle_between(DQuat::IDENTITY);
+            assert!(angle <= 2.5 + 1e-6, "overshoot {angle}");
+            if frame == 15 {
+                assert!((angle - 2.5).abs() < 0.05, "reached late: {angle}");
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,664 @@
+//! The ragdoll of physics-based tracking (the paper's section 6, eq. 5): a
+//! rigid capsule per body segment, sized from the skeleton's bones, with
+//! masses from an anthropometric table, joined by joints with human limits,
+//! standing under gravity on a floor with friction. Each frame a PD force
+//! pulls every segment's centre of mass towards where the target posture
+//! puts it. The ragdoll is only read for its motion (see `effects`); it
+//! never explodes: forces are bounded, and it is put back on the posture
+//! shown whenever a segment drifts away or a value stops being finite.
+//!
+//! Conventions: a body's rotation is the rotation of its segment *from the
+//! rest posture* (identity at rest), so joint frames and limits are the
+//! same for every posture the ragdoll is (re)built in; rest-posture axes
+//! are the character's: X to its left, Y up, Z forward.
+
+use glam::{DQuat, DVec3, Quat, Vec3};
+use rapier3d::prelude::*;
+
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Skeleton, WorldPose};
+
+/// The five regions of the paper: physical effects apply per region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Region {
+    Torso,
+    LeftArm,
+    RightArm,
+    LeftLeg,
+    RightLeg,
+}
+
+impl Region {
+    pub const ALL: [Region; 5] = [
+        Region::Torso,
+        Region::LeftArm,
+        Region::RightArm,
+        Region::LeftLeg,
+        Region::RightLeg,
+    ];
+
+    /// Index into [`Region::ALL`].
+    #[must_use]
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The region a role's part belongs to (the pelvis: the torso).
+    #[must_use]
+    pub fn of(role: Role) -> Self {
+        match role {
+            Role::LeftShoulder | Role::LeftElbow | Role::LeftHand => Region::LeftArm,
+            Role::RightShoulder | Role::RightElbow | Role::RightHand => Region::RightArm,
+            Role::LeftHip | Role::LeftKnee | Role::LeftFoot => Region::LeftLeg,
+            Role::RightHip | Role::RightKnee | Role::RightFoot => Region::RightLeg,
+            Role::Pelvis | Role::Chest | Role::Neck | Role::Head => Region::Torso,
+        }
+    }
+}
+
+/// How the ragdoll follows the target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RagdollSettings {
+    /// The PD pull (eq. 5) settles in about this long (s): softer than
+    /// acceleration-based tracking, so that the ragdoll's limbs lag, swing
+    /// and carry momentum.
+    pub settle_s: f64,
+    /// Damping ratio of the pull (1 = critical); under 1 a released limb
+    /// swings past its target a few times before it settles.
+    pub damping_ratio: f64,
+    /// The pull's acceleration is bounded (m/s²).
+    pub max_accel: f64,
+    /// A segment this far from its target (m) puts the ragdoll back on
+    /// the posture shown.
+    pub drift_m: f64,
+    /// Longest simulation step (s).
+    pub max_step_s: f64,
+}
+
+impl Default for RagdollSettings {
+    fn default() -> Self {
+        Self {
+            settle_s: 0.4,
+            damping_ratio: 0.5,
+            max_accel: 100.0,
+            drift_m: 0.8,
+            max_step_s: 1.0 / 60.0,
+        }
+    }
+}
+
+/// Segment mass as a share of the body's (de Leva 1996, adjusting
+/// Zatsiorsky–Seluyanov; male): head and neck, upper/middle/lower trunk,
+/// upper arm, forearm, hand, thigh, shank, foot.
+const MASS_SHARE: [(SegmentKind, f64); 10] = [
+    (SegmentKind::Head, 0.0694),
+    (SegmentKind::Thorax, 0.1596),
+    (SegmentKind::Abdomen, 0.1633),
+    (SegmentKind::Pelvis, 0.1117),
+    (SegmentKind::UpperArm, 0.0271),
+    (SegmentKind::Forearm, 0.0162),
+    (SegmentKind::Hand, 0.0061),
+    (SegmentKind::Thigh, 0.1416),
+    (SegmentKind::Shank, 0.0433),
+    (SegmentKind::Foot, 0.0137),
+];
+
+/// Body mass of the ragdoll (kg), for a character of [`REFERENCE_HEIGHT`].
+const BODY_MASS: f64 = 70.0;
+
+/// Stature the radii below are for (m); other characters scale.
+const REFERENCE_HEIGHT: f64 = 1.70;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SegmentKind {
+    Pelvis,
+    Abdomen,
+    Thorax,
+    Head,
+    UpperArm,
+    Forearm,
+    Hand,
+    Thigh,
+    Shank,
+    Foot,
+}
+
+impl SegmentKind {
+    /// Share of the body's mass (the forearm carries the hand).
+    fn mass_share(self) -> f64 {
+        let share = |kind| {
+            MASS_SHARE
+                .iter()
+                .find(|(k, _)| *k == kind)
+                .map_or(0.0, |(_, m)| *m)
+        };
+        match self {
+            SegmentKind::Forearm => share(SegmentKind::Forearm) + share(SegmentKind::Hand),
+            kind => share(kind),
+        }
+    }
+
+    /// Capsule radius for a 1.70 m body (m).
+    fn radius(self) -> f64 {
+        match self {
+            SegmentKind::Pelvis => 0.11,
+            SegmentKind::Abdomen => 0.12,
+            SegmentKind::Thorax => 0.13,
+            SegmentKind::Head => 0.10,
+            SegmentKind::UpperArm => 0.045,
+            SegmentKind::Forearm => 0.038,
+            SegmentKind::Hand => 0.035,
+            SegmentKind::Thigh => 0.07,
+            SegmentKind::Shank => 0.05,
+            SegmentKind::Foot => 0.035,
+        }
+    }
+}
+
+/// How a segment hangs on its parent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Hinge {
+    /// Ball joint with limits about the rest axes X, Y, Z (rad).
+    Ball([f64; 3]),
+    /// Hinge about an axis (rest axes) with limits (rad).
+    Hinge(DVec3, [f64; 2]),
+}
+
+/// A segment as built from the skeleton.
+#[derive(Clone, Debug, PartialEq)]
+struct SegmentDef {
+    kind: SegmentKind,
+    region: Region,
+    /// The skeleton joint whose world rotation the segment carries.
+    joint: usize,
+    /// Parent segment (index), and how it hangs on it.
+    parent: Option<(usize, Hinge)>,
+    /// Capsule ends at rest (world).
+    ends: [DVec3; 2],
+    radius: f64,
+    mass: f64,
+}
+
+/// One simulated segment.
+#[derive(Clone, Debug)]
+pub struct Segment {
+    def: SegmentDef,
+    body: RigidBodyHandle,
+    /// World rotation of `joint` at rest.
+    rest_rot: DQuat,
+    /// Centre of mass minus the joint's position, at rest (world axes).
+    com_off: DVec3,
+}
+
+impl Segment {
+    /// The skeleton joint whose rotation this segment carries.
+    #[must_use]
+    pub fn joint(&self) -> usize {
+        self.def.joint
+    }
+
+    /// The parent segment, if any.
+    #[must_use]
+    pub fn parent(&self) -> Option<usize> {
+        self.def.parent.map(|(p, _)| p)
+    }
+
+    #[must_use]
+    pub fn region(&self) -> Region {
+        self.def.region
+    }
+
+    /// The segment's rotation from rest, for a posture's world transforms.
+    #[must_use]
+    pub fn rotation_in(&self, w: &WorldPose) -> DQuat {
+        w.rotations[self.def.joint] * self.rest_rot.inverse()
+    }
+
+    /// Where a posture puts the segment's centre of mass.
+    #[must_use]
+    pub fn com_in(&self, w: &WorldPose) -> DVec3 {
+        w.positions[self.def.joint] + self.rotation_in(w) * self.com_off
+    }
+}
+
+/// What the simulation gives for one segment this frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimState {
+    /// Rotation from rest (world).
+    pub rotation: DQuat,
+    /// Centre of mass (world).
+    pub position: DVec3,
+}
+
+/// The ragdoll and its world.
+pub struct Ragdoll {
+    world: PhysicsWorld,
+    segments: Vec<Segment>,
+    settings: RagdollSettings,
+    resets: u64,
+}
+
+fn v32(v: DVec3) -> Vec3 {
+    v.as_vec3()
+}
+
+fn q64(q: Quat) -> DQuat {
+    q.as_dquat().normalize()
+}
+
+/// The child of `from` on the way down to `to` (`to` itself if it is a
+/// child).
+fn child_toward(skeleton: &Skeleton, from: usize, to: usize) -> usize {
+    let mut j = to;
+    while let Some(p) = skeleton.joints[j].parent {
+        if p == from {
+            return j;
+        }
+        j = p;
+    }
+    to
+}
+
+/// The farthest point of a joint's own subtree (joints and End Sites)
+/// from it, or `None` if it has none.
+fn tip(skeleton: &Skeleton, w: &WorldPose, joint: usize) -> Option<DVec3> {
+    let at = w.positions[joint];
+    let mut best: Option<DVec3> = None;
+    for i in 0..skeleton.len() {
+        if !skeleton.is_ancestor(joint, i) {
+            continue;
+        }
+        let points = (i != joint)
+            .then_some(w.positions[i])
+            .into_iter()
+            .chain(w.end_site(skeleton, i));
+        for p in points {
+            if best.is_none_or(|b| (p - at).length() > (b - at).length()) {
+                best = Some(p);
+            }
+        }
+    }
+    best.filter(|p| (*p - at).length() > 0.01)
+}
+
+/// The segments of a skeleton, from its rest posture (world transforms).
+fn segment_defs(skeleton: &Skeleton, roles: &RoleMap, rest: &WorldPose) -> Vec<SegmentDef> {
+    let at = |r: Role| rest.positions[roles.get(r)];
+    let height = (rest.positions[roles.get(Role::Head)].y
+        - at(Role::LeftFoot).y.min(at(Role::RightFoot).y))
+    .max(0.5);
+    let scale = (height / (REFERENCE_HEIGHT * 0.87)).clamp(0.3, 3.0);
+    let mass_scale = scale.powi(3);
+    let mut defs: Vec<SegmentDef> = Vec::new();
+    let mut add = |kind, region, joint, parent, ends: [DVec3; 2]| {
+        defs.push(SegmentDef {
+            kind,
+            region,
+            joint,
+            parent,
+            ends,
+            radius: SegmentKind::radius(kind) * scale,
+            mass: SegmentKind::mass_share(kind) * BODY_MASS * mass_scale,
+        });
+        defs.len() - 1
+    };
+    let pelvis_j = roles.get(Role::Pelvis);
+    let chest_j = roles.get(Role::Chest);
+    // Axes of the rest posture: the character's left and its front.
+    let left = (at(Role::LeftHip) - at(Role::RightHip))
+        .with_y(0.0)
+        .try_normalize()
+        .unwrap_or(DVec3::X);
+    let front = left.cross(DVec3::Y).normalize() * -1.0;
+    let pelvis = add(
+        SegmentKind::Pelvis,
+        Region::Torso,
+        pelvis_j,
+        None,
+        [at(Role::LeftHip), at(Role::RightHip)],
+    );
+    let spine_j = child_toward(skeleton, pelvis_j, chest_j);
+    let abdomen = if spine_j == chest_j {
+        pelvis
+    } else {
+        add(
+            SegmentKind::Abdomen,
+            Region::Torso,
+            spine_j,
+            Some((pelvis, Hinge::Ball([0.5, 0.4, 0.4]))),
+            [rest.positions[spine_j], at(Role::Chest)],
+        )
+    };
+    let thorax = add(
+        SegmentKind::Thorax,
+        Region::Torso,
+        chest_j,
+        Some((abdomen, Hinge::Ball([0.5, 0.4, 0.4]))),
+        [at(Role::Chest), at(Role::Neck)],
+    );
+    let head_j = roles.get(Role::Neck);
+    let head_top = tip(skeleton, rest, roles.get(Role::Head))
+        .unwrap_or(at(Role::Head) + DVec3::Y * 0.2 * scale);
+    add(
+        SegmentKind::Head,
+        Region::Torso,
+        head_j,
+        Some((thorax, Hinge::Ball([0.8, 1.0, 0.6]))),
+        [at(Role::Neck), head_top],
+    );
+    for (region, [shoulder, elbow, hand]) in [
+        (
+            Region::LeftArm,
+            [Role::LeftShoulder, Role::LeftElbow, Role::LeftHand],
+        ),
+        (
+            Region::RightArm,
+            [Role::RightShoulder, Role::RightElbow, Role::RightHand],
+        ),
+    ] {
+        let upper = at(elbow) - at(shoulder);
+        let fore = at(hand) - at(elbow);
+        // The elbow bends the forearm towards the front.
+        let axis = upper.cross(front).try_normalize().unwrap_or(left);
+        let s = add(
+            SegmentKind::UpperArm,
+            region,
+            roles.get(shoulder),
+            Some((thorax, Hinge::Ball([2.6, 1.4, 2.6]))),
+            [at(shoulder), at(elbow)],
+        );
+        // The hand goes with the forearm: a wrist is stiff next to the
+        // swing of an arm, and a light hand on a ball joint only jitters.
+        let fingers = tip(skeleton, rest, roles.get(hand))
+            .unwrap_or(at(hand) + fore.normalize_or_zero() * 0.08 * scale);
+        add(
+            SegmentKind::Forearm,
+            region,
+            roles.get(elbow),
+            Some((s, Hinge::Hinge(axis, [-0.05, 2.6]))),
+            [at(elbow), fingers],
+        );
+    }
+    for (region, [hip, knee, foot]) in [
+        (
+            Region::LeftLeg,
+            [Role::LeftHip, Role::LeftKnee, Role::LeftFoot],
+        ),
+        (
+            Region::RightLeg,
+            [Role::RightHip, Role::RightKnee, Role::RightFoot],
+        ),
+    ] {
+        let thigh = at(knee) - at(hip);
+        // The knee bends the shank towards the back.
+        let axis = front.cross(thigh).try_normalize().unwrap_or(left);
+        let t = add(
+            SegmentKind::Thigh,
+            region,
+            roles.get(hip),
+            Some((pelvis, Hinge::Ball([2.0, 0.8, 0.9]))),
+            [at(hip), at(knee)],
+        );
+        let k = add(
+            SegmentKind::Shank,
+            region,
+            roles.get(knee),
+            Some((t, Hinge::Hinge(axis, [-0.05, 2.5]))),
+            [at(knee), at(foot)],
+        );
+        // The sole rests on the floor: the capsule's lower side, not its
+        // axis, touches it.
+        let radius = SegmentKind::Foot.radius() * scale;
+        let toes = tip(skeleton, rest, roles.get(foot)).unwrap_or(at(foot) + front * 0.15 * scale);
+        let toes = toes.with_y(toes.y.max(radius));
+        add(
+            SegmentKind::Foot,
+            region,
+            roles.get(foot),
+            Some((k, Hinge::Ball([0.8, 0.4, 0.4]))),
+            [at(foot), toes],
+        );
+    }
+    defs
+}
+
+const GRAVITY: DVec3 = DVec3::new(0.0, -9.81, 0.0);
+
+const RAGDOLL_GROUP: Group = Group::GROUP_1;
+const FLOOR_GROUP: Group = Group::GROUP_2;
+
+impl Ragdoll {
+    /// Build the ragdoll of `skeleton` from its rest posture `rest`
+    /// (world transforms, standing on the floor), standing in `now`.
+    #[must_use]
+    pub fn new(
+        skeleton: &Skeleton,
+        roles: &RoleMap,
+        rest: &WorldPose,
+        now: &WorldPose,
+        settings: RagdollSettings,
+    ) -> Self {
+        let defs = segment_defs(skeleton, roles, rest);
+        let mut ragdoll = Self::from_defs(&defs, rest, settings);
+        ragdoll.reset(now, None);
+        ragdoll.resets = 0;
+        ragdoll
+    }
+
+    fn from_defs(defs: &[SegmentDef], rest: &WorldPose, settings: RagdollSettings) -> Self {
+        let mut world = PhysicsWorld::new();
+        world.gravity = v32(GRAVITY);
+        let floor = world.bodies.insert(RigidBodyBuilder::fixed().build());
+        world.colliders.insert_with_parent(
+            ColliderBuilder::cuboid(50.0, 0.5, 50.0)
+                .translation(Vec3::new(0.0, -0.5, 0.0))
+                .friction(0.9)
+                .collision_groups(InteractionGroups::new(
+                    FLOOR_GROUP,
+                    RAGDOLL_GROUP,
+                    InteractionTestMode::And,
+                ))
+                .build(),
+            floor,
+            &mut world.bodies,
+        );
+        let mut segments: Vec<Segment> = Vec::with_capacity(defs.len());
+        for def in defs {
+            let joint_at = rest.positions[def.joint];
+            let com = (def.ends[0] + def.ends[1]) * 0.5;
+            let body = world.bodies.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(v32(com))
+                    .angular_damping(2.0)
+                    .can_sleep(false)
+                    .build(),
+            );
+            world.colliders.insert_with_parent(
+                ColliderBuilder::capsule_from_endpoints(
+                    v32(def.ends[0] - com),
+                    v32(def.ends[1] - com),
+                    def.radius as f32,
+                )
+                .mass(def.mass as f32)
+                .friction(0.9)
+                .collision_groups(InteractionGroups::new(
+                    RAGDOLL_GROUP,
+                    FLOOR_GROUP,
+                    InteractionTestMode::And,
+                ))
+                .build(),
+                body,
+                &mut world.bodies,
+            );
+            if let Some((p, hinge)) = def.parent {
+                let parent: &Segment = &segments[p];
+                let parent_com = rest.positions[parent.def.joint] + parent.com_off;
+                let a1 = v32(joint_at - parent_com);
+                let a2 = v32(joint_at - com);
+                let joint: GenericJoint = match hinge {
+                    Hinge::Ball(l) => SphericalJointBuilder::new()
+                        .local_anchor1(a1)
+                        .local_anchor2(a2)
+                        .limits(JointAxis::AngX, [-l[0] as f32, l[0] as f32])
+                        .limits(JointAxis::AngY, [-l[1] as f32, l[1] as f32])
+                        .limits(JointAxis::AngZ, [-l[2] as f32, l[2] as f32])
+                        .contacts_enabled(false)
+                        .build()
+                        .into(),
+                    Hinge::Hinge(axis, l) => RevoluteJointBuilder::new(v32(axis))
+                        .local_anchor1(a1)
+                        .local_anchor2(a2)
+                        .limits([l[0] as f32, l[1] as f32])
+                        .contacts_enabled(false)
+                        .build()
+                        .into(),
+                };
+                world.impulse_joints.insert(parent.body, body, joint, true);
+            }
+            segments.push(Segment {
+                def: def.clone(),
+                body,
+                rest_rot: rest.rotations[def.joint],
+                com_off: com - joint_at,
+            });
+        }
+        Self {
+            world,
+            segments,
+            settings,
+            resets: 0,
+        }
+    }
+
+    /// The segments, parents before children.
+    #[must_use]
+    pub fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    /// How often the ragdoll was put back on the posture shown.
+    #[must_use]
+    pub fn resets(&self) -> u64 {
+        self.resets
+    }
+
+    /// Put every segment where `w` puts it, moving with `velocity` (the
+    /// posture's own motion, per segment), or still.
+    pub fn reset(&mut self, w: &WorldPose, velocity: Option<&[DVec3]>) {
+        self.resets += 1;
+        for (k, s) in self.segments.iter().enumerate() {
+            let rot = s.rotation_in(w);
+            let com = s.com_in(w);
+            if let Some(b) = self.world.bodies.get_mut(s.body) {
+                b.set_position(Pose::from_parts(v32(com), rot.as_quat()), true);
+                let v = velocity.and_then(|v| v.get(k)).copied().unwrap_or_default();
+                b.set_linvel(v32(v), true);
+                b.set_angvel(Vec3::ZERO, true);
+            }
+        }
+    }
+
+    /// One frame of `dt` seconds: pull every segment towards where the
+    /// target posture (world transforms) puts it (eq. 5) and simulate;
+    /// `shown` is the posture to start over from should the ragdoll drift.
+    pub fn step(&mut self, target: &WorldPose, shown: &WorldPose, dt: f64) {
+        if !(dt.is_finite() && dt > 0.0) {
+            return;
+        }
+        let w = 4.0 / self.settings.settle_s.max(1e-3);
+        let (k, d) = (w * w, 2.0 * self.settings.damping_ratio * w);
+        let steps = (dt / self.settings.max_step_s).ceil().clamp(1.0, 16.0);
+        self.world.integration_parameters.dt = (dt / steps) as f32;
+        let goals: Vec<DVec3> = self.segments.iter().map(|s| s.com_in(target)).collect();
+        for _ in 0..steps as usize {
+            for (s, goal) in self.segments.iter().zip(&goals) {
+                if let Some(b) = self.world.bodies.get_mut(s.body) {
+                    let p = b.translation().as_dvec3();
+                    let v = b.linvel().as_dvec3();
+                    // The pull holds the segment up against gravity, as
+                    // muscles do, then drives it (eq. 5).
+                    let acc = ((*goal - p) * k - v * d).clamp_length_max(self.settings.max_accel)
+                        - GRAVITY;
+                    b.reset_forces(false);
+                    b.add_force(v32(acc * s.def.mass), true);
+                }
+            }
+            self.world.step();
+        }
+        let drifted = self.segments.iter().zip(&goals).any(|(s, goal)| {
+            self.world.bodies.get(s.body).is_none_or(|b| {
+                let p = b.translation().as_dvec3();
+                !(p.is_finite() && b.rotation().is_finite())
+                    || (p - *goal).length() > self.settings.drift_m
+            })
+        });
+        if drifted {
+            tracing::debug!("ragdoll drifted from the posture; put back on it");
+            self.reset(shown, None);
+        }
+    }
+
+    /// Each segment's simulated state.
+    #[must_use]
+    pub fn states(&self) -> Vec<SimState> {
+        self.segments
+            .iter()
+            .map(|s| {
+                self.world.bodies.get(s.body).map_or(
+                    SimState {
+                        rotation: DQuat::IDENTITY,
+                        position: DVec3::ZERO,
+                    },
+                    |b| SimState {
+                        rotation: q64(*b.rotation()),
+                        position: b.translation().as_dvec3(),
+                    },
+                )
+            })
+            .collect()
+    }
+}
+
+impl Clone for Ragdoll {
+    /// A ragdoll in the same state (bodies where they are, moving as they
+    /// move); its contact caches start afresh.
+    fn clone(&self) -> Self {
+        let defs: Vec<SegmentDef> = self.segments.iter().map(|s| s.def.clone()).collect();
+        // The rest transforms are rebuilt from what each segment keeps.
+        let mut rest = WorldPose {
+            positions: vec![
+                DVec3::ZERO;
+                self.segments
+                    .iter()
+                    .map(|s| s.def.joint + 1)
+                    .max()
+                    .unwrap_or(0)
+            ],
+            rotations: vec![
+                DQuat::IDENTITY;
+                self.segments
+                    .iter()
+                    .map(|s| s.def.joint + 1)
+                    .max()
+                    .unwrap_or(0)
+            ],
+        };
+        for s in &self.segments {
+            rest.positions[s.def.joint] = (s.def.ends[0] + s.def.ends[1]) * 0.5 - s.com_off;
+            rest.rotations[s.def.joint] = s.rest_rot;
+        }
+        let mut copy = Self::from_defs(&defs, &rest, self.settings);
+        for (a, b) in self.segments.iter().zip(&copy.segments) {
+            if let (Some(from), Some(to)) = (
+                self.world.bodies.get(a.body),
+                copy.world.bodies.get_mut(b.body),
+            ) {
+                to.set_position(*from.position(), true);
+                to.set_linvel(from.linvel(), true);
+                to.set_angvel(from.angvel(), true);
+            }
+        }
+        copy.resets = self.resets;
+        copy
+    }
+}
