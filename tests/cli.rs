@@ -103,6 +103,14 @@ fn bad_config_exits_78_naming_file_and_key() {
     assert_eq!(out.status.code(), Some(78));
     let out = marionette(&["--config", "/nonexistent/marionette.toml", "demo"]);
     assert_eq!(out.status.code(), Some(78));
+    std::fs::write(&path, "[tracking]\ns1 = 1.5\n").unwrap();
+    let out = marionette(&["--config", path.to_str().unwrap(), "demo"]);
+    assert_eq!(out.status.code(), Some(78));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("tracking.s1") && err.contains("between 0 and 0.95"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -343,6 +343,19 @@ impl Config {
             key: key.to_owned(),
             message,
         };
+        // Every number within its range (inclusive), or the error for the
+        // first that is not: `(key, value, lowest, highest)`.
+        let in_ranges = |checks: &[(&str, f64, f64, f64)]| {
+            for &(key, v, lo, hi) in checks {
+                if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                    return Err(invalid(
+                        key,
+                        format!("must be between {lo} and {hi}, found {v}"),
+                    ));
+                }
+            }
+            Ok(())
+        };
         let d = &self.display;
         for (key, v) in [("display.width", d.width), ("display.height", d.height)] {
             if !(16..=16384).contains(&v) {
@@ -368,7 +381,7 @@ impl Config {
             ));
         }
         let c = &self.character;
-        for (key, v, lo, hi) in [
+        in_ranges(&[
             ("character.pick_radius_px", c.pick_radius_px, 1.0, 500.0),
             (
                 "character.camera_home_after_s",
@@ -376,27 +389,13 @@ impl Config {
                 0.0,
                 3600.0,
             ),
-        ] {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(invalid(
-                    key,
-                    format!("must be between {lo} and {hi}, found {v}"),
-                ));
-            }
-        }
+        ])?;
         let t = &self.tracking;
-        for (key, v, lo, hi) in [
+        in_ranges(&[
             ("tracking.settle_s", t.settle_s, 0.0, 2.0),
             ("tracking.s1", t.s1, 0.0, 0.95),
             ("tracking.s2", t.s2, 0.0, 2.0),
-        ] {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(invalid(
-                    key,
-                    format!("must be between {lo} and {hi}, found {v}"),
-                ));
-            }
-        }
+        ])?;
         if !(50..=60_000).contains(&self.input.rescan_interval_ms) {
             return Err(invalid(
                 "input.rescan_interval_ms",
@@ -435,7 +434,7 @@ impl Config {
             }
         }
         let a = &self.action;
-        for (key, v, lo, hi) in [
+        in_ranges(&[
             ("action.h", a.h, 0.0, 10_000.0),
             ("action.threshold_px", a.threshold_px, 0.0, 1_000.0),
             (
@@ -447,14 +446,7 @@ impl Config {
             ("action.min_trail_px", a.min_trail_px, 0.0, 2_000.0),
             ("action.min_coverage", a.min_coverage, 0.0, 1.0),
             ("action.min_view_angle_deg", a.min_view_angle_deg, 0.0, 90.0),
-        ] {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(invalid(
-                    key,
-                    format!("must be between {lo} and {hi}, found {v}"),
-                ));
-            }
-        }
+        ])?;
         if !["error", "warn", "info", "debug", "trace"].contains(&self.log.level.as_str()) {
             return Err(invalid(
                 "log.level",
