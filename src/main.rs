@@ -157,6 +157,16 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The kiosk: fullscreen on the KMS output, reading every touchscreen,
+    /// until SIGTERM/SIGINT (what systemd starts)
+    Run {
+        /// Where the DRM device nodes are
+        #[arg(long, default_value = "/dev/dri")]
+        dri: PathBuf,
+        /// Stop after this many seconds (for tests)
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
     /// List the DRM/KMS outputs: cards, connectors, their state and modes
     ListOutputs {
         /// One JSON object per connector
@@ -335,6 +345,7 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
         }
         Command::ListDevices { json } => list_devices(config, json),
         Command::ListOutputs { json, dir } => list_outputs(&dir, json),
+        Command::Run { dri, seconds } => run_kiosk(config, dri, seconds),
         Command::ConvertBvh {
             file,
             out,
@@ -690,6 +701,20 @@ fn character(
     Ok(std::sync::Arc::new(
         marionette::control::controller::Character::new(lib, model),
     ))
+}
+
+/// `marionette run`: the kiosk.
+fn run_kiosk(config: &Config, dri: PathBuf, seconds: Option<f64>) -> Result<(), Failure> {
+    use marionette::app::run;
+    let ch = character(config)?;
+    let opts = run::RunOptions {
+        dri_dir: dri,
+        seconds,
+        ..run::RunOptions::default()
+    };
+    run::run(ch, config, &opts)
+        .map(|_| ())
+        .map_err(|e| Failure::new(e.exit_code(), e))
 }
 
 /// A recording through the whole pipeline into images.

@@ -47,7 +47,29 @@ pub struct Config {
     pub action: ActionConfig,
     pub character: CharacterConfig,
     pub tracking: TrackingConfig,
+    pub kiosk: KioskConfig,
     pub log: LogConfig,
+}
+
+/// `[kiosk]`: what `marionette run` does when nobody touches the table.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct KioskConfig {
+    /// After this long without a touch the character returns to its rest
+    /// posture (s).
+    pub idle_after_s: f64,
+    /// An evemu recording the character then performs in a loop until
+    /// someone touches; empty for none.
+    pub attract: PathBuf,
+}
+
+impl Default for KioskConfig {
+    fn default() -> Self {
+        Self {
+            idle_after_s: 45.0,
+            attract: PathBuf::new(),
+        }
+    }
 }
 
 /// `[tracking]`: how the shown motion follows the synthesised one (the
@@ -189,6 +211,11 @@ pub struct DisplayConfig {
     pub trajectories: bool,
     /// Show a status line (mode, action, frame time).
     pub status_line: bool,
+    /// The KMS output to drive, by connector name (`HDMI-A-1`; see
+    /// `marionette list-outputs`); empty: the first connected one.
+    pub output: String,
+    /// Its mode, `WIDTHxHEIGHT` or `WIDTHxHEIGHT@HZ`; empty: the preferred.
+    pub mode: String,
 }
 
 impl Default for DisplayConfig {
@@ -200,6 +227,8 @@ impl Default for DisplayConfig {
             samples: 0,
             trajectories: true,
             status_line: true,
+            output: String::new(),
+            mode: String::new(),
         }
     }
 }
@@ -390,6 +419,18 @@ impl Config {
                 3600.0,
             ),
         ])?;
+        if !d.mode.is_empty()
+            && crate::display::present::OutputChoice::parse_mode(&d.mode).is_none()
+        {
+            return Err(invalid(
+                "display.mode",
+                format!(
+                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found \"{}\"",
+                    d.mode
+                ),
+            ));
+        }
+        in_ranges(&[("kiosk.idle_after_s", self.kiosk.idle_after_s, 1.0, 86_400.0)])?;
         let t = &self.tracking;
         in_ranges(&[
             ("tracking.settle_s", t.settle_s, 0.0, 2.0),

@@ -4,4 +4,6 @@ pub mod config;
 pub mod exit;
 pub mod headless;
 pub mod logging;
+pub mod notify;
+pub mod run;
 pub mod signals;

@@ -348,6 +348,18 @@ impl Controller {
         }
     }
 
+    /// Return to the rest posture where the character stands (tracking
+    /// makes it a smooth motion); an action playing is left to finish.
+    /// For a kiosk nobody has touched for a while.
+    pub fn go_to_rest(&mut self) {
+        if matches!(self.mode, Mode::Posing) && self.grabs.is_empty() {
+            let at = self.placement_now();
+            self.target = self.ch.rest_pose(&at);
+            self.at = at;
+            self.planted = None;
+        }
+    }
+
     /// Apply one frame of touches (its time is `frame.t`).
     pub fn touch(&mut self, frame: &ScreenFrame) {
         let before: BTreeMap<ContactId, ScreenPoint> = self

@@ -176,8 +176,8 @@ pub fn outputs_of(path: &Path) -> Result<Vec<OutputInfo>, KmsError> {
     Ok(out)
 }
 
-/// Every card's outputs under `dir` (normally `/dev/dri`).
-pub fn list_outputs(dir: &Path) -> Result<Vec<OutputInfo>, KmsError> {
+/// The card nodes under `dir` (normally `/dev/dri`), sorted.
+pub fn card_paths(dir: &Path) -> Result<Vec<PathBuf>, KmsError> {
     let mut cards: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|_| KmsError::NoDevices(dir.to_owned()))?
         .filter_map(Result::ok)
@@ -192,8 +192,13 @@ pub fn list_outputs(dir: &Path) -> Result<Vec<OutputInfo>, KmsError> {
     if cards.is_empty() {
         return Err(KmsError::NoDevices(dir.to_owned()));
     }
+    Ok(cards)
+}
+
+/// Every card's outputs under `dir` (normally `/dev/dri`).
+pub fn list_outputs(dir: &Path) -> Result<Vec<OutputInfo>, KmsError> {
     let mut out = Vec::new();
-    for c in cards {
+    for c in card_paths(dir)? {
         out.extend(outputs_of(&c)?);
     }
     Ok(out)

@@ -23,54 +23,13 @@ bin=${MARIONETTE_BIN:-$root/target/debug/marionette}
 cache=${MARIONETTE_VM_CACHE:-$root/target/vm-cache}
 rec=${1:-$root/../shared/recordings/evemu/atmel-maxtouch.4-finger-drag-down.evemu}
 
-for tool in qemu-system-x86_64 cpio python3; do
-    command -v "$tool" >/dev/null || { echo "vm test: $tool is missing: apt-get install qemu-system-x86 busybox-static cpio python3" >&2; exit 69; }
-done
-busybox=/bin/busybox
-linkage=$(ldd "$busybox" 2>&1 || true)
-if [ ! -x "$busybox" ] || [[ "$linkage" != *"not a dynamic executable"* ]]; then
-    echo "vm test: a static busybox is needed at $busybox: apt-get install busybox-static" >&2
-    exit 69
-fi
-[ -x "$bin" ] || { echo "vm test: $bin not built (cargo build)" >&2; exit 66; }
 [ -f "$rec" ] || { echo "vm test: recording $rec not found" >&2; exit 66; }
-
-# The kernel and its evdev/uinput modules, and virtio-gpu with what it
-# needs (a real KMS device for list-outputs), cached; in load order.
-modules="evdev uinput virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy_dev virtio_pci drm drm_kms_helper drm_shmem_helper virtio_dma_buf virtio-gpu"
-mkdir -p "$cache"
-if [ ! -f "$cache/vmlinuz" ] || [ ! -f "$cache/uinput.ko" ] || [ ! -f "$cache/virtio-gpu.ko" ]; then
-    pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ {print $2; exit}')
-    [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package (apt-get update first)" >&2; exit 69; }
-    tmp=$(mktemp -d)
-    (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
-    dpkg -x "$tmp"/*.deb "$tmp/x"
-    cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
-    for m in $modules; do
-        f=$(find "$tmp/x/lib/modules" -name "$m.ko*" | head -n1)
-        [ -n "$f" ] || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
-        case "$f" in
-            *.xz) xz -dc "$f" > "$cache/$m.ko" ;;
-            *.zst) zstd -qdc "$f" > "$cache/$m.ko" ;;
-            *) cp "$f" "$cache/$m.ko" ;;
-        esac
-    done
-    rm -rf "$tmp"
-fi
-
+. "$here/common.sh"
+vm_kernel
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 ird="$work/initrd"
-mkdir -p "$ird"/{bin,dev,proc,sys,tmp,modules}
-cp "$busybox" "$ird/bin/busybox"
-cp "$bin" "$ird/bin/marionette"
-# The binary's shared libraries, at their own paths.
-ldd "$bin" | awk '/=> \// {print $3} /^\t\// {print $1}' | while read -r lib; do
-    mkdir -p "$ird$(dirname "$lib")"
-    cp -L "$lib" "$ird$lib"
-done
-for m in $modules; do cp "$cache/$m.ko" "$ird/modules/"; done
-echo "$modules" > "$ird/modules/order"
+vm_initrd_base "$ird"
 cp "$rec" "$ird/rec.evemu"
 cp "$root/tests/data/burst-overflow.evemu" "$ird/burst.evemu"
 cp "$root/tests/data/unplug-mid-drag.evemu" "$ird/middrag.evemu"
@@ -118,7 +77,7 @@ INIT
 chmod +x "$ird/init"
 (cd "$ird" && find . | cpio -o -H newc --quiet | gzip -1 > "$work/initrd.gz")
 
-timeout 300 qemu-system-x86_64 -accel tcg -cpu max -m 512 -smp 1 -nic none -display none \
+timeout 300 qemu-system-x86_64 -accel tcg -cpu max -m 1024 -smp 1 -nic none -display none \
     -device virtio-vga \
     -serial "file:$work/console.log" -monitor none -no-reboot \
     -kernel "$cache/vmlinuz" -initrd "$work/initrd.gz" \

@@ -1,0 +1,74 @@
+# Shared by the VM tests: Debian's kernel with the modules marionette needs,
+# and a busybox initramfs with the marionette binary and its libraries.
+# Expects $bin (the binary) and $cache (kernel cache folder).
+
+for tool in qemu-system-x86_64 cpio python3; do
+    command -v "$tool" >/dev/null || { echo "vm test: $tool is missing: apt-get install qemu-system-x86 busybox-static cpio python3" >&2; exit 69; }
+done
+busybox=/bin/busybox
+linkage=$(ldd "$busybox" 2>&1 || true)
+if [ ! -x "$busybox" ] || [[ "$linkage" != *"not a dynamic executable"* ]]; then
+    echo "vm test: a static busybox is needed at $busybox: apt-get install busybox-static" >&2
+    exit 69
+fi
+[ -x "$bin" ] || { echo "vm test: $bin not built (cargo build)" >&2; exit 66; }
+
+# The kernel modules, in load order: evdev and uinput, and virtio-gpu with
+# what it needs (a real KMS device).
+modules="evdev uinput virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy_dev virtio_pci drm drm_kms_helper drm_shmem_helper virtio_dma_buf virtio-gpu"
+
+# Fetch the kernel and the modules into $cache (once).
+vm_kernel() {
+    mkdir -p "$cache"
+    if [ -f "$cache/vmlinuz" ] && [ -f "$cache/uinput.ko" ] && [ -f "$cache/virtio-gpu.ko" ]; then
+        return
+    fi
+    local pkg tmp f m
+    pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ {print $2; exit}')
+    [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package (apt-get update first)" >&2; exit 69; }
+    tmp=$(mktemp -d)
+    (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
+    dpkg -x "$tmp"/*.deb "$tmp/x"
+    cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
+    for m in $modules; do
+        f=$(find "$tmp/x/lib/modules" -name "$m.ko*" | head -n1)
+        [ -n "$f" ] || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
+        case "$f" in
+            *.xz) xz -dc "$f" > "$cache/$m.ko" ;;
+            *.zst) zstd -qdc "$f" > "$cache/$m.ko" ;;
+            *) cp "$f" "$cache/$m.ko" ;;
+        esac
+    done
+    rm -rf "$tmp"
+}
+
+# Copy a binary or library and the shared libraries it needs, at their own
+# paths, into the initramfs $1.
+vm_copy_with_libs() {
+    local ird=$1 file=$2 lib
+    mkdir -p "$ird$(dirname "$file")"
+    cp -L "$file" "$ird$file"
+    ldd "$file" | awk '/=> \// {print $3} /^\t\// {print $1}' | while read -r lib; do
+        [ -f "$ird$lib" ] && continue
+        mkdir -p "$ird$(dirname "$lib")"
+        cp -L "$lib" "$ird$lib"
+    done
+}
+
+# The initramfs tree in $1: busybox, marionette (as /bin/marionette) with
+# its libraries, the modules and their load order.
+vm_initrd_base() {
+    local ird=$1 m
+    mkdir -p "$ird"/{bin,dev,proc,sys,tmp,modules}
+    cp "$busybox" "$ird/bin/busybox"
+    vm_copy_with_libs "$ird" "$bin"
+    # Without debug information the guest needs far less memory.
+    if command -v strip >/dev/null; then
+        strip --strip-debug -o "$ird/bin/marionette" "$ird$bin"
+        rm "$ird$bin"
+    else
+        mv "$ird$bin" "$ird/bin/marionette"
+    fi
+    for m in $modules; do cp "$cache/$m.ko" "$ird/modules/"; done
+    echo "$modules" > "$ird/modules/order"
+}
