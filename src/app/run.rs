@@ -535,3 +535,61 @@ fn wait(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::calibration::{RawPoint, ScreenPoint};
+    use crate::input::touch::Tool;
+
+    fn frame(t: f64, id: u64, phase: Phase) -> ScreenFrame {
+        ScreenFrame {
+            t,
+            contacts: vec![ScreenContact {
+                id,
+                phase,
+                tool: Tool::Finger,
+                raw: RawPoint { x: 0, y: 0 },
+                screen: ScreenPoint::new(10.0, 20.0),
+            }],
+        }
+    }
+
+    #[test]
+    fn attract_plays_in_a_loop_and_lets_go_when_touched() {
+        let mut a = Attract {
+            frames: vec![
+                frame(0.0, 1, Phase::Down),
+                frame(0.5, 1, Phase::Move),
+                frame(1.0, 1, Phase::Up),
+            ],
+            start: 10.0,
+            next: 0,
+            down: std::collections::BTreeSet::new(),
+        };
+        let mut out = Vec::new();
+        a.due(9.9, &mut out);
+        assert!(out.is_empty(), "nothing before its start");
+        a.due(10.6, &mut out);
+        assert_eq!(out.len(), 2);
+        assert!((out[1].t - 10.5).abs() < 1e-9, "shifted to the loop's time");
+        assert_eq!(
+            out[0].contacts[0].id,
+            1 + ATTRACT_ID,
+            "kept apart from real ids"
+        );
+        // A touch now: the recording's finger is cancelled.
+        let lift = a.lift(10.7).unwrap();
+        assert_eq!(lift.contacts[0].phase, Phase::Cancel);
+        assert!(a.lift(10.8).is_none());
+        // Played to its end, it starts over a second later.
+        out.clear();
+        a.due(11.1, &mut out);
+        a.due(12.2, &mut out);
+        assert_eq!(a.next, 0);
+        assert!((a.start - 12.2).abs() < 1e-9);
+        out.clear();
+        a.due(12.2, &mut out);
+        assert_eq!(out[0].contacts[0].phase, Phase::Down);
+    }
+}
