@@ -167,6 +167,20 @@ enum Command {
         #[arg(long)]
         seconds: Option<f64>,
     },
+    /// Calibrate a touchscreen on the KMS display: touch the targets shown;
+    /// the device's calibration is written into the configuration file
+    Calibrate {
+        /// The touchscreen's name (see list-devices); needed when there
+        /// are several
+        #[arg(long)]
+        device: Option<String>,
+        /// Where the DRM device nodes are
+        #[arg(long, default_value = "/dev/dri")]
+        dri: PathBuf,
+        /// Give up when a target is not touched within this many seconds
+        #[arg(long, default_value_t = 60)]
+        timeout: u64,
+    },
     /// List the DRM/KMS outputs: cards, connectors, their state and modes
     ListOutputs {
         /// One JSON object per connector
@@ -291,7 +305,11 @@ fn main() -> ExitCode {
         }
     };
     logging::init(&config.log.level);
-    match run(cli.command, &config) {
+    let config_path = cli
+        .config
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(config::DEFAULT_PATH));
+    match run(cli.command, &config, &config_path) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
             eprintln!("marionette: {}", f.message);
@@ -310,7 +328,7 @@ fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
     }
 }
 
-fn run(command: Command, config: &Config) -> Result<(), Failure> {
+fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
     match command {
         Command::Demo { out, fps } => demo(config, &out, fps),
         Command::Inspect { file } => inspect(&file),
@@ -346,6 +364,11 @@ fn run(command: Command, config: &Config) -> Result<(), Failure> {
         Command::ListDevices { json } => list_devices(config, json),
         Command::ListOutputs { json, dir } => list_outputs(&dir, json),
         Command::Run { dri, seconds } => run_kiosk(config, dri, seconds),
+        Command::Calibrate {
+            device,
+            dri,
+            timeout,
+        } => calibrate(config, config_path, device, dri, timeout),
         Command::ConvertBvh {
             file,
             out,
@@ -701,6 +724,44 @@ fn character(
     Ok(std::sync::Arc::new(
         marionette::control::controller::Character::new(lib, model),
     ))
+}
+
+/// `marionette calibrate`: targets on the display, the solved matrix into
+/// the configuration file.
+fn calibrate(
+    config: &Config,
+    config_path: &Path,
+    device: Option<String>,
+    dri: PathBuf,
+    timeout: u64,
+) -> Result<(), Failure> {
+    use marionette::app::calibrate;
+    let opts = calibrate::CalibrateOptions {
+        dri_dir: dri,
+        device,
+        config_path: config_path.to_owned(),
+        touch_timeout: std::time::Duration::from_secs(timeout.max(1)),
+    };
+    let done = calibrate::calibrate(config, &opts).map_err(|e| Failure::new(e.exit_code(), e))?;
+    let m = done.solution.matrix.0;
+    writeln!(
+        std::io::stdout(),
+        "{}: calibration [{:.6}, {:.6}, {:.6}, {:.6}, {:.6}, {:.6}]; fit {:.1} px, check point off by {:.1} px; written to {}{}",
+        done.device,
+        m[0],
+        m[1],
+        m[2],
+        m[3],
+        m[4],
+        m[5],
+        done.solution.rms_px,
+        done.solution.check_error_px,
+        done.written.display(),
+        done.backup
+            .map(|b| format!(" (the old file kept as {})", b.display()))
+            .unwrap_or_default()
+    )
+    .map_err(stdout_error)
 }
 
 /// `marionette run`: the kiosk.

@@ -85,7 +85,7 @@ pub struct RunStats {
 }
 
 /// CLOCK_MONOTONIC in microseconds: the clock evdev stamps events with.
-fn monotonic_us() -> i64 {
+pub(crate) fn monotonic_us() -> i64 {
     let mut ts = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
@@ -434,7 +434,7 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
 /// The touchscreens are read on their own thread, so that a slow frame
 /// (a CPU renderer under load) never lets the kernel's event buffers
 /// overflow; it wakes the render loop through a socket.
-struct InputThread {
+pub(crate) struct InputThread {
     events: std::sync::mpsc::Receiver<HubEvent>,
     wake: std::os::unix::net::UnixStream,
     stop: Arc<std::sync::atomic::AtomicBool>,
@@ -442,7 +442,7 @@ struct InputThread {
 }
 
 impl InputThread {
-    fn start(config: Config) -> Result<Self, RunError> {
+    pub(crate) fn start(config: Config) -> Result<Self, LiveError> {
         use std::io::Write as _;
         let (tx, rx) = std::sync::mpsc::channel();
         let (wake, mut waker) =
@@ -490,14 +490,14 @@ impl InputThread {
     }
 
     /// Everything read since the last call.
-    fn drain(&self, out: &mut Vec<HubEvent>) {
+    pub(crate) fn drain(&self, out: &mut Vec<HubEvent>) {
         use std::io::Read as _;
         let mut buf = [0u8; 64];
         while matches!((&self.wake).read(&mut buf), Ok(n) if n > 0) {}
         out.extend(self.events.try_iter());
     }
 
-    fn stop(mut self) {
+    pub(crate) fn stop(mut self) {
         self.stop.store(true, std::sync::atomic::Ordering::SeqCst);
         if let Some(h) = self.handle.take() {
             let _ = h.join();

@@ -59,6 +59,26 @@ for line in open(sys.argv[1]):
     out.append(line)
 open(sys.argv[2], "w").writelines(out)
 PY
+# Taps on the five calibration targets of a panel that is off: its raw
+# positions map to the screen through [1.05 0 -0.03; 0 0.95 0.02], which
+# `marionette calibrate` must find.
+python3 - "$root/assets/recordings/demo.evemu" "$ird/taps.evemu" <<'PY'
+import sys
+head = [l for l in open(sys.argv[1]) if l[:2] in ("# ", "N:", "I:", "P:", "B:", "A:")]
+targets = [(0.1, 0.1), (0.9, 0.1), (0.9, 0.9), (0.1, 0.9), (0.5, 0.5)]
+ev, t = [], 0.0
+def e(t, typ, code, val):
+    ev.append(f"E: {t:.6f} {typ:04x} {code:04x} {val:04d}\n")
+for k, (sx, sy) in enumerate(targets):
+    x = round((sx + 0.03) / 1.05 * 4095)
+    y = round((sy - 0.02) / 0.95 * 4095)
+    t += 1.2
+    e(t, 3, 0x39, k + 1); e(t, 3, 0x35, x); e(t, 3, 0x36, y)
+    e(t, 1, 0x14a, 1); e(t, 3, 0, x); e(t, 3, 1, y); e(t, 0, 0, 0)
+    t += 0.6
+    e(t, 3, 0x39, -1); e(t, 1, 0x14a, 0); e(t, 0, 0, 0)
+open(sys.argv[2], "w").writelines(head + ev)
+PY
 cat > "$ird/m.toml" <<'TOML'
 [character]
 library = "/library"
@@ -100,7 +120,18 @@ kill -TERM $pid
 wait $pid; echo "run rc=$?" >> /tmp/rc
 read up1 rest < /proc/uptime
 echo "stop took $up0 $up1" >> /tmp/rc
-for f in rc run.log play1.log play2.log; do
+# On-screen calibration of the panel, touched through uinput.
+cp /m.toml /m.orig.toml
+$m calibrate --device "marionette demo panel" --timeout 60 > /tmp/cal.out 2> /tmp/cal.log &
+cal=$!
+sleep 1
+$m play /taps.evemu --settle-ms 1500 2> /tmp/play3.log &
+sleep 5; echo "MARK calibrating"
+wait $!; echo "play3 rc=$?" >> /tmp/rc
+wait $cal; echo "calibrate rc=$?" >> /tmp/rc
+cp /m.toml /tmp/m.toml
+cmp -s /m.toml.bak /m.orig.toml && echo "backup kept" >> /tmp/rc
+for f in rc run.log play1.log play2.log cal.out cal.log m.toml; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f

@@ -143,6 +143,20 @@ for a, b in [("rest", "posed"), ("before-replug", "replugged")]:
     print(f"{a} -> {b}1..3: {changed} pixels changed")
     if max(changed, default=0) < 500:
         failures.append(f"the character did not move under the finger ({a} -> {b}: {changed} pixels)")
+# Calibration: the matrix found is the panel's, the old file kept.
+for want in ["play3 rc=0", "calibrate rc=0", "backup kept"]:
+    if want not in rc:
+        failures.append(f"calibration: expected '{want}' in the guest's exit codes")
+cal = open(os.path.join(out, "m.toml")).read() if os.path.exists(os.path.join(out, "m.toml")) else ""
+print(open(os.path.join(out, "cal.out")).read() if os.path.exists(os.path.join(out, "cal.out")) else "no calibrate output")
+m = re.search(r'match_name = "marionette demo panel"\s*\ncalibration = \[([^\]]*)\]', cal)
+if not m:
+    failures.append("calibration: no [[input.device]] entry written:\n" + cal[-800:])
+else:
+    got = [float(v) for v in m.group(1).split(",")]
+    want = [1.05, 0.0, -0.03, 0.0, 0.95, 0.02]
+    if any(abs(g - w) > 0.01 for g, w in zip(got, want)):
+        failures.append(f"calibration: matrix {got}, expected about {want}")
 if failures:
     print("kiosk log:\n" + log[-3000:])
     raise SystemExit("vm test failed:\n  " + "\n  ".join(failures))

@@ -1,0 +1,603 @@
+//! `marionette calibrate`: on-screen calibration of a touchscreen. Targets
+//! are drawn one after another on the KMS display (the same presenter as
+//! the kiosk); at each the touch is taken from its steady samples only (a
+//! finger that slides or is lifted at once is asked again); the libinput
+//! matrix is solved by least squares (`input::calibration::solve`), the
+//! error is shown on a check point, and the device's calibration is
+//! written into the configuration file atomically (temporary file and
+//! rename, the old file kept as `.bak`). Touches that do not agree are
+//! refused, with the reason on screen and in the exit code; nothing is
+//! written then.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use thiserror::Error;
+
+use super::config::Config;
+use super::run::InputThread;
+use crate::display::present::{CopyPresenter, OutputChoice, PresentError};
+use crate::input::calibration::{
+    CalibrationError, RawPoint, Rotation, ScreenPoint, Solution, SolveOptions, solve,
+};
+use crate::input::live::{HubEvent, LiveError};
+use crate::input::touch::Phase;
+use crate::render::contact::draw_text;
+use crate::render::headless::Image;
+
+/// Why calibration stopped without writing.
+#[derive(Debug, Error)]
+pub enum CalibrateError {
+    #[error(transparent)]
+    Present(#[from] PresentError),
+    #[error(transparent)]
+    Input(#[from] LiveError),
+    #[error("{0}")]
+    Device(String),
+    #[error("{device}: {source}")]
+    Refused {
+        device: String,
+        #[source]
+        source: CalibrationError,
+    },
+    #[error(
+        "no touch on target {target} within {seconds} s; calibration abandoned, nothing written"
+    )]
+    NoTouch { target: usize, seconds: u64 },
+    #[error("stopped before the end; nothing written")]
+    Stopped,
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    ConfigText { path: PathBuf, message: String },
+}
+
+impl CalibrateError {
+    /// The exit code (sysexits): 65 touches refused, 69 no display or
+    /// device, 73 cannot write, 78 a config file that cannot be edited.
+    #[must_use]
+    pub fn exit_code(&self) -> u8 {
+        use super::exit;
+        match self {
+            Self::Present(e) => e.exit_code(),
+            Self::Input(e) => e.exit_code(),
+            Self::Device(_) | Self::NoTouch { .. } => exit::UNAVAILABLE,
+            Self::Refused { .. } => exit::DATAERR,
+            Self::Stopped => exit::FAILURE,
+            Self::Write { .. } => exit::CANTCREAT,
+            Self::ConfigText { .. } => exit::CONFIG,
+        }
+    }
+}
+
+/// How to calibrate.
+#[derive(Clone, Debug)]
+pub struct CalibrateOptions {
+    pub dri_dir: PathBuf,
+    /// The touchscreen, by name; `None`: the only one there is.
+    pub device: Option<String>,
+    /// The configuration file to write the calibration into.
+    pub config_path: PathBuf,
+    /// How long to wait for each touch.
+    pub touch_timeout: Duration,
+}
+
+/// What a calibration found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Calibrated {
+    pub device: String,
+    pub solution: Solution,
+    pub written: PathBuf,
+    pub backup: Option<PathBuf>,
+}
+
+/// Targets as fractions of the picture: four near the corners, then the
+/// check point in the middle.
+pub const TARGETS: [(f64, f64); 5] = [(0.1, 0.1), (0.9, 0.1), (0.9, 0.9), (0.1, 0.9), (0.5, 0.5)];
+
+/// A touch is taken from the samples of its last `STEADY_S` seconds before
+/// the finger lifts, when they all lie within `STEADY_SPREAD` of the
+/// panel's range of their median.
+const STEADY_S: f64 = 0.25;
+const STEADY_SPREAD: f64 = 0.01;
+
+/// The steady position of one touch: its samples (time in seconds, raw
+/// point) from going down to lifting, the last at the lift (a finger that
+/// holds still sends no events: each sample stands until the next);
+/// `None` if the finger did not hold still for the last `STEADY_S`.
+#[must_use]
+pub fn steady_touch(samples: &[(f64, RawPoint)], range: (f64, f64)) -> Option<RawPoint> {
+    let (end, _) = *samples.last()?;
+    // The sample in force when the window opens, and those after it.
+    let from = samples.iter().rposition(|(t, _)| *t <= end - STEADY_S)?;
+    let tail: Vec<RawPoint> = samples[from..].iter().map(|(_, p)| *p).collect();
+    let median = |mut v: Vec<i32>| {
+        v.sort_unstable();
+        v[v.len() / 2]
+    };
+    let m = RawPoint {
+        x: median(tail.iter().map(|p| p.x).collect()),
+        y: median(tail.iter().map(|p| p.y).collect()),
+    };
+    let steady = tail.iter().all(|p| {
+        f64::from((p.x - m.x).abs()) <= range.0 * STEADY_SPREAD
+            && f64::from((p.y - m.y).abs()) <= range.1 * STEADY_SPREAD
+    });
+    steady.then_some(m)
+}
+
+/// The configuration text with `device`'s calibration set: its
+/// `[[input.device]]` entry (by `match_name`) updated, else a new entry
+/// appended. Comments and layout are kept.
+pub fn with_calibration(text: &str, device: &str, matrix: [f64; 6]) -> Result<String, String> {
+    let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e| format!("{e}"))?;
+    let round = |v: f64| (v * 1e6).round() / 1e6;
+    let mut values = toml_edit::Array::new();
+    for v in matrix {
+        values.push(round(v));
+    }
+    let input = doc
+        .entry("input")
+        .or_insert_with(|| toml_edit::Item::Table(toml_edit::Table::new()))
+        .as_table_mut()
+        .ok_or("`input` is not a table")?;
+    let devices = input
+        .entry("device")
+        .or_insert_with(|| toml_edit::Item::ArrayOfTables(toml_edit::ArrayOfTables::new()))
+        .as_array_of_tables_mut()
+        .ok_or("`input.device` is not a list of [[input.device]] tables")?;
+    let existing = devices
+        .iter_mut()
+        .find(|t| t.get("match_name").and_then(|v| v.as_str()) == Some(device));
+    match existing {
+        Some(t) => {
+            t["calibration"] = toml_edit::value(values);
+        }
+        None => {
+            let mut t = toml_edit::Table::new();
+            t["match_name"] = toml_edit::value(device);
+            t["calibration"] = toml_edit::value(values);
+            devices.push(t);
+        }
+    }
+    Ok(doc.to_string())
+}
+
+/// Write `text` to `path` atomically, keeping the old file as `.bak`.
+fn write_config(path: &Path, text: &str) -> Result<Option<PathBuf>, CalibrateError> {
+    let werr = |path: &Path| {
+        let path = path.to_owned();
+        move |source| CalibrateError::Write { path, source }
+    };
+    let with_ext = |ext: &str| {
+        let mut p = path.as_os_str().to_owned();
+        p.push(ext);
+        PathBuf::from(p)
+    };
+    let backup = if path.exists() {
+        let bak = with_ext(".bak");
+        std::fs::copy(path, &bak).map_err(werr(&bak))?;
+        Some(bak)
+    } else {
+        None
+    };
+    let tmp = with_ext(".tmp");
+    {
+        use std::io::Write as _;
+        let mut f = std::fs::File::create(&tmp).map_err(werr(&tmp))?;
+        f.write_all(text.as_bytes()).map_err(werr(&tmp))?;
+        f.sync_all().map_err(werr(&tmp))?;
+    }
+    std::fs::rename(&tmp, path).map_err(werr(path))?;
+    Ok(backup)
+}
+
+/// A picture-sized screen with a target, a message and a hint.
+fn screen(size: (u32, u32), target: Option<ScreenPoint>, lines: &[&str], colour: [u8; 4]) -> Image {
+    let (w, h) = size;
+    let mut img = Image::filled(w, h, [24, 28, 38, 255]);
+    if let Some(t) = target {
+        let (cx, cy) = (t.x.round() as i64, t.y.round() as i64);
+        let mut put = |x: i64, y: i64, c: [u8; 4]| {
+            if (0..i64::from(w)).contains(&x) && (0..i64::from(h)).contains(&y) {
+                let i = (y as usize * w as usize + x as usize) * 4;
+                img.rgba[i..i + 4].copy_from_slice(&c);
+            }
+        };
+        let white = [240, 240, 240, 255];
+        for d in -30..=30i64 {
+            for k in -1..=1 {
+                put(cx + d, cy + k, white);
+                put(cx + k, cy + d, white);
+            }
+        }
+        for a in 0..720 {
+            let th = f64::from(a) * std::f64::consts::TAU / 720.0;
+            for r in [18.0, 19.0, 20.0] {
+                put(
+                    cx + (r * th.cos()).round() as i64,
+                    cy + (r * th.sin()).round() as i64,
+                    [255, 150, 40, 255],
+                );
+            }
+        }
+    }
+    // Text up to three times the font's size, as large as fits, centred.
+    for (k, line) in lines.iter().enumerate() {
+        let lw = line.chars().count() as u32 * 8;
+        let scale = (w * 9 / 10 / lw.max(1)).clamp(1, 3);
+        let mut small = Image::filled(lw.max(1), 8, [24, 28, 38, 255]);
+        draw_text(&mut small, 0, 0, line, colour);
+        let x0 = (w.saturating_sub(lw * scale)) / 2;
+        let y0 = h / 2 + 60 + k as u32 * 30;
+        for y in 0..8 * scale {
+            for x in 0..lw * scale {
+                let (px, py) = (x0 + x, y0 + y);
+                if px < w && py < h {
+                    let s = small.pixel(x / scale, y / scale);
+                    let i = (py as usize * w as usize + px as usize) * 4;
+                    img.rgba[i..i + 4].copy_from_slice(&s);
+                }
+            }
+        }
+    }
+    img
+}
+
+/// The picture turned onto the output (the panel's mounting).
+fn to_output(img: &Image, rotation: Rotation) -> Image {
+    let (w, h) = (img.width, img.height);
+    let deg = rotation.degrees();
+    let (ow, oh) = if deg % 180 == 0 { (w, h) } else { (h, w) };
+    if deg == 0 {
+        return img.clone();
+    }
+    let mut out = Image::filled(ow, oh, [0, 0, 0, 255]);
+    for y in 0..h {
+        for x in 0..w {
+            let (ox, oy) = match deg {
+                90 => (h - 1 - y, x),
+                180 => (w - 1 - x, h - 1 - y),
+                _ => (y, w - 1 - x),
+            };
+            let s = img.pixel(x, y);
+            let i = (oy as usize * ow as usize + ox as usize) * 4;
+            out.rgba[i..i + 4].copy_from_slice(&s);
+        }
+    }
+    out
+}
+
+/// Calibrate a touchscreen on the display; `config` is the configuration
+/// as loaded from `opts.config_path` (or the defaults if it is missing).
+pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated, CalibrateError> {
+    super::signals::install_stop_handler();
+    let choice = OutputChoice {
+        connector: (!config.display.output.is_empty()).then(|| config.display.output.clone()),
+        mode: OutputChoice::parse_mode(&config.display.mode),
+    };
+    let mut presenter = CopyPresenter::open(&opts.dri_dir, &choice)?;
+    let (ow, oh) = presenter.size();
+    let mut config = config.clone();
+    config.display.width = ow;
+    config.display.height = oh;
+    let size = config.display.size();
+    let rotation = config.display.rotation();
+    let mut show = |img: &Image| -> Result<(), CalibrateError> {
+        presenter.present(&to_output(img, rotation))?;
+        presenter.wait_flip(Duration::from_millis(500))?;
+        Ok(())
+    };
+    show(&screen(
+        size,
+        None,
+        &["looking for touchscreens..."],
+        [200, 200, 200, 255],
+    ))?;
+    let input = InputThread::start(config.clone())?;
+    // The touchscreen: named, or the only one.
+    let mut devices: Vec<(u32, PathBuf, String)> = Vec::new();
+    let mut events = Vec::new();
+    let started = Instant::now();
+    let wanted = loop {
+        input.drain(&mut events);
+        for e in events.drain(..) {
+            if let HubEvent::Added { device, path, name } = e {
+                devices.push((device, path, name));
+            }
+        }
+        let found = match &opts.device {
+            Some(n) => devices.iter().find(|d| d.2 == *n).cloned(),
+            None if devices.len() == 1 && started.elapsed() > Duration::from_secs(2) => {
+                devices.first().cloned()
+            }
+            None => None,
+        };
+        if let Some(d) = found {
+            break d;
+        }
+        if super::signals::stop_requested() {
+            input.stop();
+            return Err(CalibrateError::Stopped);
+        }
+        if started.elapsed() > Duration::from_secs(10) {
+            input.stop();
+            let names: Vec<&str> = devices.iter().map(|d| d.2.as_str()).collect();
+            return Err(CalibrateError::Device(match (&opts.device, names.len()) {
+                (Some(n), _) => format!(
+                    "no touchscreen named \"{n}\" (found: {}); see `marionette list-devices`",
+                    if names.is_empty() {
+                        "none".to_owned()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+                (None, 0) => {
+                    "no touchscreen found: plug one in (see `marionette list-devices`)".to_owned()
+                }
+                (None, _) => format!(
+                    "several touchscreens: choose one with --device NAME ({})",
+                    names.join(", ")
+                ),
+            }));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let (dev_id, dev_path, dev_name) = wanted;
+    tracing::info!(device = %dev_name, path = %dev_path.display(), "calibrating");
+    let desc = crate::input::live::EvdevDevice::open(&dev_path)
+        .map(|d| crate::input::live::EventDevice::description(&d).clone())
+        .map_err(|source| LiveError::Io {
+            path: dev_path.clone(),
+            source,
+        })?;
+    let base = crate::input::pipeline::calibration_for(&config, &desc)
+        .map_err(|e| CalibrateError::Device(e.to_string()))?;
+    let (xa, ya) = desc
+        .position_axes()
+        .ok_or_else(|| CalibrateError::Device(format!("{dev_name} has no position axes")))?;
+    let range = (
+        f64::from(xa.maximum - xa.minimum),
+        f64::from(ya.maximum - ya.minimum),
+    );
+    let targets: Vec<ScreenPoint> = TARGETS
+        .iter()
+        .map(|(fx, fy)| ScreenPoint::new(fx * f64::from(size.0), fy * f64::from(size.1)))
+        .collect();
+    let mut taken: Vec<RawPoint> = Vec::new();
+    let mut hint = "";
+    while taken.len() < targets.len() {
+        let k = taken.len();
+        let title = format!(
+            "touch the centre of the target and hold still ({}/{})",
+            k + 1,
+            targets.len()
+        );
+        show(&screen(
+            size,
+            Some(targets[k]),
+            &[&dev_name, &title, hint],
+            [230, 230, 230, 255],
+        ))?;
+        let mut samples: Vec<(f64, RawPoint)> = Vec::new();
+        let waited = Instant::now();
+        let lifted = loop {
+            if super::signals::stop_requested() {
+                input.stop();
+                return Err(CalibrateError::Stopped);
+            }
+            if samples.is_empty() && waited.elapsed() > opts.touch_timeout {
+                input.stop();
+                return Err(CalibrateError::NoTouch {
+                    target: k + 1,
+                    seconds: opts.touch_timeout.as_secs(),
+                });
+            }
+            input.drain(&mut events);
+            let mut up = false;
+            for e in events.drain(..) {
+                if let HubEvent::Touch {
+                    device,
+                    time_us,
+                    contacts,
+                } = e
+                {
+                    if device != dev_id {
+                        continue;
+                    }
+                    // The first finger only.
+                    if let Some(c) = contacts.first() {
+                        if c.phase.is_down() {
+                            samples.push((time_us as f64 / 1e6, c.raw));
+                        } else if !samples.is_empty() {
+                            up = c.phase == Phase::Up;
+                            if up {
+                                let last = samples[samples.len() - 1].1;
+                                samples.push((time_us as f64 / 1e6, last));
+                            } else {
+                                samples.clear();
+                            }
+                        }
+                    }
+                }
+            }
+            if up {
+                break std::mem::take(&mut samples);
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        match steady_touch(&lifted, range) {
+            Some(p) => {
+                taken.push(p);
+                hint = "";
+            }
+            None => hint = "hold the finger still on the target a moment, then lift it",
+        }
+    }
+    input.stop();
+    let pairs: Vec<(ScreenPoint, RawPoint)> = targets[..4]
+        .iter()
+        .copied()
+        .zip(taken[..4].iter().copied())
+        .collect();
+    let solved = solve(
+        &base,
+        &pairs,
+        (targets[4], taken[4]),
+        SolveOptions::default(),
+    );
+    let solution = match solved {
+        Ok(s) => s,
+        Err(source) => {
+            let why = source.to_string();
+            show(&screen(
+                size,
+                None,
+                &[
+                    "calibration refused, nothing written:",
+                    &why,
+                    "run `marionette calibrate` again",
+                ],
+                [255, 120, 100, 255],
+            ))?;
+            std::thread::sleep(Duration::from_secs(3));
+            return Err(CalibrateError::Refused {
+                device: dev_name,
+                source,
+            });
+        }
+    };
+    let text = match std::fs::read_to_string(&opts.config_path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(source) => {
+            return Err(CalibrateError::Write {
+                path: opts.config_path.clone(),
+                source,
+            });
+        }
+    };
+    let cerr = |message: String| CalibrateError::ConfigText {
+        path: opts.config_path.clone(),
+        message,
+    };
+    let new_text = with_calibration(&text, &dev_name, solution.matrix.0).map_err(cerr)?;
+    // Never write a file the kiosk would refuse.
+    Config::parse(&new_text, &opts.config_path).map_err(|e| cerr(e.to_string()))?;
+    let backup = write_config(&opts.config_path, &new_text)?;
+    let done = format!(
+        "calibrated: the check point is off by {:.1} px (fit {:.1} px)",
+        solution.check_error_px, solution.rms_px
+    );
+    let wrote = format!("written to {}", opts.config_path.display());
+    show(&screen(
+        size,
+        Some(targets[4]),
+        &[&done, &wrote],
+        [140, 230, 140, 255],
+    ))?;
+    tracing::info!(
+        device = %dev_name,
+        check_error_px = solution.check_error_px,
+        rms_px = solution.rms_px,
+        matrix = ?solution.matrix.0,
+        config = %opts.config_path.display(),
+        "calibration written"
+    );
+    std::thread::sleep(Duration::from_secs(2));
+    Ok(Calibrated {
+        device: dev_name,
+        solution,
+        written: opts.config_path.clone(),
+        backup,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(t: f64, x: i32, y: i32) -> (f64, RawPoint) {
+        (t, RawPoint { x, y })
+    }
+
+    #[test]
+    fn only_steady_touches_count() {
+        let range = (4095.0, 4095.0);
+        // Slides onto the target, then holds still with a little jitter.
+        let mut s: Vec<_> = (0..10)
+            .map(|k| at(f64::from(k) * 0.01, 100 + k * 40, 200))
+            .collect();
+        s.extend((0..30).map(|k| at(0.1 + f64::from(k) * 0.01, 500 + (k % 3) - 1, 300 + (k % 2))));
+        let p = steady_touch(&s, range).unwrap();
+        assert!((p.x - 500).abs() <= 1 && (p.y - 300).abs() <= 1, "{p:?}");
+        // A tap: too short.
+        let tap: Vec<_> = (0..5).map(|k| at(f64::from(k) * 0.01, 500, 300)).collect();
+        assert_eq!(steady_touch(&tap, range), None);
+        // A finger that holds perfectly still sends nothing until it lifts.
+        let still = [at(0.0, 700, 800), at(0.6, 700, 800)];
+        assert_eq!(
+            steady_touch(&still, range),
+            Some(RawPoint { x: 700, y: 800 })
+        );
+        // Still sliding when lifted.
+        let slide: Vec<_> = (0..40)
+            .map(|k| at(f64::from(k) * 0.01, 100 + k * 20, 300))
+            .collect();
+        assert_eq!(steady_touch(&slide, range), None);
+    }
+
+    #[test]
+    fn the_calibration_goes_into_the_config_keeping_comments() {
+        let text = "# kiosk settings\n[display]\nrotation = 0 # upright\n\n[[input.device]]\nmatch_name = \"Other\"\ncalibration = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]\n";
+        let m = [1.02, 0.0, -0.01, 0.0, 0.98, 0.015];
+        let out = with_calibration(text, "Panel", m).unwrap();
+        assert!(out.contains("# kiosk settings") && out.contains("# upright"));
+        let c = Config::parse(&out, Path::new("m.toml")).unwrap();
+        assert_eq!(c.input.device.len(), 2);
+        assert_eq!(c.input.device[1].match_name.as_deref(), Some("Panel"));
+        assert_eq!(c.input.device[1].calibration, m);
+        // Again: the entry is updated, not added.
+        let again = with_calibration(&out, "Panel", [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]).unwrap();
+        let c = Config::parse(&again, Path::new("m.toml")).unwrap();
+        assert_eq!(c.input.device.len(), 2);
+        assert_eq!(
+            c.input.device[1].calibration,
+            [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        );
+        // An empty file gets a section.
+        let fresh = with_calibration("", "Panel", m).unwrap();
+        assert_eq!(
+            Config::parse(&fresh, Path::new("m.toml"))
+                .unwrap()
+                .input
+                .device
+                .len(),
+            1
+        );
+    }
+
+    #[test]
+    fn writing_keeps_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("marionette.toml");
+        std::fs::write(&p, "old").unwrap();
+        let bak = write_config(&p, "new").unwrap().unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "new");
+        assert_eq!(std::fs::read_to_string(bak).unwrap(), "old");
+        assert!(!dir.path().join("marionette.toml.tmp").exists());
+    }
+
+    #[test]
+    fn pictures_turn_onto_the_output() {
+        let mut img = Image::filled(3, 2, [0, 0, 0, 255]);
+        img.rgba[0..4].copy_from_slice(&[255, 0, 0, 255]); // top-left
+        let r = to_output(&img, Rotation::from_degrees(90).unwrap());
+        assert_eq!((r.width, r.height), (2, 3));
+        assert_eq!(r.pixel(1, 0), [255, 0, 0, 255], "top-left goes top-right");
+    }
+}
