@@ -4,104 +4,20 @@ usage: kiosk_vm.py WORK VMLINUZ OUT
 WORK holds initrd.gz; screens (PPM) and the guest's logs go to OUT.
 """
 
-import json
 import os
 import re
-import socket
-import subprocess
 import sys
-import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vmlib import bluish, boot, differ, ppm  # noqa: E402
 
 work, kernel, out = sys.argv[1:4]
-console = os.path.join(work, "console.log")
-qmp_path = os.path.join(work, "qmp.sock")
-open(console, "w").close()
-
-qemu = subprocess.Popen(
-    [
-        "qemu-system-x86_64", "-accel", "tcg", "-cpu", "max", "-m", "2048",
-        "-smp", "2", "-nic", "none", "-display", "none",
-        "-device", "virtio-vga,xres=640,yres=360",
-        "-serial", f"file:{console}", "-monitor", "none", "-no-reboot",
-        "-qmp", f"unix:{qmp_path},server=on,wait=off",
-        "-kernel", kernel, "-initrd", os.path.join(work, "initrd.gz"),
-        "-append", "console=ttyS0 quiet panic=-1 rdinit=/init",
-    ]
-)
-
-
-def qmp_connect():
-    for _ in range(100):
-        try:
-            s = socket.socket(socket.AF_UNIX)
-            s.connect(qmp_path)
-            f = s.makefile("rw")
-            json.loads(f.readline())  # greeting
-            f.write(json.dumps({"execute": "qmp_capabilities"}) + "\n")
-            f.flush()
-            json.loads(f.readline())
-            return f
-        except OSError:
-            time.sleep(0.1)
-    raise SystemExit("vm test: cannot reach qemu's QMP socket")
-
-
-def screendump(f, path):
-    f.write(json.dumps({"execute": "screendump", "arguments": {"filename": path}}) + "\n")
-    f.flush()
-    while True:
-        reply = json.loads(f.readline())
-        if "return" in reply or "error" in reply:
-            return reply
-
-
-qmp = qmp_connect()
-seen = 0
-marks = []
-deadline = time.time() + 600
-while qemu.poll() is None and time.time() < deadline:
-    text = open(console, errors="replace").read().replace("\r", "")
-    for name in re.findall(r"^MARK (\S+)$", text, re.M)[seen:]:
-        path = os.path.join(out, f"{name}.ppm")
-        reply = screendump(qmp, path)
-        marks.append(name)
-        print(f"screen '{name}' grabbed: {reply}", flush=True)
-    seen = len(marks)
-    time.sleep(0.1)
-if qemu.poll() is None:
-    qemu.kill()
-    raise SystemExit("vm test: the guest ran out of time; console:\n" + open(console, errors="replace").read()[-4000:])
-
-text = open(console, errors="replace").read().replace("\r", "")
-for name, body in re.findall(r"=== BEGIN (\S+)\n(.*?)=== END \1", text, re.S):
-    open(os.path.join(out, name), "w").write(body)
+text = boot(work, out, [
+    "-kernel", kernel, "-initrd", os.path.join(work, "initrd.gz"),
+    "-append", "console=ttyS0 quiet panic=-1 rdinit=/init",
+])
 if not os.path.exists(os.path.join(out, "rc")):
     raise SystemExit("vm test: the guest did not report back; console:\n" + text[-4000:])
-
-
-def ppm(path):
-    data = open(path, "rb").read()
-    parts = data.split(maxsplit=4)
-    assert parts[0] == b"P6", parts[0]
-    w, h = int(parts[1]), int(parts[2])
-    pixels = parts[4][: w * h * 3]
-    return w, h, pixels
-
-
-def bluish(px):
-    # The character's shirt: blue well above red.
-    return sum(
-        1 for i in range(0, len(px), 3) if px[i + 2] > 120 and px[i + 2] > px[i] + 50
-    )
-
-
-def differ(a, b):
-    return sum(
-        1
-        for i in range(0, len(a), 3)
-        if abs(a[i] - b[i]) + abs(a[i + 1] - b[i + 1]) + abs(a[i + 2] - b[i + 2]) > 60
-    )
-
 
 failures = []
 rc = open(os.path.join(out, "rc")).read()
