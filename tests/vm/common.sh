@@ -16,11 +16,15 @@ fi
 # The kernel modules, in load order: evdev and uinput, and virtio-gpu with
 # what it needs (a real KMS device).
 modules="evdev uinput virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy_dev virtio_pci drm drm_kms_helper drm_shmem_helper virtio_dma_buf virtio-gpu"
+# And for a root file system on a virtio disk (ext4), in load order.
+root_modules="virtio_blk crc16 mbcache jbd2 crc32c_generic ext4"
 
 # Fetch the kernel and the modules into $cache (once).
 vm_kernel() {
     mkdir -p "$cache"
-    if [ -f "$cache/vmlinuz" ] && [ -f "$cache/uinput.ko" ] && [ -f "$cache/virtio-gpu.ko" ]; then
+    local have=1
+    for m in $modules $root_modules; do [ -f "$cache/$m.ko" ] || have=0; done
+    if [ -f "$cache/vmlinuz" ] && [ $have = 1 ]; then
         return
     fi
     local pkg tmp f m
@@ -30,7 +34,7 @@ vm_kernel() {
     (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
     dpkg -x "$tmp"/*.deb "$tmp/x"
     cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
-    for m in $modules; do
+    for m in $modules $root_modules; do
         f=$(find "$tmp/x/lib/modules" -name "$m.ko*" | head -n1)
         [ -n "$f" ] || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
         case "$f" in

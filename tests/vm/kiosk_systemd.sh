@@ -1,0 +1,156 @@
+#!/usr/bin/env bash
+# The kiosk as an operator installs it: a Debian guest (debootstrap,
+# cached) with the release binary, the library, the config and the unit
+# installed as the README says, booted with systemd under qemu (TCG, no
+# network, virtio-vga display). Checked from the host:
+# - the service reaches READY on KMS (active, the character on screen);
+# - `marionette play` drags the character through a uinput panel, the
+#   panel goes away and comes back and drags it again;
+# - killing the process gets it restarted by systemd;
+# - stopping the service is clean (exit 0, within its timeout);
+# - the journal holds the kiosk's log.
+#
+# usage: tests/vm/kiosk_systemd.sh   (as root: debootstrap, chroot)
+# env:   MARIONETTE_BIN (default target/release/marionette, else debug),
+#        MARIONETTE_VM_CACHE (default target/vm-cache), MARIONETTE_VM_OUT
+# needs: apt-get install qemu-system-x86 busybox-static cpio python3
+#        debootstrap e2fsprogs
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin=${MARIONETTE_BIN:-$root/target/release/marionette}
+[ -x "$bin" ] || bin=$root/target/debug/marionette
+cache=${MARIONETTE_VM_CACHE:-$root/target/vm-cache}
+[ "$(id -u)" = 0 ] || { echo "vm test: run as root (debootstrap and chroot need it)" >&2; exit 77; }
+for tool in debootstrap mke2fs chroot; do
+    command -v "$tool" >/dev/null || { echo "vm test: $tool is missing: apt-get install debootstrap e2fsprogs" >&2; exit 69; }
+done
+. "$here/common.sh"
+vm_kernel
+
+# The Debian guest, once.
+base="$cache/rootfs-bookworm"
+if [ ! -f "$base/.complete" ]; then
+    rm -rf "$base"
+    echo "vm test: debootstrap of the guest (cached in $base)..." >&2
+    debootstrap --variant=minbase \
+        --include=systemd,systemd-sysv,udev,kmod,mesa-vulkan-drivers,libvulkan1,libgbm1,libdrm2 \
+        bookworm "$base" http://deb.debian.org/debian >"$cache/debootstrap.log" 2>&1 \
+        || { tail -n 20 "$cache/debootstrap.log" >&2; echo "vm test: debootstrap failed" >&2; exit 69; }
+    touch "$base/.complete"
+fi
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+rootfs="$work/rootfs"
+cp -a "$base" "$rootfs"
+
+# Installed as the README's "Installing a kiosk" says.
+strip --strip-debug -o "$rootfs/usr/bin/marionette" "$bin"
+mkdir -p "$rootfs/usr/share/marionette" "$rootfs/etc/marionette"
+cp -r "$root/assets/library" "$rootfs/usr/share/marionette/library"
+install -m 644 "$root/config/marionette.toml" "$rootfs/etc/marionette/marionette.toml"
+chroot "$rootfs" groupadd -f render
+chroot "$rootfs" useradd --system --no-create-home --shell /usr/sbin/nologin \
+    --groups input,video,render marionette
+install -m 644 "$root/systemd/marionette.service" "$rootfs/etc/systemd/system/"
+mkdir -p "$rootfs/etc/systemd/system/multi-user.target.wants"
+ln -s /etc/systemd/system/marionette.service "$rootfs/etc/systemd/system/multi-user.target.wants/"
+# Test only: the CPU renderer is quicker with 128-bit vectors under TCG.
+mkdir -p "$rootfs/etc/systemd/system/marionette.service.d"
+printf '[Service]\nEnvironment=LP_NATIVE_VECTOR_WIDTH=128\n' \
+    > "$rootfs/etc/systemd/system/marionette.service.d/tcg.conf"
+# No login prompt on the serial console the host reads.
+ln -sf /dev/null "$rootfs/etc/systemd/system/serial-getty@ttyS0.service"
+
+# The checks, run in the guest as a service of their own.
+python3 - "$root/assets/recordings/demo.evemu" "$rootfs/root/drag.evemu" <<'PY'
+import sys
+out = []
+for line in open(sys.argv[1]):
+    if line.startswith("E:") and float(line.split()[1]) > 3.2:
+        break
+    out.append(line)
+open(sys.argv[2], "w").writelines(out)
+PY
+cat > "$rootfs/usr/local/bin/kiosk-check" <<'CHECK'
+#!/bin/sh
+say() { echo "$*" > /dev/ttyS0; }
+state() { systemctl show -p "$1" --value marionette.service; }
+up() { cut -d' ' -f1 /proc/uptime | cut -d. -f1; }
+report() {
+    journalctl -u marionette.service --no-pager -o short-monotonic > /tmp/journal.txt 2>&1
+    systemctl status --no-pager marionette.service > /tmp/status.txt 2>&1
+    for f in rc journal.txt status.txt play1.log play2.log; do
+        say "=== BEGIN $f"; cat /tmp/$f > /dev/ttyS0; say "=== END $f"
+    done
+    systemctl poweroff --force
+    exit 0
+}
+# Wait (at most $2 seconds of uptime) until `$1` holds.
+until_up() {
+    limit=$(( $(up) + $2 ))
+    while ! eval "$1"; do
+        [ "$(up)" -lt "$limit" ] || return 1
+        sleep 1
+    done
+}
+until_up '[ "$(state ActiveState)" = active ]' 240 || { echo "never active: $(state ActiveState) $(state SubState)" >> /tmp/rc; report; }
+echo "active=$(state ActiveState) sub=$(state SubState) at $(up) s" >> /tmp/rc
+sleep 4; say "MARK sd-ready"; sleep 2
+marionette play /root/drag.evemu --settle-ms 800 2> /tmp/play1.log &
+sleep 2; say "MARK sd-posed1"; sleep 1; say "MARK sd-posed2"; sleep 1; say "MARK sd-posed3"
+wait $!; echo "play1 rc=$?" >> /tmp/rc
+sleep 3; say "MARK sd-before-replug"; sleep 2
+marionette play /root/drag.evemu --settle-ms 800 2> /tmp/play2.log &
+sleep 2; say "MARK sd-replugged1"; sleep 1; say "MARK sd-replugged2"; sleep 1; say "MARK sd-replugged3"
+wait $!; echo "play2 rc=$?" >> /tmp/rc
+old=$(state MainPID)
+echo "killing $old at $(up) s" >> /tmp/rc
+kill -KILL "$old"
+sleep 3
+until_up '[ "$(state NRestarts)" = 1 ] && [ "$(state ActiveState)" = active ]' 240 \
+    || echo "no restart: NRestarts=$(state NRestarts) $(state ActiveState) $(state SubState)" >> /tmp/rc
+echo "restarts=$(state NRestarts) active=$(state ActiveState) pid $old -> $(state MainPID) at $(up) s" >> /tmp/rc
+sleep 4; say "MARK sd-restarted"; sleep 1
+t0=$(cut -d' ' -f1 /proc/uptime); systemctl stop marionette.service; t1=$(cut -d' ' -f1 /proc/uptime)
+echo "stop took $t0 $t1 result=$(state Result) status=$(state ExecMainStatus)" >> /tmp/rc
+report
+CHECK
+chmod 755 "$rootfs/usr/local/bin/kiosk-check"
+cat > "$rootfs/etc/systemd/system/kiosk-check.service" <<'UNIT'
+[Unit]
+Description=checks the kiosk for the VM test
+After=marionette.service
+[Service]
+ExecStart=/usr/local/bin/kiosk-check
+[Install]
+WantedBy=multi-user.target
+UNIT
+ln -s /etc/systemd/system/kiosk-check.service "$rootfs/etc/systemd/system/multi-user.target.wants/"
+
+mke2fs -q -t ext4 -d "$rootfs" "$work/root.img" 3G
+rm -rf "$rootfs"
+
+# A small initramfs: the modules, then the disk as root and systemd.
+ird="$work/initrd"
+mkdir -p "$ird"/{bin,dev,proc,sys,newroot,modules}
+cp "$busybox" "$ird/bin/busybox"
+for m in $modules $root_modules; do cp "$cache/$m.ko" "$ird/modules/"; done
+echo "$modules $root_modules" > "$ird/modules/order"
+cat > "$ird/init" <<'INIT'
+#!/bin/busybox sh
+/bin/busybox --install -s /bin
+mount -t proc proc /proc; mount -t sysfs sys /sys; mount -t devtmpfs dev /dev
+for k in $(cat /modules/order); do insmod /modules/$k.ko 2>/dev/null; done
+mount -t ext4 /dev/vda /newroot || { echo "cannot mount the root disk"; poweroff -f; }
+umount /proc /sys
+mount --move /dev /newroot/dev
+exec switch_root /newroot /sbin/init
+INIT
+chmod +x "$ird/init"
+(cd "$ird" && find . | cpio -o -H newc --quiet | gzip -1 > "$work/initrd.gz")
+
+out=${MARIONETTE_VM_OUT:-$work/out}
+mkdir -p "$out"
+python3 "$here/systemd_vm.py" "$work" "$cache/vmlinuz" "$out"
