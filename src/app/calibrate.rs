@@ -276,10 +276,7 @@ fn to_output(img: &Image, rotation: Rotation) -> Image {
 /// as loaded from `opts.config_path` (or the defaults if it is missing).
 pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated, CalibrateError> {
     super::signals::install_stop_handler();
-    let choice = OutputChoice {
-        connector: (!config.display.output.is_empty()).then(|| config.display.output.clone()),
-        mode: OutputChoice::parse_mode(&config.display.mode),
-    };
+    let choice = OutputChoice::from_config(&config.display);
     let mut presenter = CopyPresenter::open(&opts.dri_dir, &choice)?;
     let (ow, oh) = presenter.size();
     let mut config = config.clone();

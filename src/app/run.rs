@@ -188,10 +188,7 @@ fn same_pose(a: &crate::character::skeleton::Pose, b: &crate::character::skeleto
 pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<RunStats, RunError> {
     super::signals::install_stop_handler();
     let notifier = Notifier::from_env();
-    let choice = OutputChoice {
-        connector: (!config.display.output.is_empty()).then(|| config.display.output.clone()),
-        mode: OutputChoice::parse_mode(&config.display.mode),
-    };
+    let choice = OutputChoice::from_config(&config.display);
     let mut presenter = CopyPresenter::open(&opts.dri_dir, &choice)?;
     // The picture fills the output: touches are mapped to its size.
     let (ow, oh) = presenter.size();

@@ -68,6 +68,15 @@ pub struct OutputChoice {
 }
 
 impl OutputChoice {
+    /// The output and mode `[display]` asks for.
+    #[must_use]
+    pub fn from_config(d: &crate::app::config::DisplayConfig) -> Self {
+        Self {
+            connector: (!d.output.is_empty()).then(|| d.output.clone()),
+            mode: Self::parse_mode(&d.mode),
+        }
+    }
+
     /// Parse a mode as written in the configuration: `1280x800` or
     /// `1920x1080@60`.
     #[must_use]
@@ -155,24 +164,19 @@ impl CopyPresenter {
                 return Self::start(card, path.clone(), name, h, crtc, mode);
             }
         }
+        let seen = if seen.is_empty() {
+            "none".to_owned()
+        } else {
+            seen.join(", ")
+        };
         Err(PresentError::NoOutput(match &choice.connector {
             Some(c) => format!(
-                "no connected output named {c} in {} (outputs: {}); see `marionette list-outputs`",
+                "no connected output named {c} in {} (outputs: {seen}); see `marionette list-outputs`",
                 dir.display(),
-                if seen.is_empty() {
-                    "none".to_owned()
-                } else {
-                    seen.join(", ")
-                }
             ),
             None => format!(
-                "no connected display in {} (outputs: {}): plug a display in, or check the cable",
+                "no connected display in {} (outputs: {seen}): plug a display in, or check the cable",
                 dir.display(),
-                if seen.is_empty() {
-                    "none".to_owned()
-                } else {
-                    seen.join(", ")
-                }
             ),
         }))
     }

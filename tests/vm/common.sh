@@ -76,3 +76,17 @@ vm_initrd_base() {
     for m in $modules; do cp "$cache/$m.ko" "$ird/modules/"; done
     echo "$modules" > "$ird/modules/order"
 }
+
+# The demo recording's first 3.2 s into $1: a finger takes the left hand
+# and drags it (the panel goes away with the finger still down).
+vm_demo_drag() {
+    python3 - "$root/assets/recordings/demo.evemu" "$1" <<'PY'
+import sys
+out = []
+for line in open(sys.argv[1]):
+    if line.startswith("E:") and float(line.split()[1]) > 3.2:
+        break
+    out.append(line)
+open(sys.argv[2], "w").writelines(out)
+PY
+}

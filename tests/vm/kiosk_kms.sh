@@ -48,17 +48,7 @@ cp "$icd" "$ird$icd"
 # not in the guest).
 mkdir -p "$ird/library"
 cp "$root"/assets/library/* "$ird/library/"
-# The demo recording's first 3.2 s: a finger takes the left hand and
-# drags it (the panel goes away with the finger still down).
-python3 - "$root/assets/recordings/demo.evemu" "$ird/drag.evemu" <<'PY'
-import sys
-out = []
-for line in open(sys.argv[1]):
-    if line.startswith("E:") and float(line.split()[1]) > 3.2:
-        break
-    out.append(line)
-open(sys.argv[2], "w").writelines(out)
-PY
+vm_demo_drag "$ird/drag.evemu"
 # Taps on the five calibration targets of a panel that is off: its raw
 # positions map to the screen through [1.05 0 -0.03; 0 0.95 0.02], which
 # `marionette calibrate` must find.

@@ -64,15 +64,7 @@ printf '[Service]\nEnvironment=LP_NATIVE_VECTOR_WIDTH=128\n' \
 ln -sf /dev/null "$rootfs/etc/systemd/system/serial-getty@ttyS0.service"
 
 # The checks, run in the guest as a service of their own.
-python3 - "$root/assets/recordings/demo.evemu" "$rootfs/root/drag.evemu" <<'PY'
-import sys
-out = []
-for line in open(sys.argv[1]):
-    if line.startswith("E:") and float(line.split()[1]) > 3.2:
-        break
-    out.append(line)
-open(sys.argv[2], "w").writelines(out)
-PY
+vm_demo_drag "$rootfs/root/drag.evemu"
 cat > "$rootfs/usr/local/bin/kiosk-check" <<'CHECK'
 #!/bin/sh
 say() { echo "$*" > /dev/ttyS0; }

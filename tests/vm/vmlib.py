@@ -98,3 +98,14 @@ def differ(a, b):
         for i in range(0, len(a), 3)
         if abs(a[i] - b[i]) + abs(a[i + 1] - b[i + 1]) + abs(a[i + 2] - b[i + 2]) > 60
     )
+
+
+def check_moved(screens, a, b, failures):
+    """Of three grabs `b`1..3 while a finger drags, the most changed against
+    `a` must show the character moving (the CPU renderer is slow under
+    emulation)."""
+    changed = [differ(screens[a], screens[f"{b}{k}"])
+               for k in (1, 2, 3) if a in screens and f"{b}{k}" in screens]
+    print(f"{a} -> {b}1..3: {changed} pixels changed")
+    if max(changed, default=0) < 500:
+        failures.append(f"the character did not move under the finger ({a} -> {b}: {changed})")
