@@ -16,7 +16,8 @@ use thiserror::Error;
 
 use super::config::Config;
 use super::run::InputThread;
-use crate::display::present::{CopyPresenter, OutputChoice, PresentError};
+use crate::display::present::{OutputChoice, PresentError, PresenterKind};
+use crate::display::screen::Screen;
 use crate::input::calibration::{
     CalibrationError, RawPoint, Rotation, ScreenPoint, Solution, SolveOptions, solve,
 };
@@ -277,7 +278,8 @@ fn to_output(img: &Image, rotation: Rotation) -> Image {
 pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated, CalibrateError> {
     super::signals::install_stop_handler();
     let choice = OutputChoice::from_config(&config.display);
-    let mut presenter = CopyPresenter::open(&opts.dri_dir, &choice)?;
+    let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
+    let mut presenter = Screen::open_for_pictures(&opts.dri_dir, &choice, kind)?;
     let (ow, oh) = presenter.size();
     let mut config = config.clone();
     config.display.width = ow;
@@ -285,7 +287,7 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
     let size = config.display.size();
     let rotation = config.display.rotation();
     let mut show = |img: &Image| -> Result<(), CalibrateError> {
-        presenter.present(&to_output(img, rotation))?;
+        presenter.show_image(&to_output(img, rotation))?;
         presenter.wait_flip(Duration::from_millis(500))?;
         Ok(())
     };

@@ -216,6 +216,9 @@ pub struct DisplayConfig {
     pub output: String,
     /// Its mode, `WIDTHxHEIGHT` or `WIDTHxHEIGHT@HZ`; empty: the preferred.
     pub mode: String,
+    /// How frames reach the output: `auto` (direct where the Vulkan driver
+    /// can drive the display, else copy), `direct` or `copy`.
+    pub presenter: String,
 }
 
 impl Default for DisplayConfig {
@@ -229,6 +232,7 @@ impl Default for DisplayConfig {
             status_line: true,
             output: String::new(),
             mode: String::new(),
+            presenter: "auto".to_owned(),
         }
     }
 }
@@ -430,6 +434,15 @@ impl Config {
                 ),
             ));
         }
+        if crate::display::present::PresenterKind::parse(&d.presenter).is_none() {
+            return Err(invalid(
+                "display.presenter",
+                format!(
+                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers) or \"copy\" (frames copied into KMS buffers: any driver), found \"{}\"",
+                    d.presenter
+                ),
+            ));
+        }
         in_ranges(&[("kiosk.idle_after_s", self.kiosk.idle_after_s, 1.0, 86_400.0)])?;
         let t = &self.tracking;
         in_ranges(&[
@@ -574,6 +587,17 @@ mod tests {
         assert!(e.contains("vendor:product"), "{e}");
         let e = parse("[log]\nlevel = \"loud\"\n").unwrap_err().to_string();
         assert!(e.contains("log.level"), "{e}");
+        let e = parse("[display]\npresenter = \"vulkan\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`display.presenter`") && e.contains("\"copy\"") && e.contains("vulkan"),
+            "{e}"
+        );
+        for ok in ["auto", "direct", "copy"] {
+            let c = parse(&format!("[display]\npresenter = \"{ok}\"\n")).unwrap();
+            assert_eq!(c.display.presenter, ok);
+        }
     }
 
     #[test]

@@ -15,12 +15,12 @@ use thiserror::Error;
 use super::config::Config;
 use super::notify::Notifier;
 use crate::control::controller::{Character, Controller, Settings};
-use crate::display::present::{CopyPresenter, OutputChoice, PresentError};
+use crate::display::present::{OutputChoice, PresentError, PresenterKind};
+use crate::display::screen::Screen;
 use crate::input::live::{EvdevOpener, HubEvent, InputHub, LiveError};
 use crate::input::pipeline::{ScreenContact, ScreenFrame};
 use crate::input::touch::Phase;
-use crate::render::gpu::{AdapterChoice, Gpu, GpuError};
-use crate::render::headless::Headless;
+use crate::render::gpu::{AdapterChoice, GpuError};
 use crate::render::scene::{self, View};
 
 /// Why the kiosk stopped.
@@ -189,21 +189,21 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
     super::signals::install_stop_handler();
     let notifier = Notifier::from_env();
     let choice = OutputChoice::from_config(&config.display);
-    let mut presenter = CopyPresenter::open(&opts.dri_dir, &choice)?;
+    let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
+    let mut screen = Screen::open(
+        &opts.dri_dir,
+        &choice,
+        kind,
+        opts.adapter,
+        config.display.samples,
+    )?;
     // The picture fills the output: touches are mapped to its size.
-    let (ow, oh) = presenter.size();
+    let (ow, oh) = screen.size();
     let mut config = config.clone();
     config.display.width = ow;
     config.display.height = oh;
     let (pw, ph) = config.display.size();
     let attract_frames = load_attract(&config)?;
-    let mut headless = Headless::new(Gpu::new(opts.adapter)?, ow, oh, config.display.samples);
-    tracing::info!(
-        width = ow,
-        height = oh,
-        samples = headless.renderer.samples(),
-        "rendering offscreen"
-    );
     let dev_dir = &config.input.dev_dir;
     if !dev_dir.is_dir() {
         return Err(LiveError::NoDeviceDir(dev_dir.clone()).into());
@@ -229,7 +229,7 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
     let mut paused_at: Option<f64> = None;
     let mut gpu_lost_at: Option<f64> = None;
     let mut last_touch_t = 0.0f64;
-    let frame_s = 1.0 / f64::from(presenter.refresh_hz());
+    let frame_s = 1.0 / f64::from(screen.refresh_hz());
     loop {
         let now_us = monotonic_us();
         let t = clock(now_us);
@@ -293,7 +293,7 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
         // Show it, unless the display is another program's for now.
         if let Some(since) = paused_at {
             if t - since > 0.5 {
-                if presenter.reacquire() {
+                if screen.reacquire() {
                     tracing::info!("display back: showing again");
                     paused_at = None;
                     last_shown = None;
@@ -304,9 +304,8 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
         }
         if let Some(since) = gpu_lost_at {
             if t - since > 1.0 {
-                match Gpu::new(opts.adapter) {
-                    Ok(gpu) => {
-                        headless = Headless::new(gpu, ow, oh, config.display.samples);
+                match screen.rebuild() {
+                    Ok(()) => {
                         stats.gpu_rebuilds += 1;
                         gpu_lost_at = None;
                         last_shown = None;
@@ -334,7 +333,7 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
                 || !marks.fingers.is_empty()
                 || ctl.action().is_some()
         });
-        if paused_at.is_none() && gpu_lost_at.is_none() && !presenter.flip_pending() && changed {
+        if paused_at.is_none() && gpu_lost_at.is_none() && !screen.flip_pending() && changed {
             let view = View {
                 camera: ctl.rig.camera(),
                 rotation: config.display.rotation(),
@@ -359,34 +358,43 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
                 &marks,
             );
             let started = std::time::Instant::now();
-            match headless.render(&list) {
-                Ok(img) => match presenter.present(&img) {
-                    Ok(()) => {
+            match screen.draw(&list) {
+                Ok(shown) => {
+                    if shown {
                         let ms = started.elapsed().as_secs_f64() * 1e3;
                         stats.render_ms_mean += ms;
                         stats.render_ms_max = stats.render_ms_max.max(ms);
                         stats.frames += 1;
                         last_shown = Some(key);
+                        if !ready && screen.fd().is_none() {
+                            // The swapchain shows it at the next vblank.
+                            ready = true;
+                            notifier.notify("READY=1\nSTATUS=showing the character");
+                            tracing::info!(
+                                output = screen.name(),
+                                "first frame queued to the display: ready"
+                            );
+                        }
                     }
-                    Err(PresentError::LostMaster(card)) => {
-                        stats.display_losses += 1;
-                        tracing::warn!(card = %card.display(), "the display was taken (VT switch?): paused until it comes back");
-                        paused_at = Some(t);
-                    }
-                    Err(e) => return Err(e.into()),
-                },
-                Err(e) => {
+                }
+                Err(PresentError::LostMaster(card)) => {
+                    stats.display_losses += 1;
+                    tracing::warn!(card = %card.display(), "the display was taken (VT switch?): paused until it comes back");
+                    paused_at = Some(t);
+                }
+                Err(PresentError::Gpu(e)) => {
                     tracing::error!(error = %e, "rendering failed: rebuilding the GPU device");
                     gpu_lost_at = Some(t);
                 }
+                Err(e) => return Err(e.into()),
             }
         }
-        if !ready && presenter.flip_pending() {
+        if !ready && screen.flip_pending() {
             // The first frame reaches the screen at this flip.
-            if presenter.wait_flip(Duration::from_millis(500))? {
+            if screen.wait_flip(Duration::from_millis(500))? {
                 ready = true;
                 notifier.notify("READY=1\nSTATUS=showing the character");
-                tracing::info!(output = presenter.name(), "first frame on screen: ready");
+                tracing::info!(output = screen.name(), "first frame on screen: ready");
             }
         }
         if let Some(w) = watchdog {
@@ -397,20 +405,23 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
         }
         // Wait for a flip, a touch, or the next frame's time; longer when
         // nothing moves (no busy-wait when idle).
-        let wait_s = if changed || attract.is_some() {
+        let wait_s = if (changed || attract.is_some()) && screen.fd().is_none() {
+            // The direct presenter's swapchain already waited for vblank.
+            0.0
+        } else if changed || attract.is_some() {
             frame_s
         } else {
             0.1
         };
         wait(
             &input,
-            &mut presenter,
+            &mut screen,
             Duration::from_secs_f64(wait_s.min(0.1)),
         )?;
     }
     input.stop();
     stats.seconds = clock(monotonic_us());
-    stats.flips = presenter.flips();
+    stats.flips = screen.flips();
     if stats.frames > 0 {
         stats.render_ms_mean /= stats.frames as f64;
     }
@@ -503,18 +514,14 @@ impl InputThread {
 }
 
 /// Wait for the card (a page flip) or the input thread, up to `timeout`.
-fn wait(
-    input: &InputThread,
-    presenter: &mut CopyPresenter,
-    timeout: Duration,
-) -> Result<(), RunError> {
+fn wait(input: &InputThread, screen: &mut Screen, timeout: Duration) -> Result<(), RunError> {
     use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
     use std::os::fd::AsFd as _;
     let card_ready = {
-        let mut fds = [
-            PollFd::new(presenter.fd(), PollFlags::POLLIN),
-            PollFd::new(input.wake.as_fd(), PollFlags::POLLIN),
-        ];
+        let mut fds = vec![PollFd::new(input.wake.as_fd(), PollFlags::POLLIN)];
+        if let Some(fd) = screen.fd() {
+            fds.push(PollFd::new(fd, PollFlags::POLLIN));
+        }
         let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
         match poll(&mut fds, PollTimeout::from(ms)) {
             Ok(_) | Err(nix::errno::Errno::EINTR) => {}
@@ -523,12 +530,12 @@ fn wait(
                 std::thread::sleep(timeout);
             }
         }
-        fds[0]
-            .revents()
+        fds.get(1)
+            .and_then(PollFd::revents)
             .is_some_and(|r| r.contains(PollFlags::POLLIN))
     };
     if card_ready {
-        presenter.dispatch()?;
+        screen.dispatch()?;
     }
     Ok(())
 }

@@ -1,6 +1,9 @@
-//! Display outputs: DRM/KMS connectors and modes ([`kms`]) and the
-//! presenter that shows frames on them ([`present`]). The headless
-//! presenter is `render::headless`.
+//! Display outputs: DRM/KMS connectors and modes ([`kms`]) and the two
+//! presenters that show frames on them, [`direct`] (Vulkan drives the
+//! display) and the copy presenter in [`present`], behind one interface in
+//! [`screen`]. The headless presenter is `render::headless`.
 
+pub mod direct;
 pub mod kms;
 pub mod present;
+pub mod screen;

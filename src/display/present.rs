@@ -38,6 +38,12 @@ pub enum PresentError {
         #[source]
         source: std::io::Error,
     },
+    /// No GPU to render with.
+    #[error(transparent)]
+    Gpu(#[from] crate::render::gpu::GpuError),
+    /// The direct presenter cannot drive this output.
+    #[error("{path}: Vulkan cannot drive the display directly: {why}")]
+    Direct { path: PathBuf, why: String },
     /// Another program took the display (a VT switch): wait and take it
     /// back.
     #[error("{0}: the display was taken by another program (VT switch)")]
@@ -50,9 +56,11 @@ impl PresentError {
     pub fn exit_code(&self) -> u8 {
         match self {
             Self::Kms(e) => e.exit_code(),
-            Self::NoOutput(_) | Self::Master { .. } | Self::LostMaster(_) => {
-                crate::app::exit::UNAVAILABLE
-            }
+            Self::NoOutput(_)
+            | Self::Master { .. }
+            | Self::LostMaster(_)
+            | Self::Direct { .. }
+            | Self::Gpu(_) => crate::app::exit::UNAVAILABLE,
             Self::Io { .. } => crate::app::exit::IOERR,
         }
     }
@@ -108,77 +116,139 @@ pub struct CopyPresenter {
     flips: u64,
 }
 
-fn connector_name(info: &connector::Info) -> String {
+pub(crate) fn connector_name(info: &connector::Info) -> String {
     format!("{}-{}", info.interface().as_str(), info.interface_id())
+}
+
+/// How frames reach the output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PresenterKind {
+    /// Direct where the Vulkan driver can drive the display, else copy.
+    #[default]
+    Auto,
+    /// Vulkan drives the display (VK_EXT_acquire_drm_display).
+    Direct,
+    /// Frames rendered offscreen and copied into dumb buffers.
+    Copy,
+}
+
+impl PresenterKind {
+    /// `auto`, `direct` or `copy`, as written in `[display] presenter`.
+    #[must_use]
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "auto" => Some(Self::Auto),
+            "direct" => Some(Self::Direct),
+            "copy" => Some(Self::Copy),
+            _ => None,
+        }
+    }
+}
+
+/// A connected output found on a card, with the mode to drive it in.
+pub(crate) struct Found {
+    pub card: Card,
+    pub path: PathBuf,
+    pub name: String,
+    pub connector: connector::Handle,
+    pub crtc: crtc::Handle,
+    pub mode: Mode,
+}
+
+/// Find the output `choice` names (or the first connected one) on the
+/// cards in `dir` (normally `/dev/dri`).
+pub(crate) fn find_output(dir: &Path, choice: &OutputChoice) -> Result<Found, PresentError> {
+    let mut seen = Vec::new();
+    for path in super::kms::card_paths(dir)? {
+        let card = Card::open(&path)?;
+        let io = |what, source| PresentError::Io {
+            path: path.clone(),
+            what,
+            source,
+        };
+        let Ok(res) = card.resource_handles() else {
+            continue; // a render-only node
+        };
+        for &h in res.connectors() {
+            let info = card
+                .get_connector(h, true)
+                .map_err(|e| io("reading a connector", e))?;
+            let name = connector_name(&info);
+            let connected = info.state() == connector::State::Connected;
+            seen.push(format!(
+                "{name} ({})",
+                if connected {
+                    "connected"
+                } else {
+                    "disconnected"
+                }
+            ));
+            if choice.connector.as_ref().is_some_and(|c| *c != name) || !connected {
+                continue;
+            }
+            let mode = pick_mode(info.modes(), choice.mode).ok_or_else(|| {
+                PresentError::NoOutput(format!(
+                    "{name} has no mode {}; its modes: {}",
+                    choice.mode.map_or_else(String::new, |(w, h, hz)| format!(
+                        "{w}x{h}{}",
+                        hz.map_or(String::new(), |hz| format!("@{hz}"))
+                    )),
+                    info.modes()
+                        .iter()
+                        .map(|m| format!("{}x{}@{}", m.size().0, m.size().1, m.vrefresh()))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ))
+            })?;
+            let crtc = crtc_for(&card, &res, &info)
+                .ok_or_else(|| PresentError::NoOutput(format!("{name}: no CRTC can drive it")))?;
+            return Ok(Found {
+                card,
+                path: path.clone(),
+                name,
+                connector: h,
+                crtc,
+                mode,
+            });
+        }
+    }
+    let seen = if seen.is_empty() {
+        "none".to_owned()
+    } else {
+        seen.join(", ")
+    };
+    Err(PresentError::NoOutput(match &choice.connector {
+        Some(c) => format!(
+            "no connected output named {c} in {} (outputs: {seen}); see `marionette list-outputs`",
+            dir.display(),
+        ),
+        None => format!(
+            "no connected display in {} (outputs: {seen}): plug a display in, or check the cable",
+            dir.display(),
+        ),
+    }))
+}
+
+/// Become DRM master of `card` (the first client of a card is master
+/// already; an explicit request fails only if another program holds it).
+pub(crate) fn become_master(card: &Card, path: &Path) -> Result<(), PresentError> {
+    if let Err(source) = drm::Device::acquire_master_lock(card) {
+        if source.raw_os_error() != Some(libc::EINVAL) {
+            return Err(PresentError::Master {
+                path: path.to_owned(),
+                source,
+            });
+        }
+    }
+    Ok(())
 }
 
 impl CopyPresenter {
     /// Find the output on the cards in `dir` (normally `/dev/dri`), become
     /// DRM master and show a black frame on it.
     pub fn open(dir: &Path, choice: &OutputChoice) -> Result<Self, PresentError> {
-        let mut seen = Vec::new();
-        for path in super::kms::card_paths(dir)? {
-            let card = Card::open(&path)?;
-            let io = |what, source| PresentError::Io {
-                path: path.clone(),
-                what,
-                source,
-            };
-            let Ok(res) = card.resource_handles() else {
-                continue; // a render-only node
-            };
-            for &h in res.connectors() {
-                let info = card
-                    .get_connector(h, true)
-                    .map_err(|e| io("reading a connector", e))?;
-                let name = connector_name(&info);
-                let connected = info.state() == connector::State::Connected;
-                seen.push(format!(
-                    "{name} ({})",
-                    if connected {
-                        "connected"
-                    } else {
-                        "disconnected"
-                    }
-                ));
-                if choice.connector.as_ref().is_some_and(|c| *c != name) || !connected {
-                    continue;
-                }
-                let mode = pick_mode(info.modes(), choice.mode).ok_or_else(|| {
-                    PresentError::NoOutput(format!(
-                        "{name} has no mode {}; its modes: {}",
-                        choice.mode.map_or_else(String::new, |(w, h, hz)| format!(
-                            "{w}x{h}{}",
-                            hz.map_or(String::new(), |hz| format!("@{hz}"))
-                        )),
-                        info.modes()
-                            .iter()
-                            .map(|m| format!("{}x{}@{}", m.size().0, m.size().1, m.vrefresh()))
-                            .collect::<Vec<_>>()
-                            .join(" ")
-                    ))
-                })?;
-                let crtc = crtc_for(&card, &res, &info).ok_or_else(|| {
-                    PresentError::NoOutput(format!("{name}: no CRTC can drive it"))
-                })?;
-                return Self::start(card, path.clone(), name, h, crtc, mode);
-            }
-        }
-        let seen = if seen.is_empty() {
-            "none".to_owned()
-        } else {
-            seen.join(", ")
-        };
-        Err(PresentError::NoOutput(match &choice.connector {
-            Some(c) => format!(
-                "no connected output named {c} in {} (outputs: {seen}); see `marionette list-outputs`",
-                dir.display(),
-            ),
-            None => format!(
-                "no connected display in {} (outputs: {seen}): plug a display in, or check the cable",
-                dir.display(),
-            ),
-        }))
+        let f = find_output(dir, choice)?;
+        Self::start(f.card, f.path, f.name, f.connector, f.crtc, f.mode)
     }
 
     fn start(
@@ -189,13 +259,7 @@ impl CopyPresenter {
         crtc: crtc::Handle,
         mode: Mode,
     ) -> Result<Self, PresentError> {
-        if let Err(source) = drm::Device::acquire_master_lock(&card) {
-            // Opening the first client of a card makes it master already;
-            // an explicit request fails only if another holds it.
-            if source.raw_os_error() != Some(libc::EINVAL) {
-                return Err(PresentError::Master { path, source });
-            }
-        }
+        become_master(&card, &path)?;
         let io = |what, source| PresentError::Io {
             path: path.clone(),
             what,

@@ -46,12 +46,19 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// Open the best Vulkan adapter allowed by `choice`.
-    pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+    /// A Vulkan instance (with the display extensions where the driver
+    /// has them).
+    #[must_use]
+    pub fn instance() -> wgpu::Instance {
+        wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::VULKAN,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
-        });
+        })
+    }
+
+    /// Open the best Vulkan adapter allowed by `choice`.
+    pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
+        let instance = Self::instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
         for a in &adapters {
             let i = a.get_info();
@@ -69,6 +76,26 @@ impl Gpu {
         });
         adapters.sort_by_key(rank);
         let adapter = adapters.into_iter().next().ok_or(GpuError::NoAdapter)?;
+        Self::open(adapter)
+    }
+
+    /// The adapter that can draw into `surface` (the one driving its
+    /// display), with its device.
+    pub fn for_surface(
+        instance: &wgpu::Instance,
+        surface: &wgpu::Surface<'_>,
+    ) -> Result<Self, GpuError> {
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: Some(surface),
+            ..Default::default()
+        }))
+        .map_err(|_| GpuError::NoAdapter)?;
+        Self::open(adapter)
+    }
+
+    fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("marionette"),

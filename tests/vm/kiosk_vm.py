@@ -29,10 +29,21 @@ for want in ["play1 rc=0", "play2 rc=0", "run rc=0"]:
 m = re.search(r"stop took (\S+) (\S+)", rc)
 if not m or float(m.group(2)) - float(m.group(1)) > 1.0:
     failures.append(f"SIGTERM should stop the kiosk within 1 s: {m and m.groups()}")
-for want in ["presenter=\"copy\"", "first frame on screen", "touchscreen added",
+for want in ["direct presenter is not available here", "presenter: copy (chosen automatically)",
+             "presenter=\"copy\"", "first frame on screen", "touchscreen added",
              "touchscreen removed", "stopped"]:
     if want not in log:
         failures.append(f"expected '{want}' in the kiosk's log")
+# presenter = "direct" where the driver cannot: exit 69 with the reason.
+direct = open(os.path.join(out, "direct.log")).read() if os.path.exists(os.path.join(out, "direct.log")) else ""
+print("forced direct: " + (direct.strip().splitlines() or ["(no output)"])[-1])
+if "direct rc=69" not in rc:
+    failures.append("presenter = \"direct\" on lavapipe should exit 69")
+if "Vulkan cannot drive the display directly" not in direct:
+    failures.append("presenter = \"direct\" on lavapipe should say why:\n" + direct[-1500:])
+for name, text in [("forced direct", direct), ("kiosk", log)]:
+    if "panicked" in text:
+        failures.append(f"{name}: a panic:\n" + text[-1500:])
 if log.count("touchscreen added") < 2:
     failures.append("the replugged panel was not picked up again")
 screens = {}
