@@ -216,7 +216,8 @@ enum EvalCommand {
         frames: usize,
     },
     /// Action control: replay held-out clips' primary-part paths as drags
-    /// and print one JSON object (trials, correct, wrong_action, missed,
+    /// through the controller (touch frames, as live input) and print one
+    /// JSON object (trials, correct, wrong_action, missed,
     /// false_trigger_slow, decided_at)
     Actions {
         /// Library folder (with library.toml)
@@ -228,6 +229,10 @@ enum EvalCommand {
         /// Seed of the noise and the slow drags
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Judge the drags with the action models alone (faster; no
+        /// controller, no posing model)
+        #[arg(long)]
+        models_only: bool,
     },
 }
 
@@ -381,8 +386,9 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     library,
                     test,
                     seed,
+                    models_only,
                 },
-        } => eval_actions(config, &library, &test, seed),
+        } => eval_actions(config, &library, &test, seed, models_only),
         Command::Eval {
             what:
                 EvalCommand::Pose {
@@ -557,6 +563,7 @@ fn eval_actions(
     library: &Path,
     test_dir: &Path,
     seed: u64,
+    models_only: bool,
 ) -> Result<(), Failure> {
     use marionette::character::action::{eval, model::ActionModel};
     use marionette::character::library::Library;
@@ -598,7 +605,17 @@ fn eval_actions(
     }
     let tests: Vec<(String, &marionette::character::motion::Clip)> =
         clips.iter().map(|(a, c)| (a.clone(), c)).collect();
-    let result = eval::eval_actions(&actions, &tests, &config.action.rule(), seed);
+    let result = if models_only {
+        eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
+    } else {
+        use marionette::control::controller::{Character, Settings};
+        let (lib, model) = load_model(library, false)?;
+        let ch = std::sync::Arc::new(Character::new(lib, model));
+        let settings = Settings::from_config(config);
+        eval::eval_with(&eval::with_primary(&actions, &tests), seed, &mut |d| {
+            marionette::control::live_eval::judge(&ch, &settings, d)
+        })
+    };
     let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }

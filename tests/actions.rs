@@ -106,16 +106,14 @@ fn a_quick_drag_along_a_punch_starts_the_punch() {
     );
 }
 
-#[test]
-fn held_out_variants_are_recognised_and_slow_drags_are_not() {
-    use marionette::character::action::eval::eval_actions;
+/// Variants of the default library's actions that the library does not
+/// have: a little slower, wider, higher, and each mirrored action a little
+/// faster.
+fn held_out_clips() -> Vec<(String, marionette::character::motion::Clip)> {
     use marionette::character::author::compile::{FPS, frames};
     use marionette::character::author::rig;
     use marionette::character::author::score::{Kind, Score, Variant};
     use marionette::character::motion::{Clip, ImportSettings};
-    let (_, actions) = setup();
-    // Variants the library does not have: a little slower, wider, higher,
-    // and each mirrored action a little faster.
     let src = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library-src");
     let mut clips: Vec<(String, Clip)> = Vec::new();
     let skeleton = rig::skeleton();
@@ -172,9 +170,42 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
         }
     }
     assert!(clips.len() >= 12);
+    assert!(clips.len() >= 12);
+    clips
+}
+
+#[test]
+fn held_out_variants_are_recognised_and_slow_drags_are_not() {
+    use marionette::character::action::eval::eval_actions;
+    use marionette::character::motion::Clip;
+    let (_, actions) = setup();
+    let clips = held_out_clips();
     let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();
     let r = eval_actions(&actions, &tests, &Default::default(), 1);
     eprintln!("{r:?}");
+    assert_eq!(r.trials, clips.len() * 6);
+    assert!(r.correct >= 0.85, "{r:?}");
+    assert!(r.wrong_action <= 0.05, "{r:?}");
+    assert!(r.false_trigger_slow <= 0.05, "{r:?}");
+}
+
+#[test]
+fn held_out_variants_through_the_controller() {
+    use marionette::character::action::eval::{eval_with, with_primary};
+    use marionette::character::motion::Clip;
+    use marionette::character::posing::model::{LearnedModel, posing_samples};
+    use marionette::control::controller::{Character, Settings};
+    use marionette::control::live_eval::judge;
+    let (lib, actions) = setup();
+    let (_, samples) = posing_samples(&lib);
+    let ch = std::sync::Arc::new(Character::new(lib, LearnedModel::build(samples)));
+    let settings = Settings::default();
+    let clips = held_out_clips();
+    let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();
+    let r = eval_with(&with_primary(&actions, &tests), 1, &mut |d| {
+        judge(&ch, &settings, d)
+    });
+    eprintln!("through the controller: {r:?}");
     assert_eq!(r.trials, clips.len() * 6);
     assert!(r.correct >= 0.85, "{r:?}");
     assert!(r.wrong_action <= 0.05, "{r:?}");

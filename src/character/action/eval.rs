@@ -73,7 +73,19 @@ fn first_recognition(
         .find_map(|n| recognize(actions, role, &trail[..n], cam, at, rule).map(|r| (r.action, n)))
 }
 
-/// Run the evaluation: `tests` are `(action name, clip)`.
+/// One drag to judge: the dragged part, the finger's trail on the screen
+/// of `camera` (which looks at the clip's character from `angle_deg`
+/// around it, at placement `at`).
+pub struct Drag<'a> {
+    pub role: Role,
+    pub trail: &'a [TrailPoint],
+    pub camera: &'a Camera,
+    pub at: &'a Placement,
+    pub angle_deg: f64,
+}
+
+/// Run the evaluation on the action models alone: each trail is fed point
+/// by point to [`recognize`]. `tests` are `(action name, clip)`.
 #[must_use]
 pub fn eval_actions(
     actions: &[ActionModel],
@@ -81,15 +93,40 @@ pub fn eval_actions(
     rule: &StartRule,
     seed: u64,
 ) -> ActionEval {
+    let mut judge = |d: &Drag<'_>| {
+        first_recognition(actions, d.role, d.trail, d.camera, d.at, rule)
+            .map(|(a, n)| (actions[a].def.name.clone(), n))
+    };
+    eval_with(&with_primary(actions, tests), seed, &mut judge)
+}
+
+/// The tests whose action is in `actions`, with its primary part.
+#[must_use]
+pub fn with_primary<'c>(
+    actions: &[ActionModel],
+    tests: &[(String, &'c Clip)],
+) -> Vec<(String, Role, &'c Clip)> {
+    tests
+        .iter()
+        .filter_map(|(name, clip)| {
+            let a = actions.iter().find(|a| a.def.name == *name)?;
+            Some((name.clone(), a.def.primary, *clip))
+        })
+        .collect()
+}
+
+/// Run the evaluation with `judge`, which says which action a drag
+/// started (by name) and after how many of its points, if any.
+pub fn eval_with(
+    tests: &[(String, Role, &Clip)],
+    seed: u64,
+    judge: &mut dyn FnMut(&Drag<'_>) -> Option<(String, usize)>,
+) -> ActionEval {
     let mut rng = Lcg(seed ^ 0x9e37_79b9_7f4a_7c15);
     let (mut trials, mut correct, mut wrong, mut missed) = (0usize, 0usize, 0usize, 0usize);
     let mut decided = Vec::new();
     let (mut slow_trials, mut slow_triggers) = (0usize, 0usize);
-    for (name, clip) in tests {
-        let Some(model) = actions.iter().find(|a| a.def.name == *name) else {
-            continue;
-        };
-        let role = model.def.primary;
+    for &(ref name, role, clip) in tests {
         let at = Placement {
             anchor: Anchor::ClipStart,
             ..Placement::of(&clip.skeleton, &clip.roles, &clip.frames[0])
@@ -123,8 +160,15 @@ pub fn eval_actions(
                     })
                     .collect();
                 trials += 1;
-                match first_recognition(actions, role, &trail, &cam, &at, rule) {
-                    Some((a, n)) if actions[a].def.name == *name => {
+                let drag = Drag {
+                    role,
+                    trail: &trail,
+                    camera: &cam,
+                    at: &at,
+                    angle_deg: angle,
+                };
+                match judge(&drag) {
+                    Some((a, n)) if a == *name => {
                         correct += 1;
                         decided.push(n as f64 / trail.len().max(1) as f64);
                     }
@@ -154,7 +198,11 @@ pub fn eval_actions(
                     })
                     .collect();
                 slow_trials += 1;
-                if first_recognition(actions, role, &slow, &cam, &at, rule).is_some() {
+                let drag = Drag {
+                    trail: &slow,
+                    ..drag
+                };
+                if judge(&drag).is_some() {
                     slow_triggers += 1;
                 }
             }

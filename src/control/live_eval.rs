@@ -1,0 +1,91 @@
+//! Judging drags through the controller, as live touches are: each drag
+//! becomes touch frames (finger down on the part as the controller shows
+//! it, moved along the drag, lifted) fed to a fresh [`Controller`] at the
+//! drag's times, and the action it starts is read from its event stream.
+//! Everything after the touch pipeline runs as in the kiosk: picking,
+//! posing, the trail since the finger last rested, recognition, playing.
+
+use std::sync::Arc;
+
+use crate::character::action::eval::Drag;
+use crate::character::action::timeline::ActionEvent;
+use crate::control::controller::{Character, Controller, Settings};
+use crate::control::rig::Orbit;
+use crate::input::calibration::{RawPoint, ScreenPoint};
+use crate::input::pipeline::{ScreenContact, ScreenFrame};
+use crate::input::touch::{Phase, Tool};
+
+/// Time the character is left to stand before the finger goes down (s).
+const SETTLE_S: f64 = 0.3;
+/// Controller steps per second between touch frames.
+const STEP_HZ: f64 = 60.0;
+
+/// Which action `drag` starts through the controller, and after how many
+/// of its points.
+#[must_use]
+pub fn judge(ch: &Arc<Character>, settings: &Settings, drag: &Drag<'_>) -> Option<(String, usize)> {
+    let cam = drag.camera;
+    let mut ctl = Controller::new(ch.clone(), *settings, cam.width, cam.height, 0.0);
+    // The same view of the character as the drag's camera has of the
+    // clip's: from `angle_deg` around its facing, level, 3 m away.
+    let at = ctl.placement_now();
+    let orbit = Orbit {
+        yaw: at.yaw + drag.angle_deg.to_radians(),
+        pitch: 0.0,
+        distance: cam.eye.distance(cam.target),
+    };
+    ctl.rig.orbit = orbit;
+    ctl.rig.home = orbit;
+    ctl.rig.fov_y_deg = cam.fov_y_deg;
+    let mut t = 0.0;
+    while t < SETTLE_S {
+        t += 1.0 / STEP_HZ;
+        ctl.advance(t);
+    }
+    let view = ctl.rig.camera();
+    let start = view.project(ctl.world().positions[ch.roles.get(drag.role)])?;
+    let first = drag.trail.first()?;
+    let t0 = t + 1.0 / STEP_HZ;
+    let contact = |phase, at: ScreenPoint| ScreenContact {
+        id: 1,
+        phase,
+        tool: Tool::Finger,
+        raw: RawPoint {
+            x: at.x as i32,
+            y: at.y as i32,
+        },
+        screen: at,
+    };
+    let started = |ctl: &mut Controller| {
+        ctl.take_events().into_iter().find_map(|e| match e {
+            ActionEvent::Started { action, .. } => Some(action),
+            _ => None,
+        })
+    };
+    for (k, p) in drag.trail.iter().enumerate() {
+        let at = ScreenPoint::new(
+            start.x + (p.at.x - first.at.x),
+            start.y + (p.at.y - first.at.y),
+        );
+        let ft = t0 + (p.t - first.t);
+        // Steps between touch frames, as the kiosk's loop runs.
+        while t + 1.0 / STEP_HZ < ft {
+            t += 1.0 / STEP_HZ;
+            ctl.advance(t);
+            if let Some(a) = started(&mut ctl) {
+                return Some((a, k));
+            }
+        }
+        let phase = if k == 0 { Phase::Down } else { Phase::Move };
+        ctl.touch(&ScreenFrame {
+            t: ft,
+            contacts: vec![contact(phase, at)],
+        });
+        t = ft;
+        ctl.advance(t);
+        if let Some(a) = started(&mut ctl) {
+            return Some((a, k + 1));
+        }
+    }
+    None
+}
