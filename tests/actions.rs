@@ -184,9 +184,12 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
     let r = eval_actions(&actions, &tests, &Default::default(), 1);
     eprintln!("{r:?}");
     assert_eq!(r.trials, clips.len() * 6);
-    assert!(r.correct >= 0.85, "{r:?}");
+    // The targets (decided_at: the rule needs more than half of
+    // the trajectory, so the floor is 0.5 and the next touch report).
+    assert!(r.correct >= 0.95, "{r:?}");
     assert!(r.wrong_action <= 0.05, "{r:?}");
-    assert!(r.false_trigger_slow <= 0.05, "{r:?}");
+    assert!(r.false_trigger_slow <= 0.02, "{r:?}");
+    assert!(r.decided_at > 0.5 && r.decided_at < 0.51, "{r:?}");
 }
 
 #[test]
@@ -207,9 +210,12 @@ fn held_out_variants_through_the_controller() {
     });
     eprintln!("through the controller: {r:?}");
     assert_eq!(r.trials, clips.len() * 6);
-    assert!(r.correct >= 0.85, "{r:?}");
+    // The targets (decided_at: the rule needs more than half of
+    // the trajectory, so the floor is 0.5 and the next touch report).
+    assert!(r.correct >= 0.95, "{r:?}");
     assert!(r.wrong_action <= 0.05, "{r:?}");
-    assert!(r.false_trigger_slow <= 0.05, "{r:?}");
+    assert!(r.false_trigger_slow <= 0.02, "{r:?}");
+    assert!(r.decided_at > 0.5 && r.decided_at < 0.51, "{r:?}");
 }
 
 #[test]

@@ -28,7 +28,9 @@ pub struct ActionEval {
     pub wrong_action: f64,
     pub missed: f64,
     pub false_trigger_slow: f64,
-    /// Mean fraction of the true trajectory seen when the action started.
+    /// Mean fraction of the true trajectory seen when the action started
+    /// (by time: the last point the recogniser had, over the drag's
+    /// duration).
     pub decided_at: f64,
 }
 
@@ -71,6 +73,18 @@ fn first_recognition(
 ) -> Option<(usize, usize)> {
     (2..=trail.len())
         .find_map(|n| recognize(actions, role, &trail[..n], cam, at, rule).map(|r| (r.action, n)))
+}
+
+/// The fraction of a trail's duration that its first `n` points span.
+fn seen_fraction(trail: &[TrailPoint], n: usize) -> f64 {
+    match (
+        trail.first(),
+        trail.last(),
+        n.checked_sub(1).and_then(|i| trail.get(i)),
+    ) {
+        (Some(a), Some(b), Some(c)) if b.t > a.t => ((c.t - a.t) / (b.t - a.t)).clamp(0.0, 1.0),
+        _ => 1.0,
+    }
 }
 
 /// One drag to judge: the dragged part, the finger's trail on the screen
@@ -170,14 +184,17 @@ pub fn eval_with(
                 match judge(&drag) {
                     Some((a, n)) if a == *name => {
                         correct += 1;
-                        decided.push(n as f64 / trail.len().max(1) as f64);
+                        decided.push(seen_fraction(&trail, n));
                     }
                     Some(_) => wrong += 1,
                     None => missed += 1,
                 }
                 // A slow posing drag of the same part: as long, in a random
                 // direction, at under a third of the speed.
-                let len: f64 = trail.windows(2).map(|w| w[0].at.distance(w[1].at)).sum();
+                // (The length of the true path: the noise is not the
+                // action's movement.)
+                let truth: Vec<ScreenPoint> = path.iter().filter_map(|p| cam.project(*p)).collect();
+                let len: f64 = truth.windows(2).map(|w| w[0].distance(w[1])).sum();
                 let dir = rng.unit() * std::f64::consts::TAU;
                 let duration = trail.last().map_or(1.0, |p| p.t) * (3.0 + rng.unit() * 2.0);
                 let start = trail

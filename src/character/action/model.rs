@@ -11,8 +11,10 @@ use crate::character::library::{ActionDef, Library};
 use crate::character::posing::model::{LearnedModel, sample_stride};
 use crate::character::posing::sample::{Placement, Sample, samples_of};
 
-/// Points of an action's average trajectory.
-pub const TRAJECTORY_POINTS: usize = 32;
+/// Points of an action's average trajectory, at generalized times k/32:
+/// an odd count, so that "more than half of its points" is reached at
+/// generalized time 0.5 exactly (17 of 33).
+pub const TRAJECTORY_POINTS: usize = 33;
 
 /// One action model.
 #[derive(Clone, Debug)]

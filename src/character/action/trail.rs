@@ -23,7 +23,9 @@ pub struct TrailPoint {
 pub struct Match {
     /// Eq. 1 averaged over the corresponding pairs (px).
     pub cost: f64,
-    /// Fraction of the trajectory the trail corresponds to (0..1).
+    /// Share of the trajectory's points that have a partner in the
+    /// correspondence (0..1]: the paper's "S covers more than half the
+    /// action trajectory".
     pub coverage: f64,
 }
 
@@ -79,11 +81,7 @@ pub fn match_trail(trail: &[TrailPoint], trajectory: &[TrailPoint], h: f64) -> O
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(j, avg)| Match {
             cost: avg,
-            coverage: if m == 1 {
-                1.0
-            } else {
-                j as f64 / (m - 1) as f64
-            },
+            coverage: (j + 1) as f64 / m as f64,
         })
 }
 
@@ -109,8 +107,8 @@ impl Default for StartRule {
     fn default() -> Self {
         Self {
             h: 50.0,
-            base_threshold_px: 18.0,
-            speed_gain: 0.07,
+            base_threshold_px: 14.0,
+            speed_gain: 0.04,
             min_trail_px: 40.0,
             min_coverage: 0.5,
             min_view_angle_deg: 45.0,
@@ -118,10 +116,27 @@ impl Default for StartRule {
     }
 }
 
-/// Length of a trail (px) and its mean speed (px/s).
+/// Steps of a trail shorter than this are not counted as movement until
+/// they add up to it (px): a panel's jitter of a couple of pixels per
+/// report would otherwise make a slow, steady finger look fast and long.
+pub const JITTER_PX: f64 = 6.0;
+
+/// Length of a trail (px) and its mean speed (px/s), with jitter below
+/// [`JITTER_PX`] left out: the path is followed from one point to the next
+/// that lies at least that far from it.
 #[must_use]
 pub fn length_and_speed(trail: &[TrailPoint]) -> (f64, f64) {
-    let len: f64 = trail.windows(2).map(|w| w[0].at.distance(w[1].at)).sum();
+    let mut len = 0.0;
+    if let Some(first) = trail.first() {
+        let mut anchor = first.at;
+        for p in &trail[1..] {
+            let d = anchor.distance(p.at);
+            if d >= JITTER_PX {
+                len += d;
+                anchor = p.at;
+            }
+        }
+    }
     let time = match (trail.first(), trail.last()) {
         (Some(a), Some(b)) => (b.t - a.t).max(1e-6),
         _ => 1.0,
@@ -186,6 +201,30 @@ mod tests {
         let slow = line((500.0, 100.0), (680.0, 100.0), 0.6, 10);
         let ms = match_trail(&slow, &punch, 100.0).unwrap();
         assert!(ms.cost > m.cost + 5.0, "{ms:?} vs {m:?}");
+    }
+
+    #[test]
+    fn jitter_is_not_movement() {
+        // A finger resting for a second with ±2 px of jitter per report.
+        let mut x = 7u32;
+        let mut noise = || {
+            x = x.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            f64::from((x >> 16) % 401) / 100.0 - 2.0
+        };
+        let still: Vec<TrailPoint> = (0..60)
+            .map(|i| TrailPoint {
+                at: ScreenPoint::new(300.0 + noise(), 200.0 + noise()),
+                t: f64::from(i) / 60.0,
+            })
+            .collect();
+        let (len, speed) = length_and_speed(&still);
+        assert!(len < 10.0 && speed < 10.0, "{len} px, {speed} px/s");
+        // Summing every step would call it a drag of over 100 px.
+        let raw: f64 = still.windows(2).map(|w| w[0].at.distance(w[1].at)).sum();
+        assert!(raw > 100.0, "{raw}");
+        // A steady drag keeps its length.
+        let (len, speed) = length_and_speed(&line((0.0, 0.0), (300.0, 0.0), 0.5, 31));
+        assert!((len - 300.0).abs() < 1e-9 && (speed - 600.0).abs() < 1e-6);
     }
 
     #[test]
