@@ -131,3 +131,51 @@ fn unknown_keys_and_a_missing_file_are_clear() {
         "{e}"
     );
 }
+
+#[test]
+fn clips_can_be_frame_ranges_of_one_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let cc = common::shared_dir().join("mocap/cmu-cc");
+    write_library(
+        dir.path(),
+        &cc,
+        r#"
+[posing]
+clips = ["005_01.bvh"]
+
+[[action]]
+name = "punch"
+clips = ["002_05.bvh#40-132", "002_05.bvh#132-220"]
+primary = "right_hand"
+segments = [{ until = 1.0, still = true, release = "forward" }]
+"#,
+    );
+    let lib = Library::load(dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    let whole = marionette::character::bvh::read_file(&cc.join("002_05.bvh")).unwrap();
+    let a = &lib.clips["002_05.bvh#40-132"];
+    let b = &lib.clips["002_05.bvh#132-220"];
+    assert_eq!((a.frames.len(), b.frames.len()), (93, 89));
+    // The range's last frame is the next range's first, as in the file.
+    assert_eq!(a.frames.last().unwrap().rotations, b.frames[0].rotations);
+    assert_eq!(whole.frames[132].rotations, b.frames[0].rotations);
+    assert_eq!(lib.clip_path("002_05.bvh#40-132"), cc.join("002_05.bvh"));
+
+    // Ranges that cannot be: each named.
+    write_library(
+        dir.path(),
+        &cc,
+        r#"
+[posing]
+clips = ["002_05.bvh#900-2000", "002_05.bvh#fast", "002_05.bvh#50-40", "nothere.bvh#1-5"]
+"#,
+    );
+    let text = Library::load(dir.path()).unwrap_err().to_string();
+    for want in [
+        "frame 2000 is past the end of 002_05.bvh (927 frames",
+        "`#fast` is not a frame range; write it as FIRST-LAST",
+        "the frame range 50-40 must end after it begins",
+        "nothere.bvh",
+    ] {
+        assert!(text.contains(want), "missing `{want}` in:\n{text}");
+    }
+}

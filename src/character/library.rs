@@ -14,6 +14,9 @@
 //!
 //! [posing]
 //! clips = ["idle.bvh", "reach_high.bvh"]
+//! # A clip may be part of a file: "take.bvh#120-185" is frames 120 to 185
+//! # (counted from 0 in the file's MOTION section, both included), so
+//! # one long take can give several actions.
 //!
 //! [[action]]
 //! name = "punch"
@@ -149,10 +152,12 @@ pub struct Library {
 }
 
 impl Library {
-    /// The file of a clip.
+    /// The file of a clip (a clip named `take.bvh#120-185` is in
+    /// `take.bvh`).
     #[must_use]
     pub fn clip_path(&self, name: &str) -> PathBuf {
-        self.clips_dir.join(name)
+        self.clips_dir
+            .join(ClipRef::parse(name).map_or(name, |r| r.file))
     }
 
     /// Load and validate `dir/library.toml` and its clips.
@@ -230,12 +235,42 @@ impl Library {
         }
         let mut clips = BTreeMap::new();
         let mut skeleton: Option<(String, Skeleton)> = None;
+        // Each file is read once, however many clips it gives.
+        let mut files: BTreeMap<&str, Option<bvh::BvhFile>> = BTreeMap::new();
         for name in names {
-            let path = clips_dir.join(name);
-            let parsed = match bvh::read_file(&path) {
-                Ok(p) => p,
-                Err(e) => {
-                    problems.push(e.to_string());
+            let clip_ref = match ClipRef::parse(name) {
+                Ok(r) => r,
+                Err(why) => {
+                    problems.push(format!("clip `{name}`: {why}"));
+                    continue;
+                }
+            };
+            let file = files.entry(clip_ref.file).or_insert_with(|| {
+                match bvh::read_file(&clips_dir.join(clip_ref.file)) {
+                    Ok(p) => Some(p),
+                    Err(e) => {
+                        problems.push(e.to_string());
+                        None
+                    }
+                }
+            });
+            let Some(file) = file.as_ref() else {
+                continue;
+            };
+            let parsed = match clip_ref.frames {
+                None => file.clone(),
+                Some((a, b)) if b < file.frames.len() => bvh::BvhFile {
+                    skeleton: file.skeleton.clone(),
+                    channels: file.channels.clone(),
+                    frame_time: file.frame_time,
+                    frames: file.frames[a..=b].to_vec(),
+                },
+                Some((_, b)) => {
+                    problems.push(format!(
+                        "clip `{name}`: frame {b} is past the end of {} ({} frames, numbered from 0)",
+                        clip_ref.file,
+                        file.frames.len()
+                    ));
                     continue;
                 }
             };
@@ -310,6 +345,44 @@ impl Library {
             posing: file.posing.clips,
             actions,
             action_lead_in: lead_in,
+        })
+    }
+}
+
+/// A clip named in `library.toml`: a BVH file, or frames of one
+/// (`take.bvh#120-185`, both ends included, counted from 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClipRef<'a> {
+    pub file: &'a str,
+    pub frames: Option<(usize, usize)>,
+}
+
+impl<'a> ClipRef<'a> {
+    /// Split a clip name into its file and frame range.
+    pub fn parse(name: &'a str) -> Result<Self, String> {
+        let Some((file, range)) = name.rsplit_once('#') else {
+            return Ok(Self {
+                file: name,
+                frames: None,
+            });
+        };
+        let bad = || {
+            format!(
+                "`#{range}` is not a frame range; write it as FIRST-LAST, e.g. `{file}#120-185`"
+            )
+        };
+        let (a, b) = range.split_once('-').ok_or_else(bad)?;
+        let a: usize = a.trim().parse().map_err(|_| bad())?;
+        let b: usize = b.trim().parse().map_err(|_| bad())?;
+        if b <= a {
+            return Err(format!("the frame range {a}-{b} must end after it begins"));
+        }
+        if file.is_empty() {
+            return Err("names no file before `#`".to_owned());
+        }
+        Ok(Self {
+            file,
+            frames: Some((a, b)),
         })
     }
 }
