@@ -53,7 +53,7 @@ fn actions(c: &mut Criterion) {
             let mut started = 0;
             for m in &models {
                 let projected = m.projected(&cam, &at);
-                if let Some(r) = match_trail(&trail, &projected, rule.h) {
+                if let Some(r) = match_trail(&trail, &projected, rule.h, rule.tempo) {
                     started += usize::from(rule.starts(&r, &trail, 60.0));
                 }
             }

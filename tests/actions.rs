@@ -184,12 +184,13 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
     let r = eval_actions(&actions, &tests, &Default::default(), 1);
     eprintln!("{r:?}");
     assert_eq!(r.trials, clips.len() * 6);
-    // The targets (decided_at: the rule needs more than half of
-    // the trajectory, so the floor is 0.5 and the next touch report).
+    // The targets. decided_at: more than half of the trajectory must have
+    // a partner, which the finger's last point can be while it is still
+    // closer to the middle point than to the one before.
     assert!(r.correct >= 0.95, "{r:?}");
     assert!(r.wrong_action <= 0.05, "{r:?}");
     assert!(r.false_trigger_slow <= 0.02, "{r:?}");
-    assert!(r.decided_at > 0.5 && r.decided_at < 0.51, "{r:?}");
+    assert!(r.decided_at > 0.45 && r.decided_at <= 0.5, "{r:?}");
 }
 
 #[test]
@@ -210,12 +211,13 @@ fn held_out_variants_through_the_controller() {
     });
     eprintln!("through the controller: {r:?}");
     assert_eq!(r.trials, clips.len() * 6);
-    // The targets (decided_at: the rule needs more than half of
-    // the trajectory, so the floor is 0.5 and the next touch report).
+    // The targets. decided_at: more than half of the trajectory must have
+    // a partner, which the finger's last point can be while it is still
+    // closer to the middle point than to the one before.
     assert!(r.correct >= 0.95, "{r:?}");
     assert!(r.wrong_action <= 0.05, "{r:?}");
     assert!(r.false_trigger_slow <= 0.02, "{r:?}");
-    assert!(r.decided_at > 0.5 && r.decided_at < 0.51, "{r:?}");
+    assert!(r.decided_at > 0.45 && r.decided_at <= 0.5, "{r:?}");
 }
 
 #[test]

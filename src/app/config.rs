@@ -151,6 +151,9 @@ impl CharacterConfig {
 pub struct ActionConfig {
     /// Weight of time against position in the trail match (px per second).
     pub h: f64,
+    /// A drag may run this many times faster or slower than the action
+    /// before time counts in the match (1 = exact timing).
+    pub tempo_tolerance: f64,
     /// Match cost under which a drag at rest starts an action (px).
     pub threshold_px: f64,
     /// How much the threshold grows per px/s of drag speed.
@@ -169,6 +172,7 @@ impl Default for ActionConfig {
         let r = crate::character::action::trail::StartRule::default();
         Self {
             h: r.h,
+            tempo_tolerance: r.tempo,
             threshold_px: r.base_threshold_px,
             threshold_per_speed: r.speed_gain,
             min_trail_px: r.min_trail_px,
@@ -184,6 +188,7 @@ impl ActionConfig {
     pub fn rule(&self) -> crate::character::action::trail::StartRule {
         crate::character::action::trail::StartRule {
             h: self.h,
+            tempo: self.tempo_tolerance,
             base_threshold_px: self.threshold_px,
             speed_gain: self.threshold_per_speed,
             min_trail_px: self.min_trail_px,
@@ -490,6 +495,7 @@ impl Config {
         let a = &self.action;
         in_ranges(&[
             ("action.h", a.h, 0.0, 10_000.0),
+            ("action.tempo_tolerance", a.tempo_tolerance, 1.0, 10.0),
             ("action.threshold_px", a.threshold_px, 0.0, 1_000.0),
             (
                 "action.threshold_per_speed",

@@ -132,7 +132,7 @@ pub fn recognize(
         .filter_map(|(i, a)| {
             let world_dir = glam::DQuat::from_rotation_y(at.yaw) * a.direction;
             let angle = view_angle_deg(world_dir, eye);
-            let m = match_trail(trail, &a.projected(camera, at), rule.h)?;
+            let m = match_trail(trail, &a.projected(camera, at), rule.h, rule.tempo)?;
             rule.starts(&m, trail, angle).then_some(Recognition {
                 action: i,
                 matched: m,

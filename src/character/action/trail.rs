@@ -32,7 +32,12 @@ pub struct Match {
 /// Match `trail` against the beginning of `trajectory` (both with at least
 /// one point). `h` weighs time against position (px per second).
 #[must_use]
-pub fn match_trail(trail: &[TrailPoint], trajectory: &[TrailPoint], h: f64) -> Option<Match> {
+pub fn match_trail(
+    trail: &[TrailPoint],
+    trajectory: &[TrailPoint],
+    h: f64,
+    tempo: f64,
+) -> Option<Match> {
     let (n, m) = (trail.len(), trajectory.len());
     if n == 0 || m == 0 {
         return None;
@@ -43,7 +48,7 @@ pub fn match_trail(trail: &[TrailPoint], trajectory: &[TrailPoint], h: f64) -> O
         let b = trajectory[j];
         let dx = (a.at.x - p0.at.x) - (b.at.x - q0.at.x);
         let dy = (a.at.y - p0.at.y) - (b.at.y - q0.at.y);
-        dx.hypot(dy) + h * ((a.t - p0.t) - (b.t - q0.t)).abs()
+        dx.hypot(dy) + h * tempo_gap(a.t - p0.t, b.t - q0.t, tempo)
     };
     // sum[i][j]: least summed cost of a path from (0, 0) to (i, j);
     // len[i][j]: its number of pairs.
@@ -85,11 +90,28 @@ pub fn match_trail(trail: &[TrailPoint], trajectory: &[TrailPoint], h: f64) -> O
         })
 }
 
+/// How far (s) the action's time `action_t` lies outside the band
+/// `[input_t / tempo, input_t * tempo]`: the drag may run up to `tempo`
+/// times faster or slower than the action at no cost.
+fn tempo_gap(input_t: f64, action_t: f64, tempo: f64) -> f64 {
+    let (lo, hi) = (input_t / tempo, input_t * tempo);
+    if action_t > hi {
+        action_t - hi
+    } else if action_t < lo {
+        lo - action_t
+    } else {
+        0.0
+    }
+}
+
 /// Thresholds of recognition, all in the configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StartRule {
     /// Eq. 1's time weight (px per second).
     pub h: f64,
+    /// The drag may be up to this many times faster or slower than the
+    /// action before eq. 1's time term counts (1 = exact timing).
+    pub tempo: f64,
     /// Cost threshold for a drag at rest (px)...
     pub base_threshold_px: f64,
     /// ...growing with drag speed (px of threshold per px/s of speed).
@@ -106,9 +128,10 @@ pub struct StartRule {
 impl Default for StartRule {
     fn default() -> Self {
         Self {
-            h: 50.0,
-            base_threshold_px: 14.0,
-            speed_gain: 0.04,
+            h: 100.0,
+            tempo: 1.3,
+            base_threshold_px: 10.0,
+            speed_gain: 0.05,
             min_trail_px: 40.0,
             min_coverage: 0.5,
             min_view_angle_deg: 45.0,
@@ -190,17 +213,37 @@ mod tests {
         let punch = line((100.0, 200.0), (400.0, 200.0), 0.5, 21);
         // The finger has done the first 60 % of it, somewhere else on screen.
         let drag = line((500.0, 100.0), (680.0, 100.0), 0.3, 10);
-        let m = match_trail(&drag, &punch, 100.0).unwrap();
+        let m = match_trail(&drag, &punch, 100.0, 1.0).unwrap();
         // Only the two samplings differ (20 px against 15 px steps).
         assert!(m.cost < 8.0, "{m:?}");
         assert!((m.coverage - 0.6).abs() < 0.06, "{m:?}");
         // The other way is far off.
         let back = line((500.0, 100.0), (320.0, 100.0), 0.3, 10);
-        assert!(match_trail(&back, &punch, 100.0).unwrap().cost > 50.0);
+        assert!(match_trail(&back, &punch, 100.0, 1.0).unwrap().cost > 50.0);
         // Same path at half the speed: the time term grows.
         let slow = line((500.0, 100.0), (680.0, 100.0), 0.6, 10);
-        let ms = match_trail(&slow, &punch, 100.0).unwrap();
+        let ms = match_trail(&slow, &punch, 100.0, 1.0).unwrap();
         assert!(ms.cost > m.cost + 5.0, "{ms:?} vs {m:?}");
+    }
+
+    #[test]
+    fn a_tempo_band_lets_the_drag_keep_its_own_pace() {
+        let punch = line((100.0, 200.0), (400.0, 200.0), 0.5, 33);
+        let exact = |d: f64| line((500.0, 100.0), (650.0, 100.0), d, 17);
+        // Half the punch in 0.2 s instead of 0.25 s: 1.25 times faster.
+        let quick = match_trail(&exact(0.2), &punch, 100.0, 1.3).unwrap();
+        let on_time = match_trail(&exact(0.25), &punch, 100.0, 1.3).unwrap();
+        assert!((quick.cost - on_time.cost).abs() < 1e-9, "{quick:?}");
+        assert!(quick.coverage > 0.5, "{quick:?}");
+        // Without the band the quicker drag pays for its pace.
+        let strict = match_trail(&exact(0.2), &punch, 100.0, 1.0).unwrap();
+        assert!(strict.cost > quick.cost + 1.0, "{strict:?} vs {quick:?}");
+        // Three times slower is far outside the band: time still counts.
+        let slow = match_trail(&exact(0.75), &punch, 100.0, 1.3).unwrap();
+        assert!(slow.cost > on_time.cost + 5.0, "{slow:?} vs {on_time:?}");
+        assert_eq!(tempo_gap(1.0, 1.2, 1.3), 0.0);
+        assert!((tempo_gap(1.0, 0.5, 1.3) - (1.0 / 1.3 - 0.5)).abs() < 1e-12);
+        assert!((tempo_gap(1.0, 2.0, 1.3) - 0.7).abs() < 1e-12);
     }
 
     #[test]
@@ -232,14 +275,14 @@ mod tests {
         let rule = StartRule::default();
         let punch = line((100.0, 200.0), (400.0, 200.0), 0.5, 21);
         let drag = line((500.0, 100.0), (680.0, 100.0), 0.3, 10);
-        let m = match_trail(&drag, &punch, rule.h).unwrap();
+        let m = match_trail(&drag, &punch, rule.h, rule.tempo).unwrap();
         assert!(rule.starts(&m, &drag, 80.0));
         assert!(
             !rule.starts(&m, &drag, 30.0),
             "seen end-on, the action is excluded"
         );
         let short = line((500.0, 100.0), (520.0, 100.0), 0.05, 4);
-        let ms = match_trail(&short, &punch, rule.h).unwrap();
+        let ms = match_trail(&short, &punch, rule.h, rule.tempo).unwrap();
         assert!(
             !rule.starts(&ms, &short, 80.0),
             "too short and too little of the trajectory"
