@@ -50,6 +50,18 @@ fn the_model_embeds_every_sample_and_fills_a_grid() {
                 .all(|&m| model.cell_of[m as usize] as usize == i)
         );
     }
+    // Blocks of cells: every cell in exactly one, each represented by a
+    // sample of its own cells, far fewer blocks than cells.
+    let mut block_of = vec![None; model.cells.len()];
+    for (b, block) in model.blocks.iter().enumerate() {
+        for &c in &block.cells {
+            assert!(block_of[c as usize].replace(b).is_none(), "cell {c} twice");
+        }
+        let rep_cell = model.cell_of[block.representative as usize];
+        assert!(block.cells.contains(&rep_cell));
+    }
+    assert!(block_of.iter().all(Option::is_some));
+    assert!(model.blocks.len() * 4 < model.cells.len());
 }
 
 #[test]

@@ -1,7 +1,9 @@
 //! The learned model: sample postures mapped to a 2-D latent space by MDS,
 //! and a grid over that space with a representative sample per cell (the
 //! paper's Fig. 3), so that finding the right region needs one cost per
-//! cell instead of one per sample.
+//! cell instead of one per sample; cells are grouped in blocks of 4 x 4 with
+//! a representative each, so that the search looks at the blocks and then
+//! at the cells of the best few only.
 
 use super::mds;
 use super::sample::{Sample, distance};
@@ -12,6 +14,18 @@ pub struct Cell {
     pub members: Vec<u32>,
     pub representative: u32,
 }
+
+/// A block of neighbouring cells (a coarser grid over the same space): its
+/// cells and the sample that represents it, so that the search can look
+/// at a few blocks' cells instead of every cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    pub cells: Vec<u32>,
+    pub representative: u32,
+}
+
+/// Cells per side of a block.
+pub const BLOCK_CELLS: usize = 4;
 
 /// A learned model of sample postures.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,6 +41,8 @@ pub struct LearnedModel {
     pub cells: Vec<Cell>,
     /// For each sample, its index in `cells`.
     pub cell_of: Vec<u32>,
+    /// Non-empty blocks of [`BLOCK_CELLS`] x [`BLOCK_CELLS`] cells.
+    pub blocks: Vec<Block>,
 }
 
 /// The latent coordinates of samples (the expensive part, cached by bake).
@@ -45,11 +61,18 @@ impl LearnedModel {
         Self::with_coords(samples, coords)
     }
 
-    /// Lay the grid over known coordinates (about sixteen samples per cell).
+    /// Lay the grid over known coordinates (about four samples per cell,
+    /// sixteen cells per block).
     #[must_use]
     pub fn with_coords(samples: Vec<Sample>, coords: Vec<[f64; 2]>) -> Self {
+        Self::with_density(samples, coords, 4.0)
+    }
+
+    /// Lay the grid for about `per_cell` samples per cell.
+    #[must_use]
+    pub fn with_density(samples: Vec<Sample>, coords: Vec<[f64; 2]>, per_cell: f64) -> Self {
         let n = samples.len();
-        let grid = ((n as f64 / 16.0).sqrt().round() as usize).clamp(1, 64);
+        let grid = ((n as f64 / per_cell).sqrt().round() as usize).clamp(1, 256);
         let mut min = [f64::INFINITY; 2];
         let mut max = [f64::NEG_INFINITY; 2];
         for c in &coords {
@@ -72,8 +95,22 @@ impl LearnedModel {
         for (i, c) in coords.iter().enumerate() {
             by_cell[index(c)].push(i as u32);
         }
+        // The member nearest a point of the latent space.
+        let nearest = |members: &mut dyn Iterator<Item = u32>, centre: [f64; 2]| {
+            members
+                .min_by(|a, b| {
+                    let d = |i: u32| {
+                        let c = coords[i as usize];
+                        (c[0] - centre[0]).powi(2) + (c[1] - centre[1]).powi(2)
+                    };
+                    d(*a).total_cmp(&d(*b))
+                })
+                .expect("non-empty")
+        };
         let mut cells = Vec::new();
         let mut cell_of = vec![0u32; n];
+        let side = grid.div_ceil(BLOCK_CELLS);
+        let mut by_block: Vec<Vec<u32>> = vec![Vec::new(); side * side];
         for (ci, members) in by_cell.into_iter().enumerate() {
             if members.is_empty() {
                 continue;
@@ -83,21 +120,34 @@ impl LearnedModel {
                 min[0] + (ix as f64 + 0.5) * cell_size[0],
                 min[1] + (iy as f64 + 0.5) * cell_size[1],
             ];
-            let representative = *members
-                .iter()
-                .min_by(|a, b| {
-                    let d = |i: u32| {
-                        let c = coords[i as usize];
-                        (c[0] - centre[0]).powi(2) + (c[1] - centre[1]).powi(2)
-                    };
-                    d(**a).total_cmp(&d(**b))
-                })
-                .expect("non-empty");
+            let representative = nearest(&mut members.iter().copied(), centre);
             for &m in &members {
                 cell_of[m as usize] = cells.len() as u32;
             }
+            by_block[(iy / BLOCK_CELLS) * side + ix / BLOCK_CELLS].push(cells.len() as u32);
             cells.push(Cell {
                 members,
+                representative,
+            });
+        }
+        let mut blocks = Vec::new();
+        for (bi, block_cells) in by_block.into_iter().enumerate() {
+            if block_cells.is_empty() {
+                continue;
+            }
+            let span = BLOCK_CELLS as f64;
+            let centre = [
+                min[0] + ((bi % side) as f64 + 0.5) * span * cell_size[0],
+                min[1] + ((bi / side) as f64 + 0.5) * span * cell_size[1],
+            ];
+            let representative = nearest(
+                &mut block_cells
+                    .iter()
+                    .flat_map(|&c| cells[c as usize].members.iter().copied()),
+                centre,
+            );
+            blocks.push(Block {
+                cells: block_cells,
                 representative,
             });
         }
@@ -109,6 +159,7 @@ impl LearnedModel {
             cell_size,
             cells,
             cell_of,
+            blocks,
         }
     }
 }

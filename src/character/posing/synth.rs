@@ -1,6 +1,7 @@
 //! Posture synthesis from constraints (the paper's section 4): find the
-//! latent cell whose representative best meets the constraints, blend that
-//! cell's samples weighted by how well each meets them, then let CCD IK
+//! latent cells whose representatives best meet the constraints (looking
+//! first at blocks of cells, then at the cells of the best blocks), blend
+//! those cells' samples weighted by how well each meets them, then let CCD IK
 //! move each constrained part onto its constraint (at most 0.2 m) and keep
 //! planted feet where they are.
 
@@ -55,6 +56,9 @@ pub struct SynthOptions {
     pub use_grid: bool,
     /// Look into this many of the best cells.
     pub cells: usize,
+    /// Search the cells of this many of the best blocks only (0: score
+    /// every cell's representative).
+    pub blocks: usize,
     /// Blend at most this many samples.
     pub blend: usize,
     /// Apply CCD IK after blending.
@@ -67,7 +71,8 @@ impl Default for SynthOptions {
     fn default() -> Self {
         Self {
             use_grid: true,
-            cells: 10,
+            cells: 20,
+            blocks: 8,
             blend: 12,
             ik: true,
             max_ik_m: 0.2,
@@ -102,22 +107,36 @@ pub fn choose(
     opts: &SynthOptions,
 ) -> Vec<(usize, f64)> {
     let candidates: Vec<usize> = if opts.use_grid && !model.cells.is_empty() {
+        let score = |representative: u32| {
+            cost(
+                &model.samples[representative as usize],
+                roles,
+                constraints,
+                at,
+            )
+        };
+        // The cells to look at: every one, or those of the blocks whose
+        // representatives meet the constraints best.
+        let looked: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
+            let mut blocks: Vec<(usize, f64)> = model
+                .blocks
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (i, score(b.representative)))
+                .collect();
+            let keep = opts.blocks.min(blocks.len());
+            blocks.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
+            blocks[..keep]
+                .iter()
+                .flat_map(|(i, _)| model.blocks[*i].cells.iter().map(|&c| c as usize))
+                .collect()
+        } else {
+            (0..model.cells.len()).collect()
+        };
         // The cells whose representatives meet the constraints best.
-        let mut cells: Vec<(usize, f64)> = model
-            .cells
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                (
-                    i,
-                    cost(
-                        &model.samples[c.representative as usize],
-                        roles,
-                        constraints,
-                        at,
-                    ),
-                )
-            })
+        let mut cells: Vec<(usize, f64)> = looked
+            .into_iter()
+            .map(|i| (i, score(model.cells[i].representative)))
             .collect();
         let keep = opts.cells.clamp(1, cells.len());
         cells.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
@@ -132,8 +151,12 @@ pub fn choose(
         .into_iter()
         .map(|i| (i, cost(&model.samples[i], roles, constraints, at)))
         .collect();
+    let blend = opts.blend.clamp(1, scored.len().max(1));
+    if scored.len() > blend {
+        scored.select_nth_unstable_by(blend - 1, |a, b| a.1.total_cmp(&b.1));
+        scored.truncate(blend);
+    }
     scored.sort_by(|a, b| a.1.total_cmp(&b.1));
-    scored.truncate(opts.blend.max(1));
     let eps = 0.01;
     let mut weights: Vec<(usize, f64)> = scored
         .iter()
