@@ -97,6 +97,17 @@ pub fn cost(sample: &Sample, roles: &RoleMap, constraints: &[Constraint], at: &P
         / constraints.len() as f64
 }
 
+/// The indices of the `k` (at least one) lowest-scored items, in no order.
+fn best(items: impl Iterator<Item = (usize, f64)>, k: usize) -> impl Iterator<Item = usize> {
+    let mut items: Vec<(usize, f64)> = items.collect();
+    let keep = k.clamp(1, items.len().max(1)).min(items.len());
+    if keep > 0 {
+        items.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
+    }
+    items.truncate(keep);
+    items.into_iter().map(|(i, _)| i)
+}
+
 /// The samples to blend and their weights, best first.
 #[must_use]
 pub fn choose(
@@ -118,31 +129,20 @@ pub fn choose(
         // The cells to look at: every one, or those of the blocks whose
         // representatives meet the constraints best.
         let looked: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
-            let mut blocks: Vec<(usize, f64)> = model
-                .blocks
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (i, score(b.representative)))
-                .collect();
-            let keep = opts.blocks.min(blocks.len());
-            blocks.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
-            blocks[..keep]
-                .iter()
-                .flat_map(|(i, _)| model.blocks[*i].cells.iter().map(|&c| c as usize))
+            let blocks =
+                (0..model.blocks.len()).map(|i| (i, score(model.blocks[i].representative)));
+            best(blocks, opts.blocks)
+                .flat_map(|i| model.blocks[i].cells.iter().map(|&c| c as usize))
                 .collect()
         } else {
             (0..model.cells.len()).collect()
         };
         // The cells whose representatives meet the constraints best.
-        let mut cells: Vec<(usize, f64)> = looked
+        let cells = looked
             .into_iter()
-            .map(|i| (i, score(model.cells[i].representative)))
-            .collect();
-        let keep = opts.cells.clamp(1, cells.len());
-        cells.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
-        cells[..keep]
-            .iter()
-            .flat_map(|(i, _)| model.cells[*i].members.iter().map(|&m| m as usize))
+            .map(|i| (i, score(model.cells[i].representative)));
+        best(cells, opts.cells)
+            .flat_map(|i| model.cells[i].members.iter().map(|&m| m as usize))
             .collect()
     } else {
         (0..model.samples.len()).collect()
