@@ -9,6 +9,7 @@ use std::sync::Arc;
 use super::controller::{Character, Controller, Mode, Settings};
 use super::ticker::Ticker;
 use crate::app::config::Config;
+use crate::character::action::trail::TrailPoint;
 use crate::character::roles::Role;
 use crate::input::calibration::ScreenPoint;
 use crate::input::pipeline;
@@ -94,7 +95,11 @@ impl Author<'_> {
     }
 
     /// Drag an action's primary part along its trajectory as seen now, at
-    /// the action's own speed, then lift and wait for it to end.
+    /// the action's own speed, through its first 70 % and on to its
+    /// farthest point from where it began if that comes later (a kick's
+    /// foot returns to where it started, which would leave the finger's
+    /// place ambiguous), then lift and wait for the action to finish by
+    /// itself.
     fn action(&mut self, name: &str) {
         let Some(index) = self
             .ctl
@@ -116,7 +121,14 @@ impl Author<'_> {
         let (ox, oy) = (start.x - first.at.x, start.y - first.at.y);
         self.down(0, start);
         self.frame();
-        let end = traj.last().map_or(0.0, |p| p.t);
+        let end = traj
+            .iter()
+            .max_by(|a, b| {
+                let d = |p: &TrailPoint| p.at.distance(first.at);
+                d(a).total_cmp(&d(b))
+            })
+            .map_or(0.0, |p| p.t)
+            .max(0.7 * traj.last().map_or(0.0, |p| p.t));
         let mut t = 0.0;
         while t < end {
             t += DT;
