@@ -11,7 +11,7 @@ use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::posing::sample::Placement;
-use marionette::character::posing::synth::{Constraint, SynthOptions, Target, choose, synthesize};
+use marionette::character::posing::synth::{Constraint, SynthOptions, Target, select, synthesize};
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
 
@@ -77,7 +77,7 @@ fn posing(c: &mut Criterion) {
             });
             // The part the grid speeds up: finding the samples to blend.
             g.bench_function(format!("select/{n}_postures/{parts}_touches/{name}"), |b| {
-                b.iter(|| choose(&model, roles, &cs, &at, &opts));
+                b.iter(|| select(&model, roles, &cs, &at, &opts));
             });
         }
     }

@@ -11,7 +11,9 @@ use marionette::character::posing::eval::{self, Method, Mode};
 use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::posing::pick::pick;
 use marionette::character::posing::sample::Placement;
-use marionette::character::posing::synth::{Constraint, SynthOptions, Target, synthesize};
+use marionette::character::posing::synth::{
+    Constraint, SynthOptions, Target, blend, choose, synthesize, two_bone,
+};
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
 
@@ -172,33 +174,7 @@ fn planted_feet_stay_where_they_are() {
 #[test]
 fn the_model_beats_its_baselines_on_held_out_mocap() {
     let dir = tempfile::tempdir().unwrap();
-    let clips_dir = common::shared_dir().join("mocap/cmu-cc");
-    let posing: Vec<String> = [
-        "002_04", "002_05", "005_02", "005_09", "005_12", "006_02", "006_14", "007_02", "007_06",
-    ]
-    .iter()
-    .map(|n| format!("\"{n}.bvh\""))
-    .collect();
-    std::fs::write(
-        dir.path().join("library.toml"),
-        format!(
-            "[settings]\nclips_dir = {:?}\n[posing]\nclips = [{}]\n",
-            clips_dir.display().to_string(),
-            posing.join(", ")
-        ),
-    )
-    .unwrap();
-    let lib = Library::load(dir.path()).unwrap();
-    let (_, samples) = posing_samples(&lib);
-    let model = LearnedModel::build(samples);
-    let held_out: Vec<_> = ["005_10", "007_03"]
-        .iter()
-        .map(|n| {
-            let f =
-                marionette::character::bvh::read_file(&clips_dir.join(format!("{n}.bvh"))).unwrap();
-            marionette::character::motion::Clip::from_bvh(f, &Default::default()).unwrap()
-        })
-        .collect();
+    let (lib, model, held_out) = cmu_library(dir.path());
     let tests: Vec<_> = held_out.iter().collect();
     let rest = &lib.clips[&lib.posing[0]];
     let run = |mode, method| {
@@ -226,6 +202,132 @@ fn the_model_beats_its_baselines_on_held_out_mocap() {
         "blending and IK beat the nearest sample"
     );
     assert!(model_targets.mpjpe_cm < 12.0, "{model_targets:?}");
+}
+
+/// A posing library of a few CMU clips, its model, and two held-out clips of
+/// the same skeleton.
+fn cmu_library(
+    dir: &std::path::Path,
+) -> (
+    Library,
+    LearnedModel,
+    Vec<marionette::character::motion::Clip>,
+) {
+    let clips_dir = common::shared_dir().join("mocap/cmu-cc");
+    let posing: Vec<String> = [
+        "002_04", "002_05", "005_02", "005_09", "005_12", "006_02", "006_14", "007_02", "007_06",
+    ]
+    .iter()
+    .map(|n| format!("\"{n}.bvh\""))
+    .collect();
+    std::fs::write(
+        dir.join("library.toml"),
+        format!(
+            "[settings]\nclips_dir = {:?}\n[posing]\nclips = [{}]\n",
+            clips_dir.display().to_string(),
+            posing.join(", ")
+        ),
+    )
+    .unwrap();
+    let lib = Library::load(dir).unwrap();
+    let model = LearnedModel::build(posing_samples(&lib).1);
+    let held_out = ["005_10", "007_03"]
+        .iter()
+        .map(|n| {
+            let f =
+                marionette::character::bvh::read_file(&clips_dir.join(format!("{n}.bvh"))).unwrap();
+            marionette::character::motion::Clip::from_bvh(f, &Default::default()).unwrap()
+        })
+        .collect();
+    (lib, model, held_out)
+}
+
+#[test]
+fn refitted_weights_meet_the_constraints_better_than_cost_weights() {
+    let dir = tempfile::tempdir().unwrap();
+    let (lib, model, held_out) = cmu_library(dir.path());
+    let sk = &lib.skeleton;
+    let (mut plain, mut fitted) = (0.0, 0.0);
+    for clip in &held_out {
+        let roles = &clip.roles;
+        for f in (0..clip.frames.len()).step_by(clip.frames.len() / 10) {
+            let truth = forward_kinematics(sk, &clip.frames[f]);
+            let at = Placement::of(sk, roles, &clip.frames[f]);
+            let constraints: Vec<Constraint> = eval::PARTS
+                .iter()
+                .map(|&role| Constraint {
+                    role,
+                    target: Target::Point(truth.positions[roles.get(role)]),
+                })
+                .collect();
+            let miss = |fit: f64| {
+                let opts = SynthOptions {
+                    fit,
+                    ..SynthOptions::default()
+                };
+                let weights = choose(&model, roles, &constraints, &at, &opts);
+                let total: f64 = weights.iter().map(|w| w.1).sum();
+                assert!((total - 1.0).abs() < 1e-9, "weights sum to {total}");
+                assert!(weights.iter().all(|w| w.1 >= 0.0), "{weights:?}");
+                let w = forward_kinematics(sk, &blend(sk, &model, &weights, &at));
+                constraints
+                    .iter()
+                    .map(|c| c.target.distance(w.positions[roles.get(c.role)]))
+                    .sum::<f64>()
+            };
+            plain += miss(0.0);
+            fitted += miss(SynthOptions::default().fit);
+        }
+    }
+    eprintln!("misses before IK: refitted {fitted:.3} m, cost-weighted {plain:.3} m");
+    assert!(
+        fitted < 0.8 * plain,
+        "before IK the refitted blend misses by {fitted:.3} m in all, the cost-weighted one by {plain:.3} m"
+    );
+}
+
+#[test]
+fn two_bone_ik_reaches_and_keeps_the_plane_the_limb_bends_in() {
+    let lib = default_library();
+    let clip = &lib.clips[&lib.posing[0]];
+    let (sk, roles) = (&clip.skeleton, &clip.roles);
+    let limb = (
+        roles.get(Role::RightShoulder),
+        roles.get(Role::RightElbow),
+        roles.get(Role::RightHand),
+    );
+    let normal = |p: &[DVec3]| {
+        (p[limb.2] - p[limb.0])
+            .cross(p[limb.1] - p[limb.0])
+            .normalize()
+    };
+    let mut pose = clip.frames[clip.frames.len() / 2].clone();
+    let before = forward_kinematics(sk, &pose);
+    let (shoulder, hand) = (before.positions[limb.0], before.positions[limb.2]);
+    // Towards the shoulder and across: a goal within reach.
+    let goal = hand + (shoulder - hand) * 0.2 + DVec3::new(0.0, 0.05, 0.0);
+    two_bone(sk, &mut pose, limb, goal);
+    let after = forward_kinematics(sk, &pose);
+    assert!((after.positions[limb.2] - goal).length() < 1e-6);
+    let bone = |w: &marionette::character::skeleton::WorldPose, a: usize, b: usize| {
+        (w.positions[a] - w.positions[b]).length()
+    };
+    assert!((bone(&after, limb.0, limb.1) - bone(&before, limb.0, limb.1)).abs() < 1e-9);
+    // The swing onto the goal turns the plane by no more than the goal
+    // moved around the shoulder.
+    let swing = (hand - shoulder).angle_between(goal - shoulder);
+    let turned = normal(&before.positions).angle_between(normal(&after.positions));
+    assert!(
+        turned <= swing + 1e-6,
+        "plane turned {turned}, swing {swing}"
+    );
+    // Out of reach: the limb straightens towards the goal.
+    let far = shoulder + (goal - shoulder).normalize() * 5.0;
+    two_bone(sk, &mut pose, limb, far);
+    let w = forward_kinematics(sk, &pose);
+    let reach = bone(&w, limb.0, limb.1) + bone(&w, limb.1, limb.2);
+    assert!(((w.positions[limb.2] - shoulder).length() - reach).abs() < 1e-3);
+    assert!((w.positions[limb.2] - shoulder).angle_between(far - shoulder) < 1e-3);
 }
 
 #[test]

@@ -106,7 +106,7 @@ impl ActionPlayer {
                 roles,
                 constraints,
                 &self.at,
-                &SynthOptions::default(),
+                &SynthOptions::ACTION,
             );
             self.clip_weights = per_clip(&a.model, &weights, a.def.clips.len());
             Some(

@@ -8,7 +8,7 @@
 use glam::{DQuat, DVec3};
 
 use super::model::LearnedModel;
-use super::sample::{Placement, Sample, pose_of, wrap};
+use super::sample::{Anchor, Placement, Sample, pose_of, wrap};
 use crate::character::camera::HalfLine;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
@@ -65,17 +65,36 @@ pub struct SynthOptions {
     pub ik: bool,
     /// Furthest IK may move a constrained part (m).
     pub max_ik_m: f64,
+    /// Refit the blend weights to meet the constraints, pulled towards the
+    /// cost weights by this much (m², 0: no refit).
+    pub fit: f64,
+}
+
+impl SynthOptions {
+    /// For estimating an action's generalized time from the samples near
+    /// the touches (section 5): a few nearest samples by their costs, no
+    /// refit (a refit trades nearness for meeting the touches).
+    pub const ACTION: Self = Self {
+        use_grid: true,
+        cells: 20,
+        blocks: 8,
+        blend: 12,
+        ik: true,
+        max_ik_m: 0.2,
+        fit: 0.0,
+    };
 }
 
 impl Default for SynthOptions {
     fn default() -> Self {
         Self {
             use_grid: true,
-            cells: 20,
+            cells: 40,
             blocks: 8,
-            blend: 12,
+            blend: 64,
             ik: true,
             max_ik_m: 0.2,
+            fit: 0.03,
         }
     }
 }
@@ -97,18 +116,103 @@ pub fn cost(sample: &Sample, roles: &RoleMap, constraints: &[Constraint], at: &P
         / constraints.len() as f64
 }
 
-/// The indices of the `k` (at least one) lowest-scored items, in no order.
-fn best(items: impl Iterator<Item = (usize, f64)>, k: usize) -> impl Iterator<Item = usize> {
+/// The constraints in a placement's frame (the frame of
+/// [`Sample::local`]), each with its joint: scoring a sample then needs no
+/// placing.
+struct Local {
+    joint: usize,
+    target: Target,
+}
+
+fn localize(roles: &RoleMap, constraints: &[Constraint], at: &Placement) -> Vec<Local> {
+    let unturn = DQuat::from_rotation_y(-at.yaw);
+    let floor = DVec3::new(at.position.x, 0.0, at.position.z);
+    constraints
+        .iter()
+        .map(|c| Local {
+            joint: roles.get(c.role),
+            target: match c.target {
+                Target::Point(q) => Target::Point(unturn * (q - floor)),
+                Target::Ray(r) => Target::Ray(HalfLine {
+                    origin: unturn * (r.origin - floor),
+                    dir: unturn * r.dir,
+                }),
+            },
+        })
+        .collect()
+}
+
+/// [`cost`] with localized constraints.
+fn local_cost(sample: &Sample, anchor: Anchor, local: &[Local]) -> f64 {
+    let p = sample.local(anchor);
+    local
+        .iter()
+        .map(|c| c.target.distance(p[c.joint]))
+        .sum::<f64>()
+        / local.len().max(1) as f64
+}
+
+/// The `k` (at least one) lowest-scored items, in no order.
+fn best(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, f64)> {
     let mut items: Vec<(usize, f64)> = items.collect();
     let keep = k.clamp(1, items.len().max(1)).min(items.len());
-    if keep > 0 {
+    if keep > 0 && keep < items.len() {
         items.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
     }
     items.truncate(keep);
-    items.into_iter().map(|(i, _)| i)
+    items
 }
 
-/// The samples to blend and their weights, best first.
+/// The samples that meet the constraints best (at most `opts.blend`), with
+/// their costs, best first: through the grid (the representatives of the
+/// blocks, then of the cells of the best blocks, then the samples of the
+/// best cells) or by scoring every sample.
+#[must_use]
+pub fn select(
+    model: &LearnedModel,
+    roles: &RoleMap,
+    constraints: &[Constraint],
+    at: &Placement,
+    opts: &SynthOptions,
+) -> Vec<(usize, f64)> {
+    let local = localize(roles, constraints, at);
+    let score = |i: usize| local_cost(&model.samples[i], at.anchor, &local);
+    let mut scored = if opts.use_grid && !model.cells.is_empty() {
+        let rep = |i: u32| score(i as usize);
+        // The cells to look at: every one, or those of the blocks whose
+        // representatives meet the constraints best.
+        let looked: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
+            let blocks = model
+                .blocks
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (i, rep(b.representative)));
+            best(blocks, opts.blocks)
+                .into_iter()
+                .flat_map(|(i, _)| model.blocks[i].cells.iter().map(|&c| c as usize))
+                .collect()
+        } else {
+            (0..model.cells.len()).collect()
+        };
+        // The samples of the cells whose representatives meet the
+        // constraints best.
+        let cells = looked
+            .into_iter()
+            .map(|i| (i, rep(model.cells[i].representative)));
+        let members = best(cells, opts.cells)
+            .into_iter()
+            .flat_map(|(i, _)| model.cells[i].members.iter().map(|&m| m as usize));
+        best(members.map(|i| (i, score(i))), opts.blend)
+    } else {
+        best((0..model.samples.len()).map(|i| (i, score(i))), opts.blend)
+    };
+    scored.sort_by(|a, b| a.1.total_cmp(&b.1));
+    scored
+}
+
+/// The samples to blend and their weights (summing to one), best first:
+/// the best samples weighted by the inverse square of their cost, then, if
+/// `opts.fit`, refitted to meet the constraints.
 #[must_use]
 pub fn choose(
     model: &LearnedModel,
@@ -117,56 +221,138 @@ pub fn choose(
     at: &Placement,
     opts: &SynthOptions,
 ) -> Vec<(usize, f64)> {
-    let candidates: Vec<usize> = if opts.use_grid && !model.cells.is_empty() {
-        let score = |representative: u32| {
-            cost(
-                &model.samples[representative as usize],
-                roles,
-                constraints,
-                at,
-            )
-        };
-        // The cells to look at: every one, or those of the blocks whose
-        // representatives meet the constraints best.
-        let looked: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
-            let blocks =
-                (0..model.blocks.len()).map(|i| (i, score(model.blocks[i].representative)));
-            best(blocks, opts.blocks)
-                .flat_map(|i| model.blocks[i].cells.iter().map(|&c| c as usize))
-                .collect()
-        } else {
-            (0..model.cells.len()).collect()
-        };
-        // The cells whose representatives meet the constraints best.
-        let cells = looked
-            .into_iter()
-            .map(|i| (i, score(model.cells[i].representative)));
-        best(cells, opts.cells)
-            .flat_map(|i| model.cells[i].members.iter().map(|&m| m as usize))
-            .collect()
-    } else {
-        (0..model.samples.len()).collect()
-    };
-    let mut scored: Vec<(usize, f64)> = candidates
-        .into_iter()
-        .map(|i| (i, cost(&model.samples[i], roles, constraints, at)))
-        .collect();
-    let blend = opts.blend.clamp(1, scored.len().max(1));
-    if scored.len() > blend {
-        scored.select_nth_unstable_by(blend - 1, |a, b| a.1.total_cmp(&b.1));
-        scored.truncate(blend);
-    }
-    scored.sort_by(|a, b| a.1.total_cmp(&b.1));
     let eps = 0.01;
-    let mut weights: Vec<(usize, f64)> = scored
-        .iter()
-        .map(|(i, c)| (*i, 1.0 / (c + eps).powi(2)))
+    let mut weights: Vec<(usize, f64)> = select(model, roles, constraints, at, opts)
+        .into_iter()
+        .map(|(i, c)| (i, 1.0 / (c + eps).powi(2)))
         .collect();
     let total: f64 = weights.iter().map(|w| w.1).sum();
     for w in &mut weights {
         w.1 /= total;
     }
+    if opts.fit > 0.0 && weights.len() > 1 {
+        refit(model, roles, constraints, at, &mut weights, opts.fit);
+    }
     weights
+}
+
+/// Refit blend weights so that the blend of the samples' constrained parts
+/// meets the constraints: least squares on the parts' positions (a ray
+/// counts only the offset across it), pulled towards the given weights by
+/// `ridge`, the weights summing to one and none negative (a negative one is
+/// dropped and the rest refitted).
+fn refit(
+    model: &LearnedModel,
+    roles: &RoleMap,
+    constraints: &[Constraint],
+    at: &Placement,
+    weights: &mut [(usize, f64)],
+    ridge: f64,
+) {
+    let k = weights.len();
+    let local = localize(roles, constraints, at);
+    // M = sum over constraints of A'A (A: each sample's offset of the part
+    // from the target, across a ray), plus the ridge.
+    let mut m = vec![0.0; k * k];
+    let mut cols = vec![DVec3::ZERO; k];
+    for c in &local {
+        let (origin, dir) = match c.target {
+            Target::Point(q) => (q, None),
+            Target::Ray(r) => (r.origin, Some(r.dir)),
+        };
+        for (col, (i, _)) in cols.iter_mut().zip(weights.iter()) {
+            let v = model.samples[*i].local(at.anchor)[c.joint] - origin;
+            *col = dir.map_or(v, |d| v - d * v.dot(d));
+        }
+        for a in 0..k {
+            for e in a..k {
+                let d = cols[a].dot(cols[e]);
+                m[a * k + e] += d;
+            }
+        }
+    }
+    for a in 0..k {
+        for e in 0..a {
+            m[a * k + e] = m[e * k + a];
+        }
+        m[a * k + a] += ridge;
+    }
+    let g: Vec<f64> = weights.iter().map(|w| ridge * w.1).collect();
+    // Minimise w'Mw/2 - g'w subject to sum(w) = 1: w = M^-1 (g + mu 1).
+    let mut active: Vec<usize> = (0..k).collect();
+    while !active.is_empty() {
+        let n = active.len();
+        let mut sub = vec![0.0; n * n];
+        for (r, &x) in active.iter().enumerate() {
+            for (c, &y) in active.iter().enumerate() {
+                sub[r * n + c] = m[x * k + y];
+            }
+        }
+        if !cholesky(&mut sub, n) {
+            return;
+        }
+        let x = cholesky_solve(&sub, active.iter().map(|&a| g[a]).collect(), n);
+        let y = cholesky_solve(&sub, vec![1.0; n], n);
+        let mu = (1.0 - x.iter().sum::<f64>()) / y.iter().sum::<f64>();
+        let w: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a + mu * b).collect();
+        if w.iter().all(|v| *v >= 0.0) {
+            for entry in weights.iter_mut() {
+                entry.1 = 0.0;
+            }
+            for (&a, v) in active.iter().zip(w) {
+                weights[a].1 = v;
+            }
+            return;
+        }
+        active = active
+            .iter()
+            .zip(&w)
+            .filter(|(_, v)| **v >= 0.0)
+            .map(|(a, _)| *a)
+            .collect();
+    }
+}
+
+/// Cholesky factorisation in place of a symmetric positive definite `n x n`
+/// matrix (its lower triangle becomes L); false when it is not positive
+/// definite.
+fn cholesky(a: &mut [f64], n: usize) -> bool {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for p in 0..j {
+            d -= a[j * n + p] * a[j * n + p];
+        }
+        if d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for p in 0..j {
+                s -= a[i * n + p] * a[j * n + p];
+            }
+            a[i * n + j] = s / d;
+        }
+    }
+    true
+}
+
+/// Solve `L L' x = b` with `l` from [`cholesky`].
+fn cholesky_solve(l: &[f64], mut b: Vec<f64>, n: usize) -> Vec<f64> {
+    for i in 0..n {
+        for p in 0..i {
+            b[i] -= l[i * n + p] * b[p];
+        }
+        b[i] /= l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        for p in i + 1..n {
+            b[i] -= l[p * n + i] * b[p];
+        }
+        b[i] /= l[i * n + i];
+    }
+    b
 }
 
 /// Blend samples with weights into one pose placed at `at`: joint rotations
@@ -328,8 +514,82 @@ pub fn synthesize(
     pose
 }
 
-/// CCD IK onto the constraints (each part moved at most `max_move`) and
-/// onto planted foot positions.
+/// The limb of a hand or foot: its upper joint (shoulder or hip) and its
+/// middle joint (elbow or knee).
+fn limb(roles: &RoleMap, role: Role) -> Option<(usize, usize)> {
+    let (upper, middle) = match role {
+        Role::LeftHand => (Role::LeftShoulder, Role::LeftElbow),
+        Role::RightHand => (Role::RightShoulder, Role::RightElbow),
+        Role::LeftFoot => (Role::LeftHip, Role::LeftKnee),
+        Role::RightFoot => (Role::RightHip, Role::RightKnee),
+        _ => return None,
+    };
+    Some((roles.get(upper), roles.get(middle)))
+}
+
+/// Turn joint `j` of `pose` by the world rotation `turn`, `world` being the
+/// pose's world rotations before the turn.
+fn turn_joint(skeleton: &Skeleton, pose: &mut Pose, world: &[DQuat], j: usize, turn: DQuat) {
+    let parent = skeleton.joints[j]
+        .parent
+        .map_or(DQuat::IDENTITY, |p| world[p]);
+    pose.rotations[j] = (parent.inverse() * (turn * world[j])).normalize();
+}
+
+/// Two-bone IK: bend the middle joint so that the limb spans the distance
+/// to the goal, then swing the upper joint onto it; the limb keeps the plane
+/// it bends in (the least turn that reaches).
+pub fn two_bone(
+    skeleton: &Skeleton,
+    pose: &mut Pose,
+    (upper, middle, end): (usize, usize, usize),
+    goal: DVec3,
+) {
+    let w = forward_kinematics(skeleton, pose);
+    let (a, b, c) = (w.positions[upper], w.positions[middle], w.positions[end]);
+    let (lab, lbc) = ((b - a).length(), (c - b).length());
+    if lab < 1e-9 || lbc < 1e-9 {
+        return;
+    }
+    let reach = (goal - a)
+        .length()
+        .clamp((lab - lbc).abs() + 1e-6, lab + lbc - 1e-6);
+    let angle = |u: DVec3, v: DVec3| u.normalize().dot(v.normalize()).clamp(-1.0, 1.0).acos();
+    // Interior angles now and wanted (law of cosines).
+    let at_a = angle(c - a, b - a);
+    let at_b = angle(a - b, c - b);
+    let cos = |x: f64| x.clamp(-1.0, 1.0).acos();
+    let want_a = cos((lbc * lbc - lab * lab - reach * reach) / (-2.0 * lab * reach));
+    let want_b = cos((reach * reach - lab * lab - lbc * lbc) / (-2.0 * lab * lbc));
+    let mut axis = (c - a).cross(b - a);
+    if axis.length() < 1e-9 {
+        // A straight limb bends about any axis across it; take one across
+        // the goal too.
+        axis = (c - a).cross(goal - a);
+        if axis.length() < 1e-9 {
+            axis = (c - a).any_orthonormal_vector();
+        }
+    }
+    let axis = axis.normalize();
+    let bend_b = DQuat::from_axis_angle(axis, want_b - at_b);
+    let bend_a = DQuat::from_axis_angle(axis, want_a - at_a);
+    // Where the end lies after both bends, then the swing onto the goal.
+    let bent = a + bend_a * ((b - a) + bend_b * (c - b));
+    let (from, to) = (bent - a, goal - a);
+    let swing = if from.length() > 1e-9 && to.length() > 1e-9 {
+        DQuat::from_rotation_arc(from.normalize(), to.normalize())
+    } else {
+        DQuat::IDENTITY
+    };
+    turn_joint(skeleton, pose, &w.rotations, middle, bend_b);
+    turn_joint(skeleton, pose, &w.rotations, upper, swing * bend_a);
+}
+
+/// IK onto the constraints (each part moved at most `max_move`) and onto
+/// planted foot positions: the head by CCD first (it turns the chest, which
+/// carries the arms), then each limb by two-bone IK, then CCD for what is
+/// left (a goal beyond a straight limb's reach, which the clavicle helps
+/// with).
 pub fn apply_ik(
     skeleton: &Skeleton,
     roles: &RoleMap,
@@ -353,16 +613,44 @@ pub fn apply_ik(
         } else {
             to
         };
-        goals.push((e, chain(skeleton, roles, c.role), goal));
+        goals.push((c.role, goal));
     }
     if let Some(feet) = planted {
         for (role, at) in [(Role::LeftFoot, feet[0]), (Role::RightFoot, feet[1])] {
             if constraints.iter().all(|c| c.role != role) {
-                goals.push((roles.get(role), chain(skeleton, roles, role), at));
+                goals.push((role, at));
             }
         }
     }
-    if !goals.is_empty() {
-        ccd(skeleton, pose, &goals, 30);
+    let (limbs, others): (Vec<_>, Vec<_>) = goals
+        .iter()
+        .partition(|(role, _)| limb(roles, *role).is_some());
+    let ccd_goals = |goals: &[&(Role, DVec3)]| -> Vec<(usize, Vec<usize>, DVec3)> {
+        goals
+            .iter()
+            .map(|(role, goal)| (roles.get(*role), chain(skeleton, roles, *role), *goal))
+            .collect()
+    };
+    if !others.is_empty() {
+        ccd(skeleton, pose, &ccd_goals(&others), 30);
+    }
+    for (role, goal) in &limbs {
+        if let Some((upper, middle)) = limb(roles, *role) {
+            two_bone(skeleton, pose, (upper, middle, roles.get(*role)), *goal);
+        }
+    }
+    let all: Vec<&(Role, DVec3)> = goals.iter().collect();
+    if !all.is_empty() {
+        ccd(skeleton, pose, &ccd_goals(&all), 30);
+    }
+    // The head keeps the way it looked (turning the neck and chest to move
+    // it would turn its gaze).
+    if goals.iter().any(|(role, _)| *role == Role::Head) {
+        let j = roles.get(Role::Head);
+        let now = forward_kinematics(skeleton, pose);
+        let parent = skeleton.joints[j]
+            .parent
+            .map_or(DQuat::IDENTITY, |p| now.rotations[p]);
+        pose.rotations[j] = (parent.inverse() * w.rotations[j]).normalize();
     }
 }
