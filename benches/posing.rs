@@ -77,7 +77,7 @@ fn posing(c: &mut Criterion) {
             });
             // The part the grid speeds up: finding the samples to blend.
             g.bench_function(format!("select/{n}_postures/{parts}_touches/{name}"), |b| {
-                b.iter(|| select(&model, roles, &cs, &at, &opts));
+                b.iter(|| select(&model, &cs, &at, &opts));
             });
         }
     }

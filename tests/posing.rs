@@ -64,6 +64,23 @@ fn the_model_embeds_every_sample_and_fills_a_grid() {
     }
     assert!(block_of.iter().all(Option::is_some));
     assert!(model.blocks.len() * 4 < model.cells.len());
+    // The grid follows the samples: cells hold about equal shares.
+    let sizes: Vec<usize> = model.cells.iter().map(|c| c.members.len()).collect();
+    let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+    assert!(hi - lo <= 2, "cells hold {lo} to {hi} samples");
+    // The search index lays out the same cells and samples in search order.
+    let index = &model.index;
+    assert_eq!(index.blocks.len(), model.blocks.len());
+    assert_eq!(index.cells.len(), model.cells.len());
+    for (c, cell) in model.cells.iter().enumerate() {
+        let range = index.samples_of_cell[c] as usize..index.samples_of_cell[c + 1] as usize;
+        let ids: Vec<u32> = index.samples[range].iter().map(|(i, _)| *i).collect();
+        assert_eq!(ids, cell.members);
+        assert_eq!(
+            index.samples[index.samples_of_cell[c] as usize].1,
+            model.samples[cell.members[0] as usize].parts
+        );
+    }
 }
 
 #[test]
@@ -265,7 +282,7 @@ fn refitted_weights_meet_the_constraints_better_than_cost_weights() {
                     fit,
                     ..SynthOptions::default()
                 };
-                let weights = choose(&model, roles, &constraints, &at, &opts);
+                let weights = choose(&model, &constraints, &at, &opts);
                 let total: f64 = weights.iter().map(|w| w.1).sum();
                 assert!((total - 1.0).abs() < 1e-9, "weights sum to {total}");
                 assert!(weights.iter().all(|w| w.1 >= 0.0), "{weights:?}");

@@ -57,6 +57,12 @@ impl Role {
         Role::RightFoot,
     ];
 
+    /// Position in [`Role::ALL`].
+    #[must_use]
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
     /// The name used in library files and JSON (`left_hand`).
     #[must_use]
     pub fn name(self) -> &'static str {

@@ -101,13 +101,7 @@ impl ActionPlayer {
         let roles = &lib.clips[&a.def.clips[0]].roles;
         let primary_down = constraints.iter().any(|c| c.role == a.def.primary);
         let target = if primary_down {
-            let weights = choose(
-                &a.model,
-                roles,
-                constraints,
-                &self.at,
-                &SynthOptions::ACTION,
-            );
+            let weights = choose(&a.model, constraints, &self.at, &SynthOptions::ACTION);
             self.clip_weights = per_clip(&a.model, &weights, a.def.clips.len());
             Some(
                 weights

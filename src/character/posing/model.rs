@@ -35,14 +35,63 @@ pub struct LearnedModel {
     pub coords: Vec<[f64; 2]>,
     /// Cells per side.
     pub grid: usize,
-    pub min: [f64; 2],
-    pub cell_size: [f64; 2],
     /// Non-empty cells.
     pub cells: Vec<Cell>,
     /// For each sample, its index in `cells`.
     pub cell_of: Vec<u32>,
     /// Non-empty blocks of [`BLOCK_CELLS`] x [`BLOCK_CELLS`] cells.
     pub blocks: Vec<Block>,
+    /// The grid's representatives and members laid out in search order.
+    pub index: SearchIndex,
+}
+
+/// A sample's role joints, as in [`Sample::parts`].
+pub type Parts = [[glam::DVec3; crate::character::roles::Role::ALL.len()]; 2];
+
+/// The parts of the grid's samples in the order the search reads them:
+/// the blocks' representatives, the cells' representatives block by block,
+/// the samples cell by cell; each entry carries what it stands for (a
+/// block, a cell, a sample). Reading these in order, instead of samples
+/// scattered over memory, is what makes the grid search fast.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SearchIndex {
+    /// Per block (index into `blocks`): its representative's parts.
+    pub blocks: Vec<Parts>,
+    /// Cells of block `b` are `cells[cells_of_block[b]..cells_of_block[b + 1]]`.
+    pub cells_of_block: Vec<u32>,
+    /// (cell index, its representative's parts).
+    pub cells: Vec<(u32, Parts)>,
+    /// Samples of cell `c` are `samples[samples_of_cell[c]..samples_of_cell[c + 1]]`.
+    pub samples_of_cell: Vec<u32>,
+    /// (sample index, its parts).
+    pub samples: Vec<(u32, Parts)>,
+}
+
+impl SearchIndex {
+    fn build(samples: &[Sample], cells: &[Cell], blocks: &[Block]) -> Self {
+        let parts = |i: u32| samples[i as usize].parts;
+        let mut index = Self {
+            blocks: blocks.iter().map(|b| parts(b.representative)).collect(),
+            ..Self::default()
+        };
+        index.cells_of_block.push(0);
+        for b in blocks {
+            index.cells.extend(
+                b.cells
+                    .iter()
+                    .map(|&c| (c, parts(cells[c as usize].representative))),
+            );
+            index.cells_of_block.push(index.cells.len() as u32);
+        }
+        index.samples_of_cell.push(0);
+        for c in cells {
+            index
+                .samples
+                .extend(c.members.iter().map(|&m| (m, parts(m))));
+            index.samples_of_cell.push(index.samples.len() as u32);
+        }
+        index
+    }
 }
 
 /// The latent coordinates of samples (the expensive part, cached by bake).
@@ -68,43 +117,54 @@ impl LearnedModel {
         Self::with_density(samples, coords, 4.0)
     }
 
-    /// Lay the grid for about `per_cell` samples per cell.
+    /// Lay the grid for about `per_cell` samples per cell. The grid's
+    /// lines follow the samples: columns split the latent x axis at its
+    /// quantiles, and each column's rows split its samples' y at theirs, so
+    /// that every cell holds about `per_cell` samples. (MDS packs common
+    /// postures tightly: on a uniform grid over 4,900 CMU postures, 10 % of
+    /// the non-empty cells held 29 or more samples and one 212, and the
+    /// search scored thousands of samples in the best cells.)
     #[must_use]
     pub fn with_density(samples: Vec<Sample>, coords: Vec<[f64; 2]>, per_cell: f64) -> Self {
         let n = samples.len();
         let grid = ((n as f64 / per_cell).sqrt().round() as usize).clamp(1, 256);
-        let mut min = [f64::INFINITY; 2];
-        let mut max = [f64::NEG_INFINITY; 2];
-        for c in &coords {
-            for k in 0..2 {
-                min[k] = min[k].min(c[k]);
-                max[k] = max[k].max(c[k]);
+        // Equal shares of a sorted run: part k of `parts`.
+        let share = |len: usize, parts: usize, k: usize| k * len / parts..(k + 1) * len / parts;
+        let points = &coords;
+        let by = |axis: usize| {
+            move |a: &u32, b: &u32| {
+                points[*a as usize][axis]
+                    .total_cmp(&points[*b as usize][axis])
+                    .then(a.cmp(b))
+            }
+        };
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by(by(0));
+        // Cells by (column, row), each with its members.
+        let mut by_cell: Vec<Vec<u32>> = vec![Vec::new(); grid * grid];
+        for col in 0..grid {
+            let mut column = order[share(n, grid, col)].to_vec();
+            column.sort_by(by(1));
+            for row in 0..grid {
+                by_cell[row * grid + col] = column[share(column.len(), grid, row)].to_vec();
             }
         }
-        if n == 0 {
-            min = [0.0; 2];
-            max = [1.0; 2];
-        }
-        let cell_size = [0, 1].map(|k| ((max[k] - min[k]) / grid as f64).max(1e-9));
-        let index = |c: &[f64; 2]| {
-            let ix = (((c[0] - min[0]) / cell_size[0]) as usize).min(grid - 1);
-            let iy = (((c[1] - min[1]) / cell_size[1]) as usize).min(grid - 1);
-            iy * grid + ix
-        };
-        let mut by_cell: Vec<Vec<u32>> = vec![Vec::new(); grid * grid];
-        for (i, c) in coords.iter().enumerate() {
-            by_cell[index(c)].push(i as u32);
-        }
-        // The member nearest a point of the latent space.
-        let nearest = |members: &mut dyn Iterator<Item = u32>, centre: [f64; 2]| {
+        // The member nearest the members' mean in the latent space.
+        let central = |members: &mut dyn Iterator<Item = u32>| {
+            let members: Vec<u32> = members.collect();
+            let mut centre = [0.0; 2];
+            for &m in &members {
+                for (k, c) in centre.iter_mut().enumerate() {
+                    *c += coords[m as usize][k] / members.len() as f64;
+                }
+            }
+            let d = |i: u32| {
+                let c = coords[i as usize];
+                (c[0] - centre[0]).powi(2) + (c[1] - centre[1]).powi(2)
+            };
             members
-                .min_by(|a, b| {
-                    let d = |i: u32| {
-                        let c = coords[i as usize];
-                        (c[0] - centre[0]).powi(2) + (c[1] - centre[1]).powi(2)
-                    };
-                    d(*a).total_cmp(&d(*b))
-                })
+                .into_iter()
+                .min_by(|a, b| d(*a).total_cmp(&d(*b)).then(a.cmp(b)))
                 .expect("non-empty")
         };
         let mut cells = Vec::new();
@@ -116,11 +176,7 @@ impl LearnedModel {
                 continue;
             }
             let (ix, iy) = (ci % grid, ci / grid);
-            let centre = [
-                min[0] + (ix as f64 + 0.5) * cell_size[0],
-                min[1] + (iy as f64 + 0.5) * cell_size[1],
-            ];
-            let representative = nearest(&mut members.iter().copied(), centre);
+            let representative = central(&mut members.iter().copied());
             for &m in &members {
                 cell_of[m as usize] = cells.len() as u32;
             }
@@ -131,32 +187,26 @@ impl LearnedModel {
             });
         }
         let mut blocks = Vec::new();
-        for (bi, block_cells) in by_block.into_iter().enumerate() {
+        for block_cells in by_block {
             if block_cells.is_empty() {
                 continue;
             }
-            let span = BLOCK_CELLS as f64;
-            let centre = [
-                min[0] + ((bi % side) as f64 + 0.5) * span * cell_size[0],
-                min[1] + ((bi / side) as f64 + 0.5) * span * cell_size[1],
-            ];
-            let representative = nearest(
+            let representative = central(
                 &mut block_cells
                     .iter()
                     .flat_map(|&c| cells[c as usize].members.iter().copied()),
-                centre,
             );
             blocks.push(Block {
                 cells: block_cells,
                 representative,
             });
         }
+        let index = SearchIndex::build(&samples, &cells, &blocks);
         Self {
             samples,
             coords,
             grid,
-            min,
-            cell_size,
+            index,
             cells,
             cell_of,
             blocks,

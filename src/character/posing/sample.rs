@@ -41,6 +41,10 @@ pub struct Sample {
     pub placed: Vec<DVec3>,
     /// Joint positions relative to the pelvis's floor point, facing +Z.
     pub aligned: Vec<DVec3>,
+    /// The positions of the role joints (in [`Role::ALL`] order) for each
+    /// anchor ([`Anchor::ClipStart`], [`Anchor::Root`]), kept inline so
+    /// that the search reads one sample's parts from one place.
+    pub parts: [[DVec3; Role::ALL.len()]; 2],
 }
 
 /// Samples from frames `frames` of a clip.
@@ -70,6 +74,9 @@ pub fn samples_of(
             rotations[0] = (unyaw * w.rotations[0]).normalize();
             let rel = DQuat::from_rotation_y(-yaw0);
             let start = DVec3::new(root0.x, 0.0, root0.z);
+            let placed: Vec<DVec3> = w.positions.iter().map(|p| rel * (*p - start)).collect();
+            let aligned: Vec<DVec3> = w.positions.iter().map(|p| unyaw * (*p - floor)).collect();
+            let parts = [&placed, &aligned].map(|ps| Role::ALL.map(|r| ps[roles.get(r)]));
             Sample {
                 clip: clip_index,
                 frame: k,
@@ -77,8 +84,9 @@ pub fn samples_of(
                 rotations,
                 root_offset: DVec3::new(d.x, root.y, d.z),
                 yaw: wrap(yaw - yaw0),
-                placed: w.positions.iter().map(|p| rel * (*p - start)).collect(),
-                aligned: w.positions.iter().map(|p| unyaw * (*p - floor)).collect(),
+                placed,
+                aligned,
+                parts,
             }
         })
         .collect()
@@ -147,7 +155,24 @@ impl Placement {
     }
 }
 
+impl Anchor {
+    /// Index into [`Sample::parts`].
+    #[must_use]
+    pub fn index(self) -> usize {
+        match self {
+            Anchor::ClipStart => 0,
+            Anchor::Root => 1,
+        }
+    }
+}
+
 impl Sample {
+    /// A role joint's position relative to the anchor, facing +Z.
+    #[must_use]
+    pub fn part(&self, anchor: Anchor, role: Role) -> DVec3 {
+        self.parts[anchor.index()][role.index()]
+    }
+
     /// Joint positions relative to the anchor, facing +Z.
     #[must_use]
     pub fn local(&self, anchor: Anchor) -> &[DVec3] {

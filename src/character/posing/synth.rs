@@ -7,8 +7,8 @@
 
 use glam::{DQuat, DVec3};
 
-use super::model::LearnedModel;
-use super::sample::{Anchor, Placement, Sample, pose_of, wrap};
+use super::model::{LearnedModel, Parts};
+use super::sample::{Placement, Sample, pose_of, wrap};
 use crate::character::camera::HalfLine;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
@@ -89,8 +89,8 @@ impl Default for SynthOptions {
     fn default() -> Self {
         Self {
             use_grid: true,
-            cells: 40,
-            blocks: 8,
+            cells: 64,
+            blocks: 12,
             blend: 64,
             ik: true,
             max_ik_m: 0.2,
@@ -99,38 +99,21 @@ impl Default for SynthOptions {
     }
 }
 
-/// Mean distance of a sample's constrained parts to their targets, placed
-/// at `at`.
-#[must_use]
-pub fn cost(sample: &Sample, roles: &RoleMap, constraints: &[Constraint], at: &Placement) -> f64 {
-    if constraints.is_empty() {
-        return 0.0;
-    }
-    constraints
-        .iter()
-        .map(|c| {
-            c.target
-                .distance(at.place(sample.local(at.anchor)[roles.get(c.role)]))
-        })
-        .sum::<f64>()
-        / constraints.len() as f64
-}
-
 /// The constraints in a placement's frame (the frame of
 /// [`Sample::local`]), each with its joint: scoring a sample then needs no
 /// placing.
 struct Local {
-    joint: usize,
+    role: Role,
     target: Target,
 }
 
-fn localize(roles: &RoleMap, constraints: &[Constraint], at: &Placement) -> Vec<Local> {
+fn localize(constraints: &[Constraint], at: &Placement) -> Vec<Local> {
     let unturn = DQuat::from_rotation_y(-at.yaw);
     let floor = DVec3::new(at.position.x, 0.0, at.position.z);
     constraints
         .iter()
         .map(|c| Local {
-            joint: roles.get(c.role),
+            role: c.role,
             target: match c.target {
                 Target::Point(q) => Target::Point(unturn * (q - floor)),
                 Target::Ray(r) => Target::Ray(HalfLine {
@@ -140,16 +123,6 @@ fn localize(roles: &RoleMap, constraints: &[Constraint], at: &Placement) -> Vec<
             },
         })
         .collect()
-}
-
-/// [`cost`] with localized constraints.
-fn local_cost(sample: &Sample, anchor: Anchor, local: &[Local]) -> f64 {
-    let p = sample.local(anchor);
-    local
-        .iter()
-        .map(|c| c.target.distance(p[c.joint]))
-        .sum::<f64>()
-        / local.len().max(1) as f64
 }
 
 /// The `k` (at least one) lowest-scored items, in no order.
@@ -170,41 +143,49 @@ fn best(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, f64)
 #[must_use]
 pub fn select(
     model: &LearnedModel,
-    roles: &RoleMap,
     constraints: &[Constraint],
     at: &Placement,
     opts: &SynthOptions,
 ) -> Vec<(usize, f64)> {
-    let local = localize(roles, constraints, at);
-    let score = |i: usize| local_cost(&model.samples[i], at.anchor, &local);
+    let local = localize(constraints, at);
+    let anchor = at.anchor.index();
+    let cost = |parts: &Parts| {
+        local
+            .iter()
+            .map(|c| c.target.distance(parts[anchor][c.role.index()]))
+            .sum::<f64>()
+            / local.len().max(1) as f64
+    };
+    let index = &model.index;
     let mut scored = if opts.use_grid && !model.cells.is_empty() {
-        let rep = |i: u32| score(i as usize);
-        // The cells to look at: every one, or those of the blocks whose
-        // representatives meet the constraints best.
-        let looked: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
-            let blocks = model
-                .blocks
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (i, rep(b.representative)));
-            best(blocks, opts.blocks)
+        let range = |starts: &[u32], i: usize| starts[i] as usize..starts[i + 1] as usize;
+        // The cells to look at: those of the blocks whose representatives
+        // meet the constraints best, or every one.
+        let blocks: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
+            let scored = index.blocks.iter().map(cost).enumerate();
+            best(scored, opts.blocks)
                 .into_iter()
-                .flat_map(|(i, _)| model.blocks[i].cells.iter().map(|&c| c as usize))
+                .map(|(b, _)| b)
                 .collect()
         } else {
-            (0..model.cells.len()).collect()
+            (0..model.blocks.len()).collect()
         };
+        let cells = blocks.into_iter().flat_map(|b| {
+            index.cells[range(&index.cells_of_block, b)]
+                .iter()
+                .map(|(c, parts)| (*c as usize, cost(parts)))
+        });
         // The samples of the cells whose representatives meet the
         // constraints best.
-        let cells = looked
-            .into_iter()
-            .map(|i| (i, rep(model.cells[i].representative)));
-        let members = best(cells, opts.cells)
-            .into_iter()
-            .flat_map(|(i, _)| model.cells[i].members.iter().map(|&m| m as usize));
-        best(members.map(|i| (i, score(i))), opts.blend)
+        let samples = best(cells, opts.cells).into_iter().flat_map(|(c, _)| {
+            index.samples[range(&index.samples_of_cell, c)]
+                .iter()
+                .map(|(i, parts)| (*i as usize, cost(parts)))
+        });
+        best(samples, opts.blend)
     } else {
-        best((0..model.samples.len()).map(|i| (i, score(i))), opts.blend)
+        let scored = model.samples.iter().map(|s| cost(&s.parts)).enumerate();
+        best(scored, opts.blend)
     };
     scored.sort_by(|a, b| a.1.total_cmp(&b.1));
     scored
@@ -216,13 +197,12 @@ pub fn select(
 #[must_use]
 pub fn choose(
     model: &LearnedModel,
-    roles: &RoleMap,
     constraints: &[Constraint],
     at: &Placement,
     opts: &SynthOptions,
 ) -> Vec<(usize, f64)> {
     let eps = 0.01;
-    let mut weights: Vec<(usize, f64)> = select(model, roles, constraints, at, opts)
+    let mut weights: Vec<(usize, f64)> = select(model, constraints, at, opts)
         .into_iter()
         .map(|(i, c)| (i, 1.0 / (c + eps).powi(2)))
         .collect();
@@ -231,7 +211,7 @@ pub fn choose(
         w.1 /= total;
     }
     if opts.fit > 0.0 && weights.len() > 1 {
-        refit(model, roles, constraints, at, &mut weights, opts.fit);
+        refit(model, constraints, at, &mut weights, opts.fit);
     }
     weights
 }
@@ -243,14 +223,13 @@ pub fn choose(
 /// dropped and the rest refitted).
 fn refit(
     model: &LearnedModel,
-    roles: &RoleMap,
     constraints: &[Constraint],
     at: &Placement,
     weights: &mut [(usize, f64)],
     ridge: f64,
 ) {
     let k = weights.len();
-    let local = localize(roles, constraints, at);
+    let local = localize(constraints, at);
     // M = sum over constraints of A'A (A: each sample's offset of the part
     // from the target, across a ray), plus the ridge.
     let mut m = vec![0.0; k * k];
@@ -261,7 +240,7 @@ fn refit(
             Target::Ray(r) => (r.origin, Some(r.dir)),
         };
         for (col, (i, _)) in cols.iter_mut().zip(weights.iter()) {
-            let v = model.samples[*i].local(at.anchor)[c.joint] - origin;
+            let v = model.samples[*i].part(at.anchor, c.role) - origin;
             *col = dir.map_or(v, |d| v - d * v.dot(d));
         }
         for a in 0..k {
@@ -499,7 +478,7 @@ pub fn synthesize(
     planted: Option<[DVec3; 2]>,
     opts: &SynthOptions,
 ) -> Pose {
-    let weights = choose(model, roles, constraints, at, opts);
+    let weights = choose(model, constraints, at, opts);
     let mut pose = blend(skeleton, model, &weights, at);
     if opts.ik {
         apply_ik(
