@@ -138,6 +138,7 @@ pub fn eval_pose(
                 use_grid: false,
                 blend: 1,
                 ik: false,
+                limb_fit: 0.0,
                 ..SynthOptions::default()
             }),
             Method::CcdRest => None,

@@ -4,11 +4,13 @@
 //! - [`sample`]: sample postures, the posture distance, placement.
 //! - [`mds`]: landmark MDS to 2-D.
 //! - [`model`]: the learned model and its grid.
+//! - [`limbs`]: the limbs a blend can refit on their own.
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 
 pub mod cache;
 pub mod eval;
+pub mod limbs;
 pub mod mds;
 pub mod model;
 pub mod pick;

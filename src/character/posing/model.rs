@@ -65,6 +65,9 @@ pub struct SearchIndex {
     pub samples_of_cell: Vec<u32>,
     /// (sample index, its parts).
     pub samples: Vec<(u32, Parts)>,
+    /// Per limb (in [`super::limbs::LIMBS`] order), every sample's reach
+    /// in sample order, for the limb refit's search.
+    pub reach: [Vec<glam::DVec3>; 4],
 }
 
 impl SearchIndex {
@@ -72,6 +75,7 @@ impl SearchIndex {
         let parts = |i: u32| samples[i as usize].parts;
         let mut index = Self {
             blocks: blocks.iter().map(|b| parts(b.representative)).collect(),
+            reach: std::array::from_fn(|l| samples.iter().map(|s| s.reach[l]).collect()),
             ..Self::default()
         };
         index.cells_of_block.push(0);

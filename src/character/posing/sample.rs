@@ -6,6 +6,7 @@
 
 use glam::{DQuat, DVec3};
 
+use super::limbs;
 use crate::character::motion::Clip;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
@@ -45,6 +46,8 @@ pub struct Sample {
     /// anchor ([`Anchor::ClipStart`], [`Anchor::Root`]), kept inline so
     /// that the search reads one sample's parts from one place.
     pub parts: [[DVec3; Role::ALL.len()]; 2],
+    /// Each limb's reach ([`limbs::reach`], in [`limbs::LIMBS`] order).
+    pub reach: [DVec3; 4],
 }
 
 /// Samples from frames `frames` of a clip.
@@ -60,6 +63,7 @@ pub fn samples_of(
     let yaw0 = facing_yaw(&w0, roles);
     let root0 = w0.positions[0];
     let last = clip.frames.len().saturating_sub(1).max(1) as f64;
+    let chains = limbs::LIMBS.map(|r| limbs::chain(sk, roles, r));
     frames
         .filter(|&k| k < clip.frames.len())
         .map(|k| {
@@ -77,6 +81,10 @@ pub fn samples_of(
             let placed: Vec<DVec3> = w.positions.iter().map(|p| rel * (*p - start)).collect();
             let aligned: Vec<DVec3> = w.positions.iter().map(|p| unyaw * (*p - floor)).collect();
             let parts = [&placed, &aligned].map(|ps| Role::ALL.map(|r| ps[roles.get(r)]));
+            let reach = chains.each_ref().map(|c| {
+                c.as_ref()
+                    .map_or(DVec3::ZERO, |c| limbs::reach(sk, c, &pose.rotations))
+            });
             Sample {
                 clip: clip_index,
                 frame: k,
@@ -87,6 +95,7 @@ pub fn samples_of(
                 placed,
                 aligned,
                 parts,
+                reach,
             }
         })
         .collect()

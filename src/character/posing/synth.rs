@@ -7,6 +7,7 @@
 
 use glam::{DQuat, DVec3};
 
+use super::limbs::{self, limb_index};
 use super::model::{LearnedModel, Parts};
 use super::sample::{Placement, Sample, pose_of, wrap};
 use crate::character::camera::HalfLine;
@@ -68,6 +69,13 @@ pub struct SynthOptions {
     /// Refit the blend weights to meet the constraints, pulled towards the
     /// cost weights by this much (m², 0: no refit).
     pub fit: f64,
+    /// Refit each constrained limb's own blend to reach its constraint,
+    /// pulled towards the body's weights by this much (m², 0: the limbs
+    /// keep the body's blend).
+    pub limb_fit: f64,
+    /// Samples a limb's blend may add to the body's: those whose limbs
+    /// reach the constraint best.
+    pub limb_extra: usize,
 }
 
 impl SynthOptions {
@@ -82,6 +90,8 @@ impl SynthOptions {
         ik: true,
         max_ik_m: 0.2,
         fit: 0.0,
+        limb_fit: 0.0,
+        limb_extra: 0,
     };
 }
 
@@ -95,6 +105,8 @@ impl Default for SynthOptions {
             ik: true,
             max_ik_m: 0.2,
             fit: 0.03,
+            limb_fit: 0.1,
+            limb_extra: 16,
         }
     }
 }
@@ -134,6 +146,26 @@ fn best(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, f64)
     }
     items.truncate(keep);
     items
+}
+
+/// The `k` items of least (non-negative) score, least first: one pass
+/// keeping the best so far in a heap.
+fn smallest(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, f64)> {
+    let mut heap = std::collections::BinaryHeap::with_capacity(k + 1);
+    for (i, v) in items {
+        // Non-negative floats order as their bits do.
+        let key = v.max(0.0).to_bits();
+        if heap.len() < k {
+            heap.push((key, i));
+        } else if heap.peek().is_some_and(|top: &(u64, usize)| key < top.0) {
+            heap.pop();
+            heap.push((key, i));
+        }
+    }
+    heap.into_sorted_vec()
+        .into_iter()
+        .map(|(key, i)| (i, f64::from_bits(key)))
+        .collect()
 }
 
 /// The samples that meet the constraints best (at most `opts.blend`), with
@@ -228,58 +260,106 @@ fn refit(
     weights: &mut [(usize, f64)],
     ridge: f64,
 ) {
-    let k = weights.len();
     let local = localize(constraints, at);
-    // M = sum over constraints of A'A (A: each sample's offset of the part
-    // from the target, across a ray), plus the ridge.
-    let mut m = vec![0.0; k * k];
-    let mut cols = vec![DVec3::ZERO; k];
-    for c in &local {
-        let (origin, dir) = match c.target {
-            Target::Point(q) => (q, None),
-            Target::Ray(r) => (r.origin, Some(r.dir)),
-        };
-        for (col, (i, _)) in cols.iter_mut().zip(weights.iter()) {
-            let v = model.samples[*i].part(at.anchor, c.role) - origin;
-            *col = dir.map_or(v, |d| v - d * v.dot(d));
-        }
-        for a in 0..k {
-            for e in a..k {
-                let d = cols[a].dot(cols[e]);
-                m[a * k + e] += d;
-            }
+    let cols: Vec<Vec<DVec3>> = local
+        .iter()
+        .map(|c| {
+            weights
+                .iter()
+                .map(|(i, _)| across(c.target, model.samples[*i].part(at.anchor, c.role)))
+                .collect()
+        })
+        .collect();
+    let prior: Vec<f64> = weights.iter().map(|w| w.1).collect();
+    fit_weights(weights, &prior, &cols, ridge);
+}
+
+/// The offset of `p` from a target that a fit should remove: all of it from
+/// a point, the part across the line from a half-line.
+fn across(target: Target, p: DVec3) -> DVec3 {
+    match target {
+        Target::Point(q) => p - q,
+        Target::Ray(r) => {
+            let v = p - r.origin;
+            v - r.dir * v.dot(r.dir)
         }
     }
-    for a in 0..k {
-        for e in 0..a {
-            m[a * k + e] = m[e * k + a];
-        }
-        m[a * k + a] += ridge;
+}
+
+/// Weights (summing to one, none negative) whose blend of each
+/// constraint's offsets (`cols[constraint][sample]`) is least, pulled
+/// towards `prior` by `ridge` (> 0); a negative weight is dropped and the
+/// rest refitted. Leaves `weights` as they are if the system is singular.
+///
+/// The system is `ridge I + A A'` (A: a row of offsets per sample), solved
+/// through the few columns of A (Woodbury), not the many samples.
+fn fit_weights(weights: &mut [(usize, f64)], prior: &[f64], cols: &[Vec<DVec3>], ridge: f64) {
+    let k = weights.len();
+    let d = 3 * cols.len();
+    if ridge <= 0.0 || k == 0 {
+        return;
     }
-    let g: Vec<f64> = weights.iter().map(|w| ridge * w.1).collect();
+    let mut a = vec![0.0; k * d];
+    for (c, col) in cols.iter().enumerate() {
+        for (row, v) in a.chunks_exact_mut(d).zip(col) {
+            row[3 * c..3 * c + 3].copy_from_slice(&v.to_array());
+        }
+    }
+    let g: Vec<f64> = prior.iter().map(|w| ridge * w).collect();
     // Minimise w'Mw/2 - g'w subject to sum(w) = 1: w = M^-1 (g + mu 1).
     let mut active: Vec<usize> = (0..k).collect();
     while !active.is_empty() {
-        let n = active.len();
-        let mut sub = vec![0.0; n * n];
-        for (r, &x) in active.iter().enumerate() {
-            for (c, &y) in active.iter().enumerate() {
-                sub[r * n + c] = m[x * k + y];
+        // ridge I + A'A over the active samples.
+        let mut inner = vec![0.0; d * d];
+        for &s in &active {
+            let row = &a[s * d..(s + 1) * d];
+            for i in 0..d {
+                for j in 0..=i {
+                    inner[i * d + j] += row[i] * row[j];
+                }
             }
         }
-        if !cholesky(&mut sub, n) {
+        for i in 0..d {
+            inner[i * d + i] += ridge;
+            for j in 0..i {
+                inner[j * d + i] = inner[i * d + j];
+            }
+        }
+        if !cholesky(&mut inner, d) {
             return;
         }
-        let x = cholesky_solve(&sub, active.iter().map(|&a| g[a]).collect(), n);
-        let y = cholesky_solve(&sub, vec![1.0; n], n);
+        // M^-1 b = (b - A (ridge I + A'A)^-1 A'b) / ridge.
+        let solve = |b: Vec<f64>| -> Vec<f64> {
+            let mut atb = vec![0.0; d];
+            for (&s, bs) in active.iter().zip(&b) {
+                for (t, x) in atb.iter_mut().zip(&a[s * d..(s + 1) * d]) {
+                    *t += x * bs;
+                }
+            }
+            let z = cholesky_solve(&inner, atb, d);
+            active
+                .iter()
+                .zip(&b)
+                .map(|(&s, bs)| {
+                    let az: f64 = a[s * d..(s + 1) * d]
+                        .iter()
+                        .zip(&z)
+                        .map(|(x, y)| x * y)
+                        .sum();
+                    (bs - az) / ridge
+                })
+                .collect()
+        };
+        let x = solve(active.iter().map(|&s| g[s]).collect());
+        let y = solve(vec![1.0; active.len()]);
         let mu = (1.0 - x.iter().sum::<f64>()) / y.iter().sum::<f64>();
         let w: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a + mu * b).collect();
         if w.iter().all(|v| *v >= 0.0) {
             for entry in weights.iter_mut() {
                 entry.1 = 0.0;
             }
-            for (&a, v) in active.iter().zip(w) {
-                weights[a].1 = v;
+            for (&s, v) in active.iter().zip(w) {
+                weights[s].1 = v;
             }
             return;
         }
@@ -287,8 +367,91 @@ fn refit(
             .iter()
             .zip(&w)
             .filter(|(_, v)| **v >= 0.0)
-            .map(|(a, _)| *a)
+            .map(|(s, _)| *s)
             .collect();
+    }
+}
+
+/// Blend each constrained limb on its own (the joints from its base down):
+/// the body's samples and the `extra` samples whose limbs reach the
+/// constraint best, hung from where the body's blend puts the limb's base,
+/// weighted to reach the constraint, pulled towards the body's weights by
+/// `ridge` (a sample the body does not use pulls towards none).
+#[allow(clippy::too_many_arguments)]
+pub fn refit_limbs(
+    skeleton: &Skeleton,
+    roles: &RoleMap,
+    model: &LearnedModel,
+    constraints: &[Constraint],
+    pose: &mut Pose,
+    weights: &[(usize, f64)],
+    ridge: f64,
+    extra: usize,
+) {
+    let w = forward_kinematics(skeleton, pose);
+    for c in constraints {
+        let (Some(limb), Some(chain)) = (limb_index(c.role), limbs::chain(skeleton, roles, c.role))
+        else {
+            continue;
+        };
+        let base = chain[0];
+        // The constraint in the frame the limb's reach is measured in.
+        let unturn = skeleton.joints[base]
+            .parent
+            .map_or(DQuat::IDENTITY, |p| w.rotations[p])
+            .inverse();
+        let origin = w.positions[base];
+        let target = match c.target {
+            Target::Point(q) => Target::Point(unturn * (q - origin)),
+            Target::Ray(r) => Target::Ray(HalfLine {
+                origin: unturn * (r.origin - origin),
+                dir: unturn * r.dir,
+            }),
+        };
+        let reach = &model.index.reach[limb];
+        let miss = |i: usize| across(target, reach[i]);
+        let mut own = weights.to_vec();
+        if extra > 0 {
+            let scored = reach
+                .iter()
+                .enumerate()
+                .map(|(i, r)| (i, across(target, *r).length_squared()));
+            let others = smallest(scored, extra + weights.len())
+                .into_iter()
+                .filter(|(i, _)| weights.iter().all(|w| w.0 != *i))
+                .take(extra);
+            own.extend(others.map(|(i, _)| (i, 0.0)));
+        }
+        let prior: Vec<f64> = own.iter().map(|w| w.1).collect();
+        let col: Vec<DVec3> = own.iter().map(|(i, _)| miss(*i)).collect();
+        fit_weights(&mut own, &prior, &[col], ridge);
+        own.retain(|w| w.1 > 0.0);
+        if own.is_empty() {
+            continue;
+        }
+        own.sort_by(|a, b| b.1.total_cmp(&a.1));
+        for j in base..skeleton.len() {
+            if limbs::hangs_from(skeleton, j, base) {
+                pose.rotations[j] = mean_rotation(model, &own, j);
+            }
+        }
+    }
+}
+
+/// Weighted mean of the samples' local rotations of joint `j`, each turned
+/// into the hemisphere of the first sample's (so that opposite signs of one
+/// rotation do not cancel).
+fn mean_rotation(model: &LearnedModel, weights: &[(usize, f64)], j: usize) -> DQuat {
+    let reference = model.samples[weights[0].0].rotations[j];
+    let mut sum = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+    for &(i, w) in weights {
+        let q = model.samples[i].rotations[j];
+        sum += if q.dot(reference) < 0.0 { -q } else { q } * w;
+    }
+    if sum.length() > 1e-12 {
+        sum.normalize()
+    } else {
+        DQuat::IDENTITY
     }
 }
 
@@ -345,32 +508,17 @@ pub fn blend(
     at: &Placement,
 ) -> Pose {
     let first = &model.samples[weights[0].0];
-    let n = first.rotations.len();
-    let mut rot = vec![DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0); n];
     let mut offset = DVec3::ZERO;
     let (mut s, mut c) = (0.0, 0.0);
     for &(i, w) in weights {
         let sample = &model.samples[i];
-        for ((r, q), reference) in rot.iter_mut().zip(&sample.rotations).zip(&first.rotations) {
-            // Same hemisphere as the best sample, so opposite signs of one
-            // rotation do not cancel.
-            let q = if q.dot(*reference) < 0.0 { -*q } else { *q };
-            *r += q * w;
-        }
         offset += sample.root_offset * w;
         s += sample.yaw.sin() * w;
         c += sample.yaw.cos() * w;
     }
     let blended = Sample {
-        rotations: rot
-            .iter()
-            .map(|q| {
-                if q.length() > 1e-12 {
-                    q.normalize()
-                } else {
-                    DQuat::IDENTITY
-                }
-            })
+        rotations: (0..first.rotations.len())
+            .map(|j| mean_rotation(model, weights, j))
             .collect(),
         root_offset: offset,
         yaw: wrap(s.atan2(c)),
@@ -429,30 +577,69 @@ pub fn plant_feet(skeleton: &Skeleton, roles: &RoleMap, pose: &mut Pose, at: [Op
 
 /// CCD IK: move each effector towards its goal, turning the joints of its
 /// chain, nearest first. Turning a chain joint moves neither its ancestors
-/// nor their rotations, so one forward-kinematics pass per goal and sweep
-/// suffices; sweeps stop once every goal is within 0.1 mm.
+/// nor their rotations, so one pass of forward kinematics down the path
+/// from the root to the effector per goal and sweep suffices; sweeps stop
+/// once every goal is within 0.1 mm.
 pub fn ccd(
     skeleton: &Skeleton,
     pose: &mut Pose,
     goals: &[(usize, Vec<usize>, DVec3)],
     sweeps: usize,
 ) {
+    // Per goal: the path from the root down to the effector, and where each
+    // chain joint lies on it (a chain joint off the path cannot move it).
+    let paths: Vec<(Vec<usize>, Vec<usize>)> = goals
+        .iter()
+        .map(|(effector, chain, _)| {
+            let mut path = vec![*effector];
+            while let Some(p) = skeleton.joints[*path.last().unwrap_or(effector)].parent {
+                path.push(p);
+            }
+            path.reverse();
+            let on_path = chain
+                .iter()
+                .filter_map(|j| path.iter().position(|p| p == j))
+                .collect();
+            (path, on_path)
+        })
+        .collect();
+    let mut positions = Vec::new();
+    let mut rotations = Vec::new();
     for _ in 0..sweeps {
         let mut worst = 0.0f64;
-        for (effector, chain, goal) in goals {
-            let w = forward_kinematics(skeleton, pose);
-            let mut end = w.positions[*effector];
+        for ((_, _, goal), (path, on_path)) in goals.iter().zip(&paths) {
+            positions.clear();
+            rotations.clear();
+            for (k, &j) in path.iter().enumerate() {
+                let (p, r) = if k == 0 {
+                    (pose.translations[j], pose.rotations[j])
+                } else {
+                    let pr: DQuat = rotations[k - 1];
+                    (
+                        positions[k - 1] + pr * pose.translations[j],
+                        pr * pose.rotations[j],
+                    )
+                };
+                positions.push(p);
+                rotations.push(r.normalize());
+            }
+            let Some(mut end) = positions.last().copied() else {
+                continue;
+            };
             worst = worst.max((end - *goal).length());
-            for &j in chain {
-                let pivot = w.positions[j];
+            for &k in on_path {
+                let j = path[k];
+                let pivot = positions[k];
                 let (a, b) = (end - pivot, *goal - pivot);
                 if a.length() < 1e-9 || b.length() < 1e-9 {
                     continue;
                 }
                 let turn = DQuat::from_rotation_arc(a.normalize(), b.normalize());
-                let parent_rot = skeleton.joints[j]
-                    .parent
-                    .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
+                let parent_rot = if k == 0 {
+                    DQuat::IDENTITY
+                } else {
+                    rotations[k - 1]
+                };
                 // This joint's world rotation now, after the turns of the
                 // joints below it (which do not change it).
                 let current = parent_rot * pose.rotations[j];
@@ -480,6 +667,18 @@ pub fn synthesize(
 ) -> Pose {
     let weights = choose(model, constraints, at, opts);
     let mut pose = blend(skeleton, model, &weights, at);
+    if opts.limb_fit > 0.0 {
+        refit_limbs(
+            skeleton,
+            roles,
+            model,
+            constraints,
+            &mut pose,
+            &weights,
+            opts.limb_fit,
+            opts.limb_extra,
+        );
+    }
     if opts.ik {
         apply_ik(
             skeleton,
