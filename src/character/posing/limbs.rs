@@ -1,9 +1,10 @@
-//! The limbs that carry hands and feet, as the posing blend sees them: a
-//! limb hangs from its base joint (the clavicle, if the skeleton has one,
-//! else the shoulder; the hip) and its reach is where its end lies from
-//! there, in the frame of the base's parent. A limb's reach depends only on
-//! its own joints' rotations, so a limb can be blended from other samples
-//! than the body it hangs from.
+//! The limbs that carry hands, feet and head, as the posing blend sees
+//! them: a limb hangs from its base joint (the clavicle, if the skeleton has
+//! one, else the shoulder; the hip; for the head, the spine's first joint
+//! above the root) and its reach is where its end lies from there, in the
+//! frame of the base's parent. A limb's reach depends only on its own
+//! joints' rotations, so a limb can be blended from other samples than the
+//! body it hangs from.
 
 use glam::{DQuat, DVec3};
 
@@ -11,7 +12,8 @@ use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::Skeleton;
 
 /// The limbs, in the order of [`crate::character::posing::sample::Sample::reach`].
-pub const LIMBS: [Role; 4] = [
+pub const LIMBS: [Role; 5] = [
+    Role::Head,
     Role::RightHand,
     Role::LeftHand,
     Role::RightFoot,
@@ -24,8 +26,8 @@ pub fn limb_index(role: Role) -> Option<usize> {
     LIMBS.iter().position(|r| *r == role)
 }
 
-/// The joints from a limb's base down to its end (hand or foot), base
-/// first; `None` for a role that ends no limb.
+/// The joints from a limb's base down to its end (head, hand or foot),
+/// base first; `None` for a role that ends no limb.
 #[must_use]
 pub fn chain(skeleton: &Skeleton, roles: &RoleMap, role: Role) -> Option<Vec<usize>> {
     let upper = match role {
@@ -33,9 +35,20 @@ pub fn chain(skeleton: &Skeleton, roles: &RoleMap, role: Role) -> Option<Vec<usi
         Role::LeftHand => Role::LeftShoulder,
         Role::RightFoot => Role::RightHip,
         Role::LeftFoot => Role::LeftHip,
+        Role::Head => Role::Head,
         _ => return None,
     };
     let upper = roles.get(upper);
+    if role == Role::Head {
+        // The spine: from the root's child on the way to the head.
+        let mut joints = vec![upper];
+        while let Some(p) = skeleton.joints[*joints.last()?].parent {
+            joints.push(p);
+        }
+        joints.pop();
+        joints.reverse();
+        return (joints.len() > 1).then_some(joints);
+    }
     // A hand's limb starts at the joint between shoulder and chest.
     let base = match role {
         Role::RightHand | Role::LeftHand => skeleton.joints[upper]

@@ -67,7 +67,7 @@ pub struct SearchIndex {
     pub samples: Vec<(u32, Parts)>,
     /// Per limb (in [`super::limbs::LIMBS`] order), every sample's reach
     /// in sample order, for the limb refit's search.
-    pub reach: [Vec<glam::DVec3>; 4],
+    pub reach: [Vec<glam::DVec3>; 5],
 }
 
 impl SearchIndex {

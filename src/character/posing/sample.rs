@@ -47,7 +47,7 @@ pub struct Sample {
     /// that the search reads one sample's parts from one place.
     pub parts: [[DVec3; Role::ALL.len()]; 2],
     /// Each limb's reach ([`limbs::reach`], in [`limbs::LIMBS`] order).
-    pub reach: [DVec3; 4],
+    pub reach: [DVec3; 5],
 }
 
 /// Samples from frames `frames` of a clip.

@@ -1,9 +1,11 @@
 //! Posture synthesis from constraints (the paper's section 4): find the
 //! latent cells whose representatives best meet the constraints (looking
 //! first at blocks of cells, then at the cells of the best blocks), blend
-//! those cells' samples weighted by how well each meets them, then let CCD IK
-//! move each constrained part onto its constraint (at most 0.2 m) and keep
-//! planted feet where they are.
+//! those cells' samples weighted by how well each meets them (refitted to
+//! meet them), blend each constrained limb on its own so that it reaches
+//! its constraint from where the body put it, then let IK move each
+//! constrained part onto its constraint (at most 0.2 m) and keep planted
+//! feet where they are.
 
 use glam::{DQuat, DVec3};
 
@@ -372,7 +374,8 @@ fn fit_weights(weights: &mut [(usize, f64)], prior: &[f64], cols: &[Vec<DVec3>],
     }
 }
 
-/// Blend each constrained limb on its own (the joints from its base down):
+/// Blend each constrained limb on its own (the joints from its base down;
+/// the head's limb is the spine, done first since the arms hang from it):
 /// the body's samples and the `extra` samples whose limbs reach the
 /// constraint best, hung from where the body's blend puts the limb's base,
 /// weighted to reach the constraint, pulled towards the body's weights by
@@ -388,12 +391,15 @@ pub fn refit_limbs(
     ridge: f64,
     extra: usize,
 ) {
-    let w = forward_kinematics(skeleton, pose);
-    for c in constraints {
+    // The spine first: the arms hang from it.
+    let mut order: Vec<&Constraint> = constraints.iter().collect();
+    order.sort_by_key(|c| limb_index(c.role));
+    for c in order {
         let (Some(limb), Some(chain)) = (limb_index(c.role), limbs::chain(skeleton, roles, c.role))
         else {
             continue;
         };
+        let w = forward_kinematics(skeleton, pose);
         let base = chain[0];
         // The constraint in the frame the limb's reach is measured in.
         let unturn = skeleton.joints[base]
