@@ -352,7 +352,7 @@ fn limbs_blended_on_their_own_reach_what_the_body_blend_misses() {
         }
     }
     eprintln!(
-        "hands' and feet's misses before IK: body blend {body:.3} m, limbs on their own {own:.3} m"
+        "misses of the constrained parts before IK: body blend {body:.3} m, limbs on their own {own:.3} m"
     );
     assert!(moved < 1e-9, "the limb refit moved the body by {moved} m");
     assert!(
