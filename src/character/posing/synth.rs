@@ -838,3 +838,48 @@ pub fn apply_ik(
         pose.rotations[j] = (parent.inverse() * w.rotations[j]).normalize();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fitted(offsets: &[f64], prior: &[f64], ridge: f64) -> Vec<f64> {
+        let mut weights: Vec<(usize, f64)> = prior.iter().copied().enumerate().collect();
+        let cols = vec![offsets.iter().map(|x| DVec3::new(*x, 0.0, 0.0)).collect()];
+        fit_weights(&mut weights, prior, &cols, ridge);
+        weights.iter().map(|w| w.1).collect()
+    }
+
+    #[test]
+    fn fitted_weights_meet_a_reachable_constraint_and_sum_to_one() {
+        // Samples 1 m past the target and 3 m short of it: 3/4 and 1/4
+        // meet it; a small ridge barely moves that.
+        let w = fitted(&[1.0, -3.0], &[0.5, 0.5], 1e-6);
+        assert!(
+            (w[0] - 0.75).abs() < 1e-4 && (w[1] - 0.25).abs() < 1e-4,
+            "{w:?}"
+        );
+        // A large ridge keeps the prior.
+        let w = fitted(&[1.0, -3.0], &[0.5, 0.5], 1e6);
+        assert!((w[0] - 0.5).abs() < 1e-4, "{w:?}");
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn fitted_weights_drop_samples_that_would_need_a_negative_weight() {
+        // Every sample overshoots: the nearest takes all the weight rather
+        // than the others going negative.
+        let w = fitted(&[1.0, 2.0, 5.0], &[0.2, 0.5, 0.3], 1e-6);
+        assert_eq!(w[1], 0.0, "{w:?}");
+        assert_eq!(w[2], 0.0, "{w:?}");
+        assert!((w[0] - 1.0).abs() < 1e-12, "{w:?}");
+    }
+
+    #[test]
+    fn the_smallest_items_come_least_first() {
+        let items = [(0, 5.0), (1, 0.5), (2, 3.0), (3, 0.0), (4, 9.0)];
+        let got = smallest(items.into_iter(), 3);
+        assert_eq!(got, vec![(3, 0.0), (1, 0.5), (2, 3.0)]);
+        assert_eq!(smallest(items.into_iter(), 9).len(), 5);
+    }
+}
