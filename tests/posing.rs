@@ -10,7 +10,7 @@ use marionette::character::library::Library;
 use marionette::character::posing::eval::{self, Method, Mode};
 use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::posing::pick::pick;
-use marionette::character::posing::sample::Placement;
+use marionette::character::posing::sample::{Anchor, Placement};
 use marionette::character::posing::synth::{
     Constraint, SynthOptions, Target, blend, choose, refit_limbs, synthesize, two_bone,
 };
@@ -72,14 +72,28 @@ fn the_model_embeds_every_sample_and_fills_a_grid() {
     let index = &model.index;
     assert_eq!(index.blocks.len(), model.blocks.len());
     assert_eq!(index.cells.len(), model.cells.len());
+    let mut cell_ids = index.cell_ids.clone();
+    cell_ids.sort_unstable();
+    assert!(cell_ids.iter().copied().eq(0..model.cells.len() as u32));
     for (c, cell) in model.cells.iter().enumerate() {
         let range = index.samples_of_cell[c] as usize..index.samples_of_cell[c + 1] as usize;
-        let ids: Vec<u32> = index.samples[range].iter().map(|(i, _)| *i).collect();
-        assert_eq!(ids, cell.members);
-        assert_eq!(
-            index.samples[index.samples_of_cell[c] as usize].1,
-            model.samples[cell.members[0] as usize].parts
-        );
+        assert_eq!(index.samples.ids[range.clone()], cell.members);
+        for role in Role::ALL {
+            for anchor in [Anchor::ClipStart, Anchor::Root] {
+                let column = &index.samples.column(anchor, role)[range.clone()];
+                let parts = cell
+                    .members
+                    .iter()
+                    .map(|&m| model.samples[m as usize].part(anchor, role));
+                assert!(column.iter().copied().eq(parts));
+            }
+        }
+    }
+    for (k, &c) in index.cell_ids.iter().enumerate() {
+        let rep = model.cells[c as usize].representative;
+        assert_eq!(index.cells.ids[k], rep);
+        let head = model.samples[rep as usize].part(Anchor::Root, Role::Head);
+        assert_eq!(index.cells.column(Anchor::Root, Role::Head)[k], head);
     }
 }
 

@@ -6,7 +6,7 @@
 //! at the cells of the best few only.
 
 use super::mds;
-use super::sample::{Sample, distance};
+use super::sample::{Anchor, Sample, distance};
 
 /// A grid cell: its samples and the one that represents it.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,30 +41,72 @@ pub struct LearnedModel {
     pub cell_of: Vec<u32>,
     /// Non-empty blocks of [`BLOCK_CELLS`] x [`BLOCK_CELLS`] cells.
     pub blocks: Vec<Block>,
-    /// The grid's representatives and members laid out in search order.
+    /// The grid's representatives and members laid out in search order,
+    /// part by part.
     pub index: SearchIndex,
 }
 
-/// A sample's role joints, as in [`Sample::parts`].
-pub type Parts = [[glam::DVec3; crate::character::roles::Role::ALL.len()]; 2];
+/// The role-joint positions of a list of samples, one contiguous column
+/// per anchor and role: a search that constrains one part reads one column,
+/// a few bytes per sample, instead of every sample's parts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PartColumns {
+    /// Which sample each entry stands for (an index into the model's samples).
+    pub ids: Vec<u32>,
+    /// Column `anchor * Role::ALL.len() + role`.
+    columns: Vec<Vec<glam::DVec3>>,
+}
+
+impl PartColumns {
+    fn of(samples: &[Sample], ids: Vec<u32>) -> Self {
+        let roles = crate::character::roles::Role::ALL.len();
+        let columns = (0..2 * roles)
+            .map(|k| {
+                ids.iter()
+                    .map(|&i| samples[i as usize].parts[k / roles][k % roles])
+                    .collect()
+            })
+            .collect();
+        Self { ids, columns }
+    }
+
+    /// The positions of one role's joint relative to one anchor, entry by entry.
+    #[must_use]
+    pub fn column(&self, anchor: Anchor, role: crate::character::roles::Role) -> &[glam::DVec3] {
+        &self.columns[anchor.index() * crate::character::roles::Role::ALL.len() + role.index()]
+    }
+
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+}
 
 /// The parts of the grid's samples in the order the search reads them:
 /// the blocks' representatives, the cells' representatives block by block,
-/// the samples cell by cell; each entry carries what it stands for (a
-/// block, a cell, a sample). Reading these in order, instead of samples
+/// the samples cell by cell. Reading these in runs, instead of samples
 /// scattered over memory, is what makes the grid search fast.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SearchIndex {
-    /// Per block (index into `blocks`): its representative's parts.
-    pub blocks: Vec<Parts>,
-    /// Cells of block `b` are `cells[cells_of_block[b]..cells_of_block[b + 1]]`.
+    /// Entry `b`: block `b`'s representative.
+    pub blocks: PartColumns,
+    /// Cells of block `b` are entries `cells_of_block[b]..cells_of_block[b + 1]`
+    /// of `cells`.
     pub cells_of_block: Vec<u32>,
-    /// (cell index, its representative's parts).
-    pub cells: Vec<(u32, Parts)>,
-    /// Samples of cell `c` are `samples[samples_of_cell[c]..samples_of_cell[c + 1]]`.
+    /// The cells' representatives, block by block.
+    pub cells: PartColumns,
+    /// For each entry of `cells`, its index in the model's cells.
+    pub cell_ids: Vec<u32>,
+    /// Samples of cell `c` are entries `samples_of_cell[c]..samples_of_cell[c + 1]`
+    /// of `samples`.
     pub samples_of_cell: Vec<u32>,
-    /// (sample index, its parts).
-    pub samples: Vec<(u32, Parts)>,
+    /// Every sample, cell by cell.
+    pub samples: PartColumns,
     /// Per limb (in [`super::limbs::LIMBS`] order), every sample's reach
     /// in sample order, for the limb refit's search.
     pub reach: [Vec<glam::DVec3>; 5],
@@ -72,29 +114,28 @@ pub struct SearchIndex {
 
 impl SearchIndex {
     fn build(samples: &[Sample], cells: &[Cell], blocks: &[Block]) -> Self {
-        let parts = |i: u32| samples[i as usize].parts;
-        let mut index = Self {
-            blocks: blocks.iter().map(|b| parts(b.representative)).collect(),
-            reach: std::array::from_fn(|l| samples.iter().map(|s| s.reach[l]).collect()),
-            ..Self::default()
-        };
-        index.cells_of_block.push(0);
+        let mut cells_of_block = vec![0];
+        let (mut cell_ids, mut cell_reps) = (Vec::new(), Vec::new());
         for b in blocks {
-            index.cells.extend(
-                b.cells
-                    .iter()
-                    .map(|&c| (c, parts(cells[c as usize].representative))),
-            );
-            index.cells_of_block.push(index.cells.len() as u32);
+            cell_ids.extend(&b.cells);
+            cell_reps.extend(b.cells.iter().map(|&c| cells[c as usize].representative));
+            cells_of_block.push(cell_ids.len() as u32);
         }
-        index.samples_of_cell.push(0);
+        let mut samples_of_cell = vec![0];
+        let mut members = Vec::with_capacity(samples.len());
         for c in cells {
-            index
-                .samples
-                .extend(c.members.iter().map(|&m| (m, parts(m))));
-            index.samples_of_cell.push(index.samples.len() as u32);
+            members.extend(&c.members);
+            samples_of_cell.push(members.len() as u32);
         }
-        index
+        Self {
+            blocks: PartColumns::of(samples, blocks.iter().map(|b| b.representative).collect()),
+            cells_of_block,
+            cells: PartColumns::of(samples, cell_reps),
+            cell_ids,
+            samples_of_cell,
+            samples: PartColumns::of(samples, members),
+            reach: std::array::from_fn(|l| samples.iter().map(|s| s.reach[l]).collect()),
+        }
     }
 }
 

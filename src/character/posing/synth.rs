@@ -10,7 +10,7 @@
 use glam::{DQuat, DVec3};
 
 use super::limbs::{self, limb_index};
-use super::model::{LearnedModel, Parts};
+use super::model::{LearnedModel, PartColumns};
 use super::sample::{Placement, Sample, pose_of, wrap};
 use crate::character::camera::HalfLine;
 use crate::character::roles::{Role, RoleMap};
@@ -182,45 +182,70 @@ pub fn select(
     opts: &SynthOptions,
 ) -> Vec<(usize, f64)> {
     let local = localize(constraints, at);
-    let anchor = at.anchor.index();
-    let cost = |parts: &Parts| {
-        local
-            .iter()
-            .map(|c| c.target.distance(parts[anchor][c.role.index()]))
-            .sum::<f64>()
-            / local.len().max(1) as f64
-    };
     let index = &model.index;
-    let mut scored = if opts.use_grid && !model.cells.is_empty() {
+    // The mean distance to the targets of each entry of `cols[run]`,
+    // constraint by constraint down the columns, appended to `out` with
+    // the entry's position in `cols`.
+    let count = local.len().max(1) as f64;
+    let score = |cols: &PartColumns, run: std::ops::Range<usize>, out: &mut Vec<(usize, f64)>| {
+        let from = out.len();
+        out.extend(run.clone().map(|k| (k, 0.0)));
+        let sums = &mut out[from..];
+        for c in &local {
+            let col = &cols.column(at.anchor, c.role)[run.clone()];
+            match c.target {
+                Target::Point(q) => {
+                    for (s, p) in sums.iter_mut().zip(col) {
+                        s.1 += (*p - q).length();
+                    }
+                }
+                Target::Ray(r) => {
+                    for (s, p) in sums.iter_mut().zip(col) {
+                        s.1 += r.distance(*p);
+                    }
+                }
+            }
+        }
+        for s in sums {
+            s.1 /= count;
+        }
+    };
+    let mut scored = Vec::new();
+    if opts.use_grid && !model.cells.is_empty() {
         let range = |starts: &[u32], i: usize| starts[i] as usize..starts[i + 1] as usize;
         // The cells to look at: those of the blocks whose representatives
         // meet the constraints best, or every one.
-        let blocks: Vec<usize> = if opts.blocks > 0 && !model.blocks.is_empty() {
-            let scored = index.blocks.iter().map(cost).enumerate();
-            best(scored, opts.blocks)
+        let blocks: Vec<usize> = if opts.blocks > 0 && !index.blocks.is_empty() {
+            score(&index.blocks, 0..index.blocks.len(), &mut scored);
+            best(scored.drain(..), opts.blocks)
                 .into_iter()
                 .map(|(b, _)| b)
                 .collect()
         } else {
             (0..model.blocks.len()).collect()
         };
-        let cells = blocks.into_iter().flat_map(|b| {
-            index.cells[range(&index.cells_of_block, b)]
-                .iter()
-                .map(|(c, parts)| (*c as usize, cost(parts)))
-        });
+        let mut cells = Vec::new();
+        for b in blocks {
+            score(&index.cells, range(&index.cells_of_block, b), &mut cells);
+        }
         // The samples of the cells whose representatives meet the
         // constraints best.
-        let samples = best(cells, opts.cells).into_iter().flat_map(|(c, _)| {
-            index.samples[range(&index.samples_of_cell, c)]
-                .iter()
-                .map(|(i, parts)| (*i as usize, cost(parts)))
-        });
-        best(samples, opts.blend)
+        for (k, _) in best(cells.into_iter(), opts.cells) {
+            let c = index.cell_ids[k] as usize;
+            score(
+                &index.samples,
+                range(&index.samples_of_cell, c),
+                &mut scored,
+            );
+        }
     } else {
-        let scored = model.samples.iter().map(|s| cost(&s.parts)).enumerate();
-        best(scored, opts.blend)
-    };
+        score(&index.samples, 0..index.samples.len(), &mut scored);
+    }
+    let ids = &index.samples.ids;
+    let mut scored: Vec<(usize, f64)> = best(scored.into_iter(), opts.blend)
+        .into_iter()
+        .map(|(k, s)| (ids[k] as usize, s))
+        .collect();
     scored.sort_by(|a, b| a.1.total_cmp(&b.1));
     scored
 }
