@@ -7,6 +7,7 @@ mod common;
 use glam::DVec3;
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
+use marionette::character::motion::Clip;
 use marionette::character::posing::eval::{self, Method, Mode};
 use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::posing::pick::pick;
@@ -14,8 +15,8 @@ use marionette::character::posing::sample::{Anchor, Placement};
 use marionette::character::posing::synth::{
     Constraint, SynthOptions, Target, blend, choose, refit_limbs, synthesize, two_bone,
 };
-use marionette::character::roles::Role;
-use marionette::character::skeleton::forward_kinematics;
+use marionette::character::roles::{Role, RoleMap};
+use marionette::character::skeleton::{Skeleton, forward_kinematics};
 
 fn default_library() -> Library {
     Library::load(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
@@ -273,42 +274,66 @@ fn cmu_library(
     (lib, model, held_out)
 }
 
-#[test]
-fn refitted_weights_meet_the_constraints_better_than_cost_weights() {
-    let dir = tempfile::tempdir().unwrap();
-    let (lib, model, held_out) = cmu_library(dir.path());
-    let sk = &lib.skeleton;
-    let (mut plain, mut fitted) = (0.0, 0.0);
-    for clip in &held_out {
+/// Ten frames of each held-out clip, placed where they stand, with their
+/// five parts constrained to their true positions.
+struct HeldOut<'a> {
+    roles: &'a RoleMap,
+    at: Placement,
+    constraints: Vec<Constraint>,
+}
+
+fn held_out_frames<'a>(sk: &Skeleton, held_out: &'a [Clip]) -> Vec<HeldOut<'a>> {
+    let mut frames = Vec::new();
+    for clip in held_out {
         let roles = &clip.roles;
         for f in (0..clip.frames.len()).step_by(clip.frames.len() / 10) {
             let truth = forward_kinematics(sk, &clip.frames[f]);
-            let at = Placement::of(sk, roles, &clip.frames[f]);
-            let constraints: Vec<Constraint> = eval::PARTS
+            let constraints = eval::PARTS
                 .iter()
                 .map(|&role| Constraint {
                     role,
                     target: Target::Point(truth.positions[roles.get(role)]),
                 })
                 .collect();
-            let miss = |fit: f64| {
-                let opts = SynthOptions {
-                    fit,
-                    ..SynthOptions::default()
-                };
-                let weights = choose(&model, &constraints, &at, &opts);
-                let total: f64 = weights.iter().map(|w| w.1).sum();
-                assert!((total - 1.0).abs() < 1e-9, "weights sum to {total}");
-                assert!(weights.iter().all(|w| w.1 >= 0.0), "{weights:?}");
-                let w = forward_kinematics(sk, &blend(sk, &model, &weights, &at));
-                constraints
-                    .iter()
-                    .map(|c| c.target.distance(w.positions[roles.get(c.role)]))
-                    .sum::<f64>()
-            };
-            plain += miss(0.0);
-            fitted += miss(SynthOptions::default().fit);
+            frames.push(HeldOut {
+                roles,
+                at: Placement::of(sk, roles, &clip.frames[f]),
+                constraints,
+            });
         }
+    }
+    frames
+}
+
+#[test]
+fn refitted_weights_meet_the_constraints_better_than_cost_weights() {
+    let dir = tempfile::tempdir().unwrap();
+    let (lib, model, held_out) = cmu_library(dir.path());
+    let sk = &lib.skeleton;
+    let (mut plain, mut fitted) = (0.0, 0.0);
+    for HeldOut {
+        roles,
+        at,
+        constraints,
+    } in held_out_frames(sk, &held_out)
+    {
+        let miss = |fit: f64| {
+            let opts = SynthOptions {
+                fit,
+                ..SynthOptions::default()
+            };
+            let weights = choose(&model, &constraints, &at, &opts);
+            let total: f64 = weights.iter().map(|w| w.1).sum();
+            assert!((total - 1.0).abs() < 1e-9, "weights sum to {total}");
+            assert!(weights.iter().all(|w| w.1 >= 0.0), "{weights:?}");
+            let w = forward_kinematics(sk, &blend(sk, &model, &weights, &at));
+            constraints
+                .iter()
+                .map(|c| c.target.distance(w.positions[roles.get(c.role)]))
+                .sum::<f64>()
+        };
+        plain += miss(0.0);
+        fitted += miss(SynthOptions::default().fit);
     }
     eprintln!("misses before IK: refitted {fitted:.3} m, cost-weighted {plain:.3} m");
     assert!(
@@ -323,46 +348,39 @@ fn limbs_blended_on_their_own_reach_what_the_body_blend_misses() {
     let (lib, model, held_out) = cmu_library(dir.path());
     let sk = &lib.skeleton;
     let (mut body, mut own, mut moved) = (0.0, 0.0, 0.0);
-    for clip in &held_out {
-        let roles = &clip.roles;
-        for f in (0..clip.frames.len()).step_by(clip.frames.len() / 10) {
-            let truth = forward_kinematics(sk, &clip.frames[f]);
-            let at = Placement::of(sk, roles, &clip.frames[f]);
-            let constraints: Vec<Constraint> = eval::PARTS
-                .iter()
-                .map(|&role| Constraint {
-                    role,
-                    target: Target::Point(truth.positions[roles.get(role)]),
-                })
-                .collect();
-            let opts = SynthOptions::default();
-            let weights = choose(&model, &constraints, &at, &opts);
-            let before = blend(sk, &model, &weights, &at);
-            let mut after = before.clone();
-            refit_limbs(
-                sk,
-                roles,
-                &model,
-                &constraints,
-                &mut after,
-                &weights,
-                opts.limb_fit,
-                opts.limb_extra,
-            );
-            let (wb, wa) = (
-                forward_kinematics(sk, &before),
-                forward_kinematics(sk, &after),
-            );
-            for c in &constraints {
-                let j = roles.get(c.role);
-                body += c.target.distance(wb.positions[j]);
-                own += c.target.distance(wa.positions[j]);
-            }
-            // Only the limbs' joints turn: the pelvis and hips stay where
-            // the body's blend put them.
-            for r in [Role::Pelvis, Role::LeftHip, Role::RightHip] {
-                moved += (wa.positions[roles.get(r)] - wb.positions[roles.get(r)]).length();
-            }
+    for HeldOut {
+        roles,
+        at,
+        constraints,
+    } in held_out_frames(sk, &held_out)
+    {
+        let opts = SynthOptions::default();
+        let weights = choose(&model, &constraints, &at, &opts);
+        let before = blend(sk, &model, &weights, &at);
+        let mut after = before.clone();
+        refit_limbs(
+            sk,
+            roles,
+            &model,
+            &constraints,
+            &mut after,
+            &weights,
+            opts.limb_fit,
+            opts.limb_extra,
+        );
+        let (wb, wa) = (
+            forward_kinematics(sk, &before),
+            forward_kinematics(sk, &after),
+        );
+        for c in &constraints {
+            let j = roles.get(c.role);
+            body += c.target.distance(wb.positions[j]);
+            own += c.target.distance(wa.positions[j]);
+        }
+        // Only the limbs' joints turn: the pelvis and hips stay where
+        // the body's blend put them.
+        for r in [Role::Pelvis, Role::LeftHip, Role::RightHip] {
+            moved += (wa.positions[roles.get(r)] - wb.positions[roles.get(r)]).length();
         }
     }
     eprintln!(
@@ -373,6 +391,47 @@ fn limbs_blended_on_their_own_reach_what_the_body_blend_misses() {
         own < 0.6 * body,
         "before IK the limbs' own blends miss by {own:.3} m in all, the body's blend by {body:.3} m"
     );
+}
+
+#[test]
+fn ik_moves_the_hands_without_turning_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let (lib, model, held_out) = cmu_library(dir.path());
+    let sk = &lib.skeleton;
+    let (mut moved, mut turned) = (0.0, 0.0f64);
+    for HeldOut {
+        roles,
+        at,
+        constraints,
+    } in held_out_frames(sk, &held_out)
+    {
+        let with_ik = SynthOptions::default();
+        let without = SynthOptions {
+            ik: false,
+            ..with_ik
+        };
+        let (a, b) = (
+            forward_kinematics(
+                sk,
+                &synthesize(sk, roles, &model, &constraints, &at, None, &without),
+            ),
+            forward_kinematics(
+                sk,
+                &synthesize(sk, roles, &model, &constraints, &at, None, &with_ik),
+            ),
+        );
+        for role in [Role::RightHand, Role::LeftHand] {
+            let j = roles.get(role);
+            let step = (b.positions[j] - a.positions[j]).length();
+            moved += step;
+            turned = turned.max(a.rotations[j].angle_between(b.rotations[j]));
+        }
+    }
+    assert!(
+        moved > 0.1,
+        "IK moved the hands by {moved} m in all: nothing tested"
+    );
+    assert!(turned < 1e-6, "IK turned a hand by {turned} rad");
 }
 
 #[test]

