@@ -71,8 +71,13 @@ fn cmu_actions_are_recognised_from_held_out_takes() {
     let library = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/libraries/cmu-actions");
     let tests = tempfile::tempdir().unwrap();
     write_held_out(tests.path());
-    // (mode, the share of correct trials this library reaches today)
-    for (mode, floor) in [(&[][..], 0.3), (&["--models-only"][..], 0.15)] {
+    // (mode, a floor under the share of correct trials this library
+    // reaches today). Through the controller the share moves by a trial or
+    // three as posing settings move (0.296 to 0.333 as the posing search
+    // looks into 12 to 16 blocks and 16 to 64 cells: the three punch
+    // heights are near ties), so its floor sits two trials under the
+    // lowest.
+    for (mode, floor) in [(&[][..], 0.26), (&["--models-only"][..], 0.15)] {
         let r = eval(&library, tests.path(), mode);
         eprintln!("CMU actions {mode:?}: {r}");
         assert_eq!(r["trials"], HELD_OUT.len() * 6);

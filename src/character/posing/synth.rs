@@ -101,8 +101,8 @@ impl Default for SynthOptions {
     fn default() -> Self {
         Self {
             use_grid: true,
-            cells: 64,
-            blocks: 12,
+            cells: 16,
+            blocks: 16,
             blend: 64,
             ik: true,
             max_ik_m: 0.2,
@@ -139,15 +139,14 @@ fn localize(constraints: &[Constraint], at: &Placement) -> Vec<Local> {
         .collect()
 }
 
-/// The `k` (at least one) lowest-scored items, in no order.
-fn best(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, f64)> {
-    let mut items: Vec<(usize, f64)> = items.collect();
-    let keep = k.clamp(1, items.len().max(1)).min(items.len());
-    if keep > 0 && keep < items.len() {
-        items.select_nth_unstable_by(keep - 1, |a, b| a.1.total_cmp(&b.1));
+/// Keep the `k` (at least one) lowest-scored items (costs are not
+/// negative: their bits order as they do), in no order.
+fn keep_best(items: &mut Vec<(usize, f64)>, k: usize) {
+    let keep = k.max(1).min(items.len());
+    if keep < items.len() {
+        items.select_nth_unstable_by_key(keep - 1, |s| s.1.to_bits());
     }
     items.truncate(keep);
-    items
 }
 
 /// The `k` items of least (non-negative) score, least first: one pass
@@ -171,7 +170,7 @@ fn smallest(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, 
 }
 
 /// The samples that meet the constraints best (at most `opts.blend`), with
-/// their costs, best first: through the grid (the representatives of the
+/// their costs, the best first and the rest in no order: through the grid (the representatives of the
 /// blocks, then of the cells of the best blocks, then the samples of the
 /// best cells) or by scoring every sample.
 #[must_use]
@@ -183,10 +182,10 @@ pub fn select(
 ) -> Vec<(usize, f64)> {
     let local = localize(constraints, at);
     let index = &model.index;
-    // The mean distance to the targets of each entry of `cols[run]`,
+    // The summed distance to the targets of each entry of `cols[run]`,
     // constraint by constraint down the columns, appended to `out` with
-    // the entry's position in `cols`.
-    let count = local.len().max(1) as f64;
+    // the entry's position in `cols` (sums rank as the means do; only the
+    // kept ones are divided).
     let score = |cols: &PartColumns, run: std::ops::Range<usize>, out: &mut Vec<(usize, f64)>| {
         let from = out.len();
         out.extend(run.clone().map(|k| (k, 0.0)));
@@ -206,47 +205,52 @@ pub fn select(
                 }
             }
         }
-        for s in sums {
-            s.1 /= count;
-        }
     };
-    let mut scored = Vec::new();
+    // One buffer for every stage: each stage appends its scores after the
+    // kept entries of the stage before, which are then dropped.
+    let mut scored = Vec::with_capacity(256);
     if opts.use_grid && !model.cells.is_empty() {
         let range = |starts: &[u32], i: usize| starts[i] as usize..starts[i + 1] as usize;
         // The cells to look at: those of the blocks whose representatives
         // meet the constraints best, or every one.
-        let blocks: Vec<usize> = if opts.blocks > 0 && !index.blocks.is_empty() {
+        if opts.blocks > 0 && !index.blocks.is_empty() {
             score(&index.blocks, 0..index.blocks.len(), &mut scored);
-            best(scored.drain(..), opts.blocks)
-                .into_iter()
-                .map(|(b, _)| b)
-                .collect()
+            keep_best(&mut scored, opts.blocks);
+            let blocks = scored.len();
+            for k in 0..blocks {
+                let b = scored[k].0;
+                score(&index.cells, range(&index.cells_of_block, b), &mut scored);
+            }
+            scored.drain(..blocks);
         } else {
-            (0..model.blocks.len()).collect()
-        };
-        let mut cells = Vec::new();
-        for b in blocks {
-            score(&index.cells, range(&index.cells_of_block, b), &mut cells);
+            score(&index.cells, 0..index.cells.len(), &mut scored);
         }
         // The samples of the cells whose representatives meet the
         // constraints best.
-        for (k, _) in best(cells.into_iter(), opts.cells) {
-            let c = index.cell_ids[k] as usize;
+        keep_best(&mut scored, opts.cells);
+        let cells = scored.len();
+        for k in 0..cells {
+            let c = index.cell_ids[scored[k].0] as usize;
             score(
                 &index.samples,
                 range(&index.samples_of_cell, c),
                 &mut scored,
             );
         }
+        scored.drain(..cells);
     } else {
         score(&index.samples, 0..index.samples.len(), &mut scored);
     }
-    let ids = &index.samples.ids;
-    let mut scored: Vec<(usize, f64)> = best(scored.into_iter(), opts.blend)
-        .into_iter()
-        .map(|(k, s)| (ids[k] as usize, s))
-        .collect();
-    scored.sort_by(|a, b| a.1.total_cmp(&b.1));
+    keep_best(&mut scored, opts.blend);
+    let (ids, count) = (&index.samples.ids, local.len().max(1) as f64);
+    for s in &mut scored {
+        *s = (ids[s.0] as usize, s.1 / count);
+    }
+    // The best first (its rotations set the hemisphere the blend aligns
+    // to); the order of the rest does not matter.
+    if let Some(first) = (0..scored.len()).min_by_key(|&k| (scored[k].1.to_bits(), scored[k].0)) {
+        scored.swap(0, first);
+    }
     scored
 }
 
