@@ -358,16 +358,24 @@ fn limbs_blended_on_their_own_reach_what_the_body_blend_misses() {
         let weights = choose(&model, &constraints, &at, &opts);
         let before = blend(sk, &model, &weights, &at);
         let mut after = before.clone();
+        refit_limbs(sk, roles, &model, &constraints, &mut after, &weights, &opts);
+        // The reach grid finds exactly the samples measuring every reach
+        // finds.
+        let mut measured = before.clone();
+        let measure = SynthOptions {
+            use_grid: false,
+            ..opts
+        };
         refit_limbs(
             sk,
             roles,
             &model,
             &constraints,
-            &mut after,
+            &mut measured,
             &weights,
-            opts.limb_fit,
-            opts.limb_extra,
+            &measure,
         );
+        assert_eq!(after, measured);
         let (wb, wa) = (
             forward_kinematics(sk, &before),
             forward_kinematics(sk, &after),

@@ -5,6 +5,7 @@
 //! - [`mds`]: landmark MDS to 2-D.
 //! - [`model`]: the learned model and its grid.
 //! - [`limbs`]: the limbs a blend can refit on their own.
+//! - [`reach`]: the limbs' reaches in boxes, for the refit's search.
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 
@@ -14,5 +15,6 @@ pub mod limbs;
 pub mod mds;
 pub mod model;
 pub mod pick;
+pub mod reach;
 pub mod sample;
 pub mod synth;

@@ -6,6 +6,7 @@
 //! at the cells of the best few only.
 
 use super::mds;
+use super::reach::{BOX_M, ReachGrid};
 use super::sample::{Anchor, Sample, distance};
 
 /// A grid cell: its samples and the one that represents it.
@@ -110,6 +111,9 @@ pub struct SearchIndex {
     /// Per limb (in [`super::limbs::LIMBS`] order), every sample's reach
     /// in sample order, for the limb refit's search.
     pub reach: [Vec<glam::DVec3>; 5],
+    /// The same reaches in boxes, for the limb refit's search through the
+    /// grid.
+    pub reach_grids: [ReachGrid; 5],
 }
 
 impl SearchIndex {
@@ -135,6 +139,10 @@ impl SearchIndex {
             samples_of_cell,
             samples: PartColumns::of(samples, members),
             reach: std::array::from_fn(|l| samples.iter().map(|s| s.reach[l]).collect()),
+            reach_grids: std::array::from_fn(|l| {
+                let reach: Vec<glam::DVec3> = samples.iter().map(|s| s.reach[l]).collect();
+                ReachGrid::new(&reach, BOX_M)
+            }),
         }
     }
 }

@@ -170,9 +170,9 @@ fn smallest(items: impl Iterator<Item = (usize, f64)>, k: usize) -> Vec<(usize, 
 }
 
 /// The samples that meet the constraints best (at most `opts.blend`), with
-/// their costs, the best first and the rest in no order: through the grid (the representatives of the
-/// blocks, then of the cells of the best blocks, then the samples of the
-/// best cells) or by scoring every sample.
+/// their costs, the best first and the rest in no order: through the grid
+/// (the representatives of the blocks, then of the cells of the best
+/// blocks, then the samples of the best cells) or by scoring every sample.
 #[must_use]
 pub fn select(
     model: &LearnedModel,
@@ -405,11 +405,11 @@ fn fit_weights(weights: &mut [(usize, f64)], prior: &[f64], cols: &[Vec<DVec3>],
 
 /// Blend each constrained limb on its own (the joints from its base down;
 /// the head's limb is the spine, done first since the arms hang from it):
-/// the body's samples and the `extra` samples whose limbs reach the
-/// constraint best, hung from where the body's blend puts the limb's base,
+/// the body's samples and the `opts.limb_extra` samples whose limbs reach
+/// the constraint best (found through the reach grid, or by measuring
+/// every sample), hung from where the body's blend puts the limb's base,
 /// weighted to reach the constraint, pulled towards the body's weights by
-/// `ridge` (a sample the body does not use pulls towards none).
-#[allow(clippy::too_many_arguments)]
+/// `opts.limb_fit` (a sample the body does not use pulls towards none).
 pub fn refit_limbs(
     skeleton: &Skeleton,
     roles: &RoleMap,
@@ -417,9 +417,9 @@ pub fn refit_limbs(
     constraints: &[Constraint],
     pose: &mut Pose,
     weights: &[(usize, f64)],
-    ridge: f64,
-    extra: usize,
+    opts: &SynthOptions,
 ) {
+    let (ridge, extra) = (opts.limb_fit, opts.limb_extra);
     // The spine first: the arms hang from it.
     let mut order: Vec<&Constraint> = constraints.iter().collect();
     order.sort_by_key(|c| limb_index(c.role));
@@ -447,11 +447,16 @@ pub fn refit_limbs(
         let miss = |i: usize| across(target, reach[i]);
         let mut own = weights.to_vec();
         if extra > 0 {
-            let scored = reach
-                .iter()
-                .enumerate()
-                .map(|(i, r)| (i, across(target, *r).length_squared()));
-            let others = smallest(scored, extra + weights.len())
+            let nearest = if opts.use_grid {
+                model.index.reach_grids[limb].nearest(extra + weights.len(), |r| across(target, r))
+            } else {
+                let scored = reach
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| (i, across(target, *r).length_squared()));
+                smallest(scored, extra + weights.len())
+            };
+            let others = nearest
                 .into_iter()
                 .filter(|(i, _)| weights.iter().all(|w| w.0 != *i))
                 .take(extra);
@@ -710,8 +715,7 @@ pub fn synthesize(
             constraints,
             &mut pose,
             &weights,
-            opts.limb_fit,
-            opts.limb_extra,
+            opts,
         );
     }
     if opts.ik {
