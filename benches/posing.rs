@@ -1,6 +1,7 @@
 //! Posing control: synthesis from 1 and 5 touches on about 5,000 sample
-//! postures, through the grid and by scoring every sample; and baking a
-//! model of about 10,000 postures. `cargo bench --bench posing` (needs
+//! postures, through the grid and by scoring every sample (and the search
+//! alone on about 5,000 and 10,000); and baking a model of about 10,000
+//! postures. `cargo bench --bench posing` (needs
 //! ../shared/mocap).
 
 use std::path::PathBuf;
@@ -28,6 +29,7 @@ fn posing(c: &mut Criterion) {
     g.bench_function(format!("bake/{full}_postures"), |b| {
         b.iter(|| LearnedModel::build(samples.clone()))
     });
+    let whole = LearnedModel::build(samples.clone());
     let model = LearnedModel::build(samples.into_iter().step_by(2).collect());
     let held_out = marionette::character::motion::Clip::from_bvh(
         marionette::character::bvh::read_file(&lib.clips_dir.join("007_12.bvh")).unwrap(),
@@ -79,6 +81,13 @@ fn posing(c: &mut Criterion) {
             g.bench_function(format!("select/{n}_postures/{parts}_touches/{name}"), |b| {
                 b.iter(|| select(&model, &cs, &at, &opts));
             });
+            // The grid's search grows slower than the library.
+            g.bench_function(
+                format!("select/{full}_postures/{parts}_touches/{name}"),
+                |b| {
+                    b.iter(|| select(&whole, &cs, &at, &opts));
+                },
+            );
         }
     }
     g.finish();
