@@ -196,14 +196,19 @@ enum Command {
 enum EvalCommand {
     /// Posing control: reconstruct held-out frames from N constrained parts
     /// and print one JSON object (mpjpe_cm, constraint_err_px,
-    /// constraint_err_cm, ms_per_pose, poses)
+    /// constraint_err_cm, ms_per_pose, poses; with --leave-one-out, their
+    /// means and each clip's)
     Pose {
         /// Library folder (with library.toml)
         #[arg(long)]
         library: PathBuf,
         /// Held-out BVH clips of the library's skeleton
-        #[arg(long, num_args = 1.., required = true)]
+        #[arg(long, num_args = 1.., required_unless_present = "leave_one_out")]
         test: Vec<PathBuf>,
+        /// Test each posing clip of the library in turn on a model of the
+        /// others (instead of --test; --frames per clip)
+        #[arg(long, conflicts_with = "test")]
+        leave_one_out: bool,
         /// Constrained parts, first N of right_hand, left_hand, right_foot, left_foot, head
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u8).range(1..=5))]
         parts: u8,
@@ -211,7 +216,8 @@ enum EvalCommand {
         mode: EvalMode,
         #[arg(long, value_enum, default_value = "model")]
         method: EvalMethod,
-        /// Frames sampled evenly from the test clips
+        /// Frames sampled evenly from the test clips (from each clip with
+        /// --leave-one-out)
         #[arg(long, default_value_t = 200)]
         frames: usize,
     },
@@ -394,12 +400,20 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                 EvalCommand::Pose {
                     library,
                     test,
+                    leave_one_out,
                     parts,
                     mode,
                     method,
                     frames,
                 },
-        } => eval_pose(&library, &test, parts, mode, method, frames),
+        } => {
+            let setup = pose_setup(parts, mode, method, frames);
+            if leave_one_out {
+                eval_pose_leave_one_out(&library, setup)
+            } else {
+                eval_pose(&library, &test, setup)
+            }
+        }
         Command::AuthorLibrary { src, out } => {
             let n = marionette::character::author::author_library(&src, &out).map_err(|e| {
                 let code = match &e {
@@ -644,13 +658,38 @@ fn bake(library: &Path, force: bool) -> Result<(), Failure> {
     .map_err(stdout_error)
 }
 
-fn eval_pose(
-    library: &Path,
-    tests: &[PathBuf],
+fn pose_setup(
     parts: u8,
     mode: EvalMode,
     method: EvalMethod,
     frames: usize,
+) -> marionette::character::posing::eval::EvalSetup {
+    use marionette::character::posing::eval;
+    eval::EvalSetup {
+        parts: usize::from(parts),
+        mode: match mode {
+            EvalMode::Touch => eval::Mode::Touch,
+            EvalMode::Targets => eval::Mode::Targets,
+        },
+        method: match method {
+            EvalMethod::Model => eval::Method::Model,
+            EvalMethod::Scan => eval::Method::Scan,
+            EvalMethod::Nearest => eval::Method::Nearest,
+            EvalMethod::CcdRest => eval::Method::CcdRest,
+        },
+        frames,
+    }
+}
+
+fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
+    let json = serde_json::to_string(value).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+fn eval_pose(
+    library: &Path,
+    tests: &[PathBuf],
+    setup: marionette::character::posing::eval::EvalSetup,
 ) -> Result<(), Failure> {
     use marionette::character::posing::eval;
     let (lib, learned) = load_model(library, false)?;
@@ -679,25 +718,36 @@ fn eval_pose(
         .or_else(|| lib.clips.values().next())
         .expect("library has clips");
     let refs: Vec<&marionette::character::motion::Clip> = clips.iter().collect();
-    let mode = match mode {
-        EvalMode::Touch => eval::Mode::Touch,
-        EvalMode::Targets => eval::Mode::Targets,
+    print_json(&eval::eval_pose(
+        &lib.skeleton,
+        &learned,
+        rest,
+        &refs,
+        setup,
+    ))
+}
+
+fn eval_pose_leave_one_out(
+    library: &Path,
+    setup: marionette::character::posing::eval::EvalSetup,
+) -> Result<(), Failure> {
+    use marionette::character::library::Library;
+    use marionette::character::posing::eval;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let mut progress = |done: usize, of: usize| {
+        tracing::info!(done, of, "leave one out: clips tested");
     };
-    let method = match method {
-        EvalMethod::Model => eval::Method::Model,
-        EvalMethod::Scan => eval::Method::Scan,
-        EvalMethod::Nearest => eval::Method::Nearest,
-        EvalMethod::CcdRest => eval::Method::CcdRest,
-    };
-    let setup = eval::EvalSetup {
-        parts: usize::from(parts),
-        mode,
-        method,
-        frames,
-    };
-    let result = eval::eval_pose(&lib.skeleton, &learned, rest, &refs, setup);
-    let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
-    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+    let result = eval::leave_one_out(&lib, setup, &mut progress).ok_or_else(|| {
+        Failure::new(
+            exit::DATAERR,
+            format!(
+                "{}: leaving one clip out needs at least two posing clips, the library has {}",
+                library.display(),
+                lib.posing.len()
+            ),
+        )
+    })?;
+    print_json(&result)
 }
 
 fn inspect_bvh(file: &Path) -> Result<(), Failure> {

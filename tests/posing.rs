@@ -543,3 +543,83 @@ fn the_cache_is_used_when_it_matches_and_rebuilt_when_stale_or_corrupt() {
     let (_, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
     assert!(matches!(source, Source::Baked { .. }));
 }
+
+#[test]
+fn leaving_each_posing_clip_out_tests_it_on_a_model_of_the_others() {
+    let lib =
+        Library::load(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
+            .unwrap();
+    let setup = |method| eval::EvalSetup {
+        parts: 5,
+        mode: Mode::Targets,
+        method,
+        frames: 8,
+    };
+    let mut seen = Vec::new();
+    let model = eval::leave_one_out(&lib, setup(Method::Model), &mut |done, of| {
+        seen.push((done, of));
+    })
+    .unwrap();
+    let n = lib.posing.len();
+    assert_eq!(seen, (1..=n).map(|d| (d, n)).collect::<Vec<_>>());
+    let names: Vec<&String> = model.clips.iter().map(|c| &c.clip).collect();
+    assert_eq!(names, lib.posing.iter().collect::<Vec<_>>());
+    assert!(model.clips.iter().all(|c| c.result.poses == 8));
+    assert_eq!(model.mean.poses, 8 * n);
+    let mean = model.clips.iter().map(|c| c.result.mpjpe_cm).sum::<f64>() / n as f64;
+    assert!((model.mean.mpjpe_cm - mean).abs() < 1e-3, "{model:?}");
+    // Each clip is new to its model: a model that holds it does better.
+    let whole = LearnedModel::build(posing_samples(&lib).1);
+    let (first, second) = (&lib.clips[&lib.posing[0]], &lib.clips[&lib.posing[1]]);
+    let known = eval::eval_pose(
+        &lib.skeleton,
+        &whole,
+        second,
+        &[first],
+        setup(Method::Model),
+    );
+    assert!(
+        known.mpjpe_cm < model.clips[0].result.mpjpe_cm,
+        "{known:?} {:?}",
+        model.clips[0]
+    );
+    // Yet the model still beats IK alone.
+    let ccd = eval::leave_one_out(&lib, setup(Method::CcdRest), &mut |_, _| {}).unwrap();
+    assert!(
+        model.mean.mpjpe_cm < ccd.mean.mpjpe_cm,
+        "model {:?}, ccd-rest {:?}",
+        model.mean,
+        ccd.mean
+    );
+    // One posing clip leaves nothing to test it on.
+    let mut one = lib.clone();
+    one.posing.truncate(1);
+    assert!(eval::leave_one_out(&one, setup(Method::Model), &mut |_, _| {}).is_none());
+}
+
+#[test]
+fn leaving_one_out_of_a_single_posing_clip_is_refused_with_a_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let clips = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+    std::fs::write(
+        dir.path().join("library.toml"),
+        format!(
+            "[settings]\nclips_dir = {:?}\n[posing]\nclips = [\"pose_arms.bvh\"]\n",
+            clips.display().to_string()
+        ),
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args(["eval", "pose", "--leave-one-out", "--library"])
+        .arg(dir.path())
+        .env("CACHE_DIRECTORY", dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(65), "{stderr}");
+    assert!(
+        stderr.contains("at least two posing clips, the library has 1"),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty());
+}

@@ -186,3 +186,70 @@ pub fn eval_pose(
         poses: n,
     }
 }
+
+/// One posing clip's result when it is left out of the model.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ClipResult {
+    pub clip: String,
+    #[serde(flatten)]
+    pub result: EvalResult,
+}
+
+/// What `eval pose --leave-one-out` prints: each posing clip tested on a
+/// model of the library's other samples, and the mean over the clips.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LeaveOneOut {
+    pub mean: EvalResult,
+    pub clips: Vec<ClipResult>,
+}
+
+/// Test every posing clip of `lib` on a model built from the library's
+/// samples of every other clip (`setup.frames` frames per clip), calling
+/// `progress(done, of)` as clips finish. `None` when the library has
+/// fewer than two posing clips.
+#[must_use]
+pub fn leave_one_out(
+    lib: &crate::character::library::Library,
+    setup: EvalSetup,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Option<LeaveOneOut> {
+    let (names, samples) = super::model::posing_samples(lib);
+    if lib.posing.len() < 2 {
+        return None;
+    }
+    let mut clips = Vec::new();
+    for (done, held) in lib.posing.iter().enumerate() {
+        let others: Vec<_> = samples
+            .iter()
+            .filter(|s| names[s.clip] != *held)
+            .cloned()
+            .collect();
+        let model = LearnedModel::build(others);
+        let rest = lib
+            .posing
+            .iter()
+            .find(|name| *name != held)
+            .and_then(|name| lib.clips.get(name))?;
+        let test = lib.clips.get(held)?;
+        let result = eval_pose(&lib.skeleton, &model, rest, &[test], setup);
+        clips.push(ClipResult {
+            clip: held.clone(),
+            result,
+        });
+        progress(done + 1, lib.posing.len());
+    }
+    let n = clips.len() as f64;
+    let mean = |f: fn(&EvalResult) -> f64| {
+        (clips.iter().map(|c| f(&c.result)).sum::<f64>() / n * 1000.0).round() / 1000.0
+    };
+    Some(LeaveOneOut {
+        mean: EvalResult {
+            mpjpe_cm: mean(|r| r.mpjpe_cm),
+            constraint_err_px: mean(|r| r.constraint_err_px),
+            constraint_err_cm: mean(|r| r.constraint_err_cm),
+            ms_per_pose: mean(|r| r.ms_per_pose),
+            poses: clips.iter().map(|c| c.result.poses).sum(),
+        },
+        clips,
+    })
+}
