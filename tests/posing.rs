@@ -13,7 +13,7 @@ use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::posing::pick::pick;
 use marionette::character::posing::sample::{Anchor, Placement};
 use marionette::character::posing::synth::{
-    Constraint, SynthOptions, Target, blend, choose, refit_limbs, synthesize, two_bone,
+    Constraint, SynthOptions, Target, blend, choose, refit_limbs, select, synthesize, two_bone,
 };
 use marionette::character::roles::{Role, RoleMap};
 use marionette::character::skeleton::{Skeleton, forward_kinematics};
@@ -96,6 +96,30 @@ fn the_model_embeds_every_sample_and_fills_a_grid() {
         let head = model.samples[rep as usize].part(Anchor::Root, Role::Head);
         assert_eq!(index.cells.column(Anchor::Root, Role::Head)[k], head);
     }
+    // Each block's spread: how far its samples' parts lie from its
+    // representative's, on average; cells and samples have none.
+    for (b, block) in model.blocks.iter().enumerate() {
+        let members: Vec<u32> = block
+            .cells
+            .iter()
+            .flat_map(|&c| model.cells[c as usize].members.clone())
+            .collect();
+        for role in [Role::RightHand, Role::Head] {
+            let at = model.samples[block.representative as usize].part(Anchor::Root, role);
+            let mean = members
+                .iter()
+                .map(|&m| (model.samples[m as usize].part(Anchor::Root, role) - at).length())
+                .sum::<f64>()
+                / members.len() as f64;
+            let spread = index.blocks.spread(Anchor::Root, role)[b];
+            assert!(
+                (spread - mean).abs() < 1e-12,
+                "block {b}: {spread} vs {mean}"
+            );
+        }
+    }
+    assert!(index.cells.spread(Anchor::Root, Role::Head).is_empty());
+    assert!(index.samples.spread(Anchor::Root, Role::Head).is_empty());
 }
 
 #[test]
@@ -622,4 +646,32 @@ fn leaving_one_out_of_a_single_posing_clip_is_refused_with_a_reason() {
         "{stderr}"
     );
     assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn blocks_ranked_with_their_spread_lead_to_samples_nearer_the_constraints() {
+    let dir = tempfile::tempdir().unwrap();
+    let (lib, model, held_out) = cmu_library(dir.path());
+    let (mut plain, mut slack) = (0.0, 0.0);
+    for HeldOut {
+        at, constraints, ..
+    } in held_out_frames(&lib.skeleton, &held_out)
+    {
+        // The mean cost of the samples the search keeps.
+        let kept = |block_slack: f64| {
+            let opts = SynthOptions {
+                block_slack,
+                ..SynthOptions::default()
+            };
+            let found = select(&model, &constraints, &at, &opts);
+            found.iter().map(|s| s.1).sum::<f64>() / found.len() as f64
+        };
+        plain += kept(0.0);
+        slack += kept(SynthOptions::default().block_slack);
+    }
+    eprintln!("kept samples' summed mean cost: with spread {slack:.3} m, without {plain:.3} m");
+    assert!(
+        slack < plain,
+        "with the blocks' spread the kept samples cost {slack:.3} m in all, without {plain:.3} m"
+    );
 }

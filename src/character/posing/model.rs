@@ -56,6 +56,10 @@ pub struct PartColumns {
     pub ids: Vec<u32>,
     /// Column `anchor * Role::ALL.len() + role`.
     columns: Vec<Vec<glam::DVec3>>,
+    /// Per column, for entries that stand for several samples (blocks):
+    /// how far, on average, the part of the samples an entry stands for
+    /// lies from the entry's. Empty where each entry is its own sample.
+    spreads: Vec<Vec<f64>>,
 }
 
 impl PartColumns {
@@ -68,13 +72,46 @@ impl PartColumns {
                     .collect()
             })
             .collect();
-        Self { ids, columns }
+        Self {
+            ids,
+            columns,
+            spreads: Vec::new(),
+        }
+    }
+
+    /// The same with each entry's spread over `members[entry]`, the samples
+    /// it stands for.
+    fn with_spreads(mut self, samples: &[Sample], members: &[Vec<u32>]) -> Self {
+        let roles = crate::character::roles::Role::ALL.len();
+        self.spreads = (0..2 * roles)
+            .map(|k| {
+                let part = |i: u32| samples[i as usize].parts[k / roles][k % roles];
+                self.ids
+                    .iter()
+                    .zip(members)
+                    .map(|(&entry, members)| {
+                        let at = part(entry);
+                        let sum: f64 = members.iter().map(|&m| (part(m) - at).length()).sum();
+                        sum / members.len().max(1) as f64
+                    })
+                    .collect()
+            })
+            .collect();
+        self
     }
 
     /// The positions of one role's joint relative to one anchor, entry by entry.
     #[must_use]
     pub fn column(&self, anchor: Anchor, role: crate::character::roles::Role) -> &[glam::DVec3] {
         &self.columns[anchor.index() * crate::character::roles::Role::ALL.len() + role.index()]
+    }
+
+    /// The spreads of one role's column (empty if the entries have none).
+    #[must_use]
+    pub fn spread(&self, anchor: Anchor, role: crate::character::roles::Role) -> &[f64] {
+        self.spreads
+            .get(anchor.index() * crate::character::roles::Role::ALL.len() + role.index())
+            .map_or(&[], Vec::as_slice)
     }
 
     #[must_use]
@@ -131,8 +168,18 @@ impl SearchIndex {
             members.extend(&c.members);
             samples_of_cell.push(members.len() as u32);
         }
+        let block_members: Vec<Vec<u32>> = blocks
+            .iter()
+            .map(|b| {
+                b.cells
+                    .iter()
+                    .flat_map(|&c| cells[c as usize].members.iter().copied())
+                    .collect()
+            })
+            .collect();
         Self {
-            blocks: PartColumns::of(samples, blocks.iter().map(|b| b.representative).collect()),
+            blocks: PartColumns::of(samples, blocks.iter().map(|b| b.representative).collect())
+                .with_spreads(samples, &block_members),
             cells_of_block,
             cells: PartColumns::of(samples, cell_reps),
             cell_ids,

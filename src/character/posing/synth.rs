@@ -62,6 +62,11 @@ pub struct SynthOptions {
     /// Search the cells of this many of the best blocks only (0: score
     /// every cell's representative).
     pub blocks: usize,
+    /// Rank blocks by their representative's distance to each target less
+    /// this share of the block's spread there (how far its samples lie from
+    /// the representative, on average): a block of varied postures may hold
+    /// samples much nearer than its representative.
+    pub block_slack: f64,
     /// Blend at most this many samples.
     pub blend: usize,
     /// Apply CCD IK after blending.
@@ -88,6 +93,7 @@ impl SynthOptions {
         use_grid: true,
         cells: 20,
         blocks: 8,
+        block_slack: 0.0,
         blend: 12,
         ik: true,
         max_ik_m: 0.2,
@@ -103,6 +109,7 @@ impl Default for SynthOptions {
             use_grid: true,
             cells: 16,
             blocks: 16,
+            block_slack: 0.5,
             blend: 64,
             ik: true,
             max_ik_m: 0.2,
@@ -182,16 +189,37 @@ pub fn select(
 ) -> Vec<(usize, f64)> {
     let local = localize(constraints, at);
     let index = &model.index;
-    // The summed distance to the targets of each entry of `cols[run]`,
+    // The summed distance to the targets of each entry of `cols[run]`
+    // (less `slack` times the entry's spread, where it has one),
     // constraint by constraint down the columns, appended to `out` with
     // the entry's position in `cols` (sums rank as the means do; only the
     // kept ones are divided).
-    let score = |cols: &PartColumns, run: std::ops::Range<usize>, out: &mut Vec<(usize, f64)>| {
+    let score = |cols: &PartColumns,
+                 run: std::ops::Range<usize>,
+                 slack: f64,
+                 out: &mut Vec<(usize, f64)>| {
         let from = out.len();
         out.extend(run.clone().map(|k| (k, 0.0)));
         let sums = &mut out[from..];
         for c in &local {
             let col = &cols.column(at.anchor, c.role)[run.clone()];
+            let spread = cols.spread(at.anchor, c.role);
+            if slack > 0.0 && !spread.is_empty() {
+                let spread = &spread[run.clone()];
+                match c.target {
+                    Target::Point(q) => {
+                        for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
+                            s.1 += ((*p - q).length() - slack * r).max(0.0);
+                        }
+                    }
+                    Target::Ray(ray) => {
+                        for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
+                            s.1 += (ray.distance(*p) - slack * r).max(0.0);
+                        }
+                    }
+                }
+                continue;
+            }
             match c.target {
                 Target::Point(q) => {
                     for (s, p) in sums.iter_mut().zip(col) {
@@ -214,16 +242,26 @@ pub fn select(
         // The cells to look at: those of the blocks whose representatives
         // meet the constraints best, or every one.
         if opts.blocks > 0 && !index.blocks.is_empty() {
-            score(&index.blocks, 0..index.blocks.len(), &mut scored);
+            score(
+                &index.blocks,
+                0..index.blocks.len(),
+                opts.block_slack,
+                &mut scored,
+            );
             keep_best(&mut scored, opts.blocks);
             let blocks = scored.len();
             for k in 0..blocks {
                 let b = scored[k].0;
-                score(&index.cells, range(&index.cells_of_block, b), &mut scored);
+                score(
+                    &index.cells,
+                    range(&index.cells_of_block, b),
+                    0.0,
+                    &mut scored,
+                );
             }
             scored.drain(..blocks);
         } else {
-            score(&index.cells, 0..index.cells.len(), &mut scored);
+            score(&index.cells, 0..index.cells.len(), 0.0, &mut scored);
         }
         // The samples of the cells whose representatives meet the
         // constraints best.
@@ -234,12 +272,13 @@ pub fn select(
             score(
                 &index.samples,
                 range(&index.samples_of_cell, c),
+                0.0,
                 &mut scored,
             );
         }
         scored.drain(..cells);
     } else {
-        score(&index.samples, 0..index.samples.len(), &mut scored);
+        score(&index.samples, 0..index.samples.len(), 0.0, &mut scored);
     }
     keep_best(&mut scored, opts.blend);
     let (ids, count) = (&index.samples.ids, local.len().max(1) as f64);
