@@ -28,14 +28,16 @@ vm_kernel() {
         return
     fi
     local pkg tmp f m
-    pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ {print $2; exit}')
+    # awk reads to the end (leaving early would end apt-cache with
+    # SIGPIPE, an exit status of 141 under pipefail).
+    pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ && !found {found = $2} END {print found}')
     [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package (apt-get update first)" >&2; exit 69; }
     tmp=$(mktemp -d)
     (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
     dpkg -x "$tmp"/*.deb "$tmp/x"
     cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
     for m in $modules $root_modules; do
-        f=$(find "$tmp/x/lib/modules" -name "$m.ko*" | head -n1)
+        f=$(find "$tmp/x/lib/modules" -name "$m.ko*" -print -quit)
         [ -n "$f" ] || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
         case "$f" in
             *.xz) xz -dc "$f" > "$cache/$m.ko" ;;

@@ -27,7 +27,9 @@ bin=${MARIONETTE_BIN:-$root/target/debug/marionette}
 cache=${MARIONETTE_VM_CACHE:-$root/target/vm-cache}
 
 icd=/usr/share/vulkan/icd.d/lvp_icd.x86_64.json
-loader=$(ldconfig -p | awk '/libvulkan\.so\.1 / {print $NF; exit}')
+# awk reads to the end: leaving early would end ldconfig with SIGPIPE,
+# which pipefail turns into this script's exit status (141).
+loader=$(ldconfig -p | awk '/libvulkan\.so\.1 / && !found {found = $NF} END {print found}')
 if [ ! -f "$icd" ] || [ -z "$loader" ]; then
     echo "vm test: lavapipe is needed: apt-get install mesa-vulkan-drivers libvulkan1" >&2
     exit 69
