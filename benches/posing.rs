@@ -1,7 +1,7 @@
 //! Posing control: synthesis from 1 and 5 touches on about 5,000 sample
 //! postures, through the grid and by scoring every sample (and the search
-//! alone on about 5,000 and 10,000); and baking a model of about 10,000
-//! postures. `cargo bench --bench posing` (needs
+//! alone on about 5,000 and 10,000, and larger grid searches on 5,000);
+//! and baking a model of about 10,000 postures. `cargo bench --bench posing` (needs
 //! ../shared/mocap).
 
 use std::path::PathBuf;
@@ -86,6 +86,21 @@ fn posing(c: &mut Criterion) {
                 format!("select/{full}_postures/{parts}_touches/{name}"),
                 |b| {
                     b.iter(|| select(&whole, &cs, &at, &opts));
+                },
+            );
+        }
+        // Larger searches (blocks x cells; 0 blocks: every cell), which
+        // come nearer scoring every sample's error.
+        for (blocks, cells) in [(24, 24), (32, 32), (48, 48), (0, 16)] {
+            let opts = SynthOptions {
+                blocks,
+                cells,
+                ..SynthOptions::default()
+            };
+            g.bench_function(
+                format!("select/{n}_postures/{parts}_touches/grid_{blocks}x{cells}"),
+                |b| {
+                    b.iter(|| select(&model, &cs, &at, &opts));
                 },
             );
         }

@@ -220,6 +220,14 @@ enum EvalCommand {
         /// --leave-one-out)
         #[arg(long, default_value_t = 200)]
         frames: usize,
+        /// Blocks of cells the grid search looks into, the best first
+        /// (--method model; 0: every cell) [default: the synthesis's, 16]
+        #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+        blocks: Option<u32>,
+        /// Cells whose samples the grid search scores (--method model)
+        /// [default: the synthesis's, 16]
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        cells: Option<u32>,
     },
     /// Action control: replay held-out clips' primary-part paths as drags
     /// through the controller (touch frames, as live input) and print one
@@ -405,9 +413,20 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     mode,
                     method,
                     frames,
+                    blocks,
+                    cells,
                 },
         } => {
-            let setup = pose_setup(parts, mode, method, frames);
+            if !matches!(method, EvalMethod::Model) && (blocks.is_some() || cells.is_some()) {
+                return Err(Failure::new(
+                    exit::USAGE,
+                    "--blocks and --cells size the grid search of --method model; \
+                     the other methods do not search the grid",
+                ));
+            }
+            let mut setup = pose_setup(parts, mode, method, frames);
+            setup.blocks = blocks.map(|b| b as usize);
+            setup.cells = cells.map(|c| c as usize);
             if leave_one_out {
                 eval_pose_leave_one_out(&library, setup)
             } else {
@@ -678,6 +697,8 @@ fn pose_setup(
             EvalMethod::CcdRest => eval::Method::CcdRest,
         },
         frames,
+        blocks: None,
+        cells: None,
     }
 }
 

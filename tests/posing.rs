@@ -239,6 +239,8 @@ fn the_model_beats_its_baselines_on_held_out_mocap() {
             mode,
             method,
             frames: 40,
+            blocks: None,
+            cells: None,
         };
         eval::eval_pose(&lib.skeleton, &model, rest, &tests, setup)
     };
@@ -578,6 +580,8 @@ fn leaving_each_posing_clip_out_tests_it_on_a_model_of_the_others() {
         mode: Mode::Targets,
         method,
         frames: 8,
+        blocks: None,
+        cells: None,
     };
     let mut seen = Vec::new();
     let model = eval::leave_one_out(&lib, setup(Method::Model), &mut |done, of| {
@@ -619,6 +623,70 @@ fn leaving_each_posing_clip_out_tests_it_on_a_model_of_the_others() {
     let mut one = lib.clone();
     one.posing.truncate(1);
     assert!(eval::leave_one_out(&one, setup(Method::Model), &mut |_, _| {}).is_none());
+}
+
+#[test]
+fn the_grid_search_is_sized_by_the_eval_and_looking_into_every_cell_scores_every_sample() {
+    let lib =
+        Library::load(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
+            .unwrap();
+    // A model without the first posing clip, tested on it.
+    let (names, samples) = posing_samples(&lib);
+    let held = &lib.posing[0];
+    let model = LearnedModel::build(
+        samples
+            .into_iter()
+            .filter(|s| names[s.clip] != *held)
+            .collect(),
+    );
+    let (test, rest) = (&lib.clips[held], &lib.clips[&lib.posing[1]]);
+    let run = |method, blocks, cells| {
+        let setup = eval::EvalSetup {
+            parts: 5,
+            mode: Mode::Touch,
+            method,
+            frames: 24,
+            blocks,
+            cells,
+        };
+        eval::eval_pose(&lib.skeleton, &model, rest, &[test], setup)
+    };
+    let scan = run(Method::Scan, None, None);
+    let every = run(Method::Model, Some(0), Some(model.cells.len()));
+    let one = run(Method::Model, Some(1), Some(1));
+    eprintln!("scan {scan:?}\nevery cell {every:?}\none cell {one:?}");
+    assert!(
+        (scan.mpjpe_cm - every.mpjpe_cm).abs() < 0.002,
+        "every cell {every:?}, every sample {scan:?}"
+    );
+    // One cell of one block holds a few samples: another blend.
+    assert!(
+        (scan.mpjpe_cm - one.mpjpe_cm).abs() > 0.01,
+        "one cell {one:?}, every sample {scan:?}"
+    );
+    // The sizes are for the grid's search only.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args([
+            "eval",
+            "pose",
+            "--method",
+            "scan",
+            "--blocks",
+            "4",
+            "--library",
+        ])
+        .arg(std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
+        .args(["--test"])
+        .arg(
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("assets/library/pose_arms.bvh"),
+        )
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--method model"), "{stderr}");
+    assert!(out.stdout.is_empty());
 }
 
 #[test]

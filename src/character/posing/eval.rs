@@ -82,6 +82,11 @@ pub struct EvalSetup {
     pub method: Method,
     /// Frames sampled evenly from the test clips.
     pub frames: usize,
+    /// For [`Method::Model`]: blocks and cells the grid search looks into
+    /// (`None`: [`SynthOptions::default`]'s), to measure what a larger or
+    /// smaller search gains.
+    pub blocks: Option<usize>,
+    pub cells: Option<usize>,
 }
 
 /// Run the evaluation.
@@ -98,7 +103,15 @@ pub fn eval_pose(
         mode,
         method,
         frames,
+        blocks,
+        cells,
     } = setup;
+    let defaults = SynthOptions::default();
+    let model_options = SynthOptions {
+        blocks: blocks.unwrap_or(defaults.blocks),
+        cells: cells.unwrap_or(defaults.cells),
+        ..defaults
+    };
     let roles = &rest.roles;
     let all: Vec<(&Clip, usize)> = tests
         .iter()
@@ -129,7 +142,7 @@ pub fn eval_pose(
             .collect();
         let started = Instant::now();
         let options = match method {
-            Method::Model => Some(SynthOptions::default()),
+            Method::Model => Some(model_options),
             Method::Scan => Some(SynthOptions {
                 use_grid: false,
                 ..SynthOptions::default()
