@@ -39,10 +39,7 @@ fn actions(c: &mut Criterion) {
         .map(|k| {
             let s = f64::from(k) / 29.0;
             TrailPoint {
-                at: marionette::input::calibration::ScreenPoint::new(
-                    600.0 + 200.0 * s,
-                    300.0 - 40.0 * s,
-                ),
+                at: marionette::screen::ScreenPoint::new(600.0 + 200.0 * s, 300.0 - 40.0 * s),
                 t: s,
             }
         })

@@ -10,10 +10,11 @@ use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
-use marionette::input::calibration::{Calibration, Matrix, Rotation};
+use marionette::input::calibration::{Calibration, Matrix};
 use marionette::input::evemu::Recording;
 use marionette::input::synth::{Synth, panel};
 use marionette::input::tracker::{ContactTracker, ResyncSource};
+use marionette::screen::Rotation;
 
 /// Ten fingers wandering for `frames` frames at 120 Hz.
 fn ten_fingers(frames: u32) -> String {

@@ -11,10 +11,10 @@ use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
-use marionette::input::calibration::Rotation;
 use marionette::render::gpu::{AdapterChoice, Gpu};
 use marionette::render::headless::Headless;
 use marionette::render::scene::{self, FingerMark, FingerUse, Marks, TrajectoryMark, View};
+use marionette::screen::Rotation;
 
 fn view(w: u32, h: u32) -> View {
     let target = DVec3::new(0.0, 0.95, 0.0);
@@ -63,7 +63,7 @@ fn bench(c: &mut Criterion) {
                     .map(|k| {
                         let s = f64::from(k) / 31.0;
                         let p = at(Role::RightHand);
-                        marionette::input::calibration::ScreenPoint::new(
+                        marionette::screen::ScreenPoint::new(
                             p.x + 200.0 * s,
                             p.y - 80.0 * (s * 3.0).sin(),
                         )

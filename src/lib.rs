@@ -35,3 +35,4 @@ pub mod display;
 pub mod input;
 pub mod physics;
 pub mod render;
+pub mod screen;

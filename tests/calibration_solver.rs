@@ -2,9 +2,10 @@
 //! mounted rotated, one bad tap, degenerate ranges.
 
 use marionette::input::calibration::{
-    Calibration, CalibrationError, Matrix, RawPoint, Rotation, ScreenPoint, SolveOptions, solve,
+    Calibration, CalibrationError, Matrix, RawPoint, SolveOptions, solve,
 };
 use marionette::input::device::AbsInfo;
+use marionette::screen::{Rotation, ScreenPoint};
 
 /// A small deterministic generator, so the jitter is the same every run.
 struct Lcg(u64);

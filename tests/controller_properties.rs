@@ -5,9 +5,9 @@
 mod common;
 
 use marionette::control::controller::{Controller, Settings};
-use marionette::input::calibration::ScreenPoint;
 use marionette::input::pipeline::ScreenFrame;
 use marionette::input::touch::Phase;
+use marionette::screen::ScreenPoint;
 use proptest::prelude::*;
 
 /// A small deterministic generator driven by the case's seed.

@@ -527,10 +527,10 @@ fn picking_finds_the_part_under_the_finger() {
     };
     for role in [Role::LeftHand, Role::RightHand, Role::Head, Role::LeftFoot] {
         let s = cam.project(w.positions[roles.get(role)]).unwrap();
-        let near = marionette::input::calibration::ScreenPoint::new(s.x + 6.0, s.y - 4.0);
+        let near = marionette::screen::ScreenPoint::new(s.x + 6.0, s.y - 4.0);
         assert_eq!(pick(&cam, skeleton, roles, &w, near, 30.0), Some(role));
     }
-    let empty = marionette::input::calibration::ScreenPoint::new(40.0, 40.0);
+    let empty = marionette::screen::ScreenPoint::new(40.0, 40.0);
     assert_eq!(pick(&cam, skeleton, roles, &w, empty, 30.0), None);
 }
 

@@ -11,10 +11,10 @@ use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
-use marionette::input::calibration::{Rotation, ScreenPoint};
 use marionette::render::gpu::{AdapterChoice, Gpu};
 use marionette::render::headless::{Headless, Image};
 use marionette::render::scene::{self, FingerMark, FingerUse, Marks, TrajectoryMark, View};
+use marionette::screen::{Rotation, ScreenPoint};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

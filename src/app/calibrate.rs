@@ -18,13 +18,12 @@ use super::config::Config;
 use super::run::InputThread;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
-use crate::input::calibration::{
-    CalibrationError, RawPoint, Rotation, ScreenPoint, Solution, SolveOptions, solve,
-};
+use crate::input::calibration::{CalibrationError, RawPoint, Solution, SolveOptions, solve};
 use crate::input::live::{HubEvent, LiveError};
 use crate::input::touch::Phase;
 use crate::render::contact::draw_text;
 use crate::render::headless::Image;
+use crate::screen::{Rotation, ScreenPoint};
 
 /// Why calibration stopped without writing.
 #[derive(Debug, Error)]

@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::input::calibration::{Matrix, Rotation};
+use crate::input::calibration::Matrix;
 use crate::input::device::{DeviceDescription, InputId};
+use crate::screen::Rotation;
 
 /// Where `run` looks for its configuration when none is given.
 pub const DEFAULT_PATH: &str = "/etc/marionette/marionette.toml";

@@ -147,7 +147,7 @@ impl Attract {
                 phase: Phase::Cancel,
                 tool: crate::input::touch::Tool::Finger,
                 raw: crate::input::calibration::RawPoint { x: 0, y: 0 },
-                screen: crate::input::calibration::ScreenPoint::new(0.0, 0.0),
+                screen: crate::screen::ScreenPoint::new(0.0, 0.0),
             })
             .collect();
         Some(ScreenFrame { t, contacts })
@@ -543,8 +543,9 @@ fn wait(input: &InputThread, screen: &mut Screen, timeout: Duration) -> Result<(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::calibration::{RawPoint, ScreenPoint};
+    use crate::input::calibration::RawPoint;
     use crate::input::touch::Tool;
+    use crate::screen::ScreenPoint;
 
     fn frame(t: f64, id: u64, phase: Phase) -> ScreenFrame {
         ScreenFrame {

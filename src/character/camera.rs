@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 
-use crate::input::calibration::ScreenPoint;
+use crate::screen::ScreenPoint;
 
 /// A half-line from `origin` along the unit vector `dir`.
 #[derive(Clone, Copy, Debug, PartialEq)]

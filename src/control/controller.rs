@@ -26,12 +26,12 @@ use crate::character::posing::synth::{Constraint, SynthOptions, Target, synthesi
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
 use crate::character::tracking::accel::{AccelTracker, Gains};
-use crate::input::calibration::ScreenPoint;
 use crate::input::pipeline::ScreenFrame;
 use crate::input::touch::ContactId;
 use crate::physics::effects::{Attenuation, Effects, free_regions};
 use crate::physics::ragdoll::{Ragdoll, RagdollSettings, Region};
 use crate::render::scene::{FingerMark, FingerUse, Marks, TrajectoryMark};
+use crate::screen::ScreenPoint;
 
 /// What the character is made of: the library, its posing model and its
 /// action models. Built once, shared by controllers.

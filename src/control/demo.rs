@@ -11,9 +11,9 @@ use super::ticker::Ticker;
 use crate::app::config::Config;
 use crate::character::action::trail::TrailPoint;
 use crate::character::roles::Role;
-use crate::input::calibration::ScreenPoint;
 use crate::input::pipeline;
 use crate::input::synth::{Synth, panel};
+use crate::screen::ScreenPoint;
 
 /// Frame interval of the authored panel (60 Hz).
 const DT_US: i64 = 16_667;

@@ -11,9 +11,10 @@ use crate::character::action::eval::Drag;
 use crate::character::action::timeline::ActionEvent;
 use crate::control::controller::{Character, Controller, Settings};
 use crate::control::rig::Orbit;
-use crate::input::calibration::{RawPoint, ScreenPoint};
+use crate::input::calibration::RawPoint;
 use crate::input::pipeline::{ScreenContact, ScreenFrame};
 use crate::input::touch::{Phase, Tool};
+use crate::screen::ScreenPoint;
 
 /// Time the character is left to stand before the finger goes down (s).
 const SETTLE_S: f64 = 0.3;

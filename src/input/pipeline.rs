@@ -4,13 +4,14 @@
 
 use serde::Serialize;
 
-use super::calibration::{Calibration, CalibrationError, Matrix, RawPoint, ScreenPoint};
+use super::calibration::{Calibration, CalibrationError, Matrix, RawPoint};
 use super::device::{DeviceDescription, Protocol};
 use super::evemu::Recording;
 use super::tracker::{
     ContactId, Phase, Tool, TouchFrame, TrackerError, TrackerStats, track_events,
 };
 use crate::app::config::Config;
+use crate::screen::ScreenPoint;
 
 /// What `marionette inspect FILE.evemu` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]

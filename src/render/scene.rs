@@ -11,7 +11,7 @@ use super::renderer::DrawList;
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
-use crate::input::calibration::{Rotation, ScreenPoint};
+use crate::screen::{Rotation, ScreenPoint};
 
 /// Linear RGB of the background the floor fades into.
 pub const BACKGROUND: [f32; 3] = [0.035, 0.045, 0.07];

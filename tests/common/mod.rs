@@ -42,7 +42,7 @@ pub fn character() -> std::sync::Arc<marionette::control::controller::Character>
 pub fn contact(
     id: u64,
     phase: marionette::input::touch::Phase,
-    at: marionette::input::calibration::ScreenPoint,
+    at: marionette::screen::ScreenPoint,
 ) -> marionette::input::pipeline::ScreenContact {
     marionette::input::pipeline::ScreenContact {
         id,

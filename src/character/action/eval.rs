@@ -18,7 +18,7 @@ use crate::character::motion::Clip;
 use crate::character::posing::sample::{Anchor, Placement};
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
-use crate::input::calibration::ScreenPoint;
+use crate::screen::ScreenPoint;
 
 /// What `eval actions` prints.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

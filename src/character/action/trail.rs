@@ -8,7 +8,7 @@
 
 use glam::DVec3;
 
-use crate::input::calibration::ScreenPoint;
+use crate::screen::ScreenPoint;
 
 /// A point of a trail or a projected trajectory: screen position and time
 /// in seconds from its start.

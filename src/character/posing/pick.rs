@@ -4,7 +4,7 @@
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
-use crate::input::calibration::ScreenPoint;
+use crate::screen::ScreenPoint;
 
 /// The body parts a finger can grab, and the bone that leads to each (so
 /// that a touch on the forearm grabs the hand).
