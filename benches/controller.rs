@@ -11,8 +11,8 @@ use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::roles::Role;
 use marionette::control::controller::{Character, Controller, Settings};
 use marionette::input::calibration::RawPoint;
-use marionette::input::pipeline::{ScreenContact, ScreenFrame};
 use marionette::input::touch::{Phase, Tool};
+use marionette::input::touch::{ScreenContact, ScreenFrame};
 use marionette::screen::ScreenPoint;
 
 fn contact(id: u64, phase: Phase, at: ScreenPoint) -> ScreenContact {

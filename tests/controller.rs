@@ -7,8 +7,8 @@ mod common;
 use common::contact;
 use marionette::character::roles::Role;
 use marionette::control::controller::{Controller, Settings};
-use marionette::input::pipeline::{ScreenContact, ScreenFrame};
 use marionette::input::touch::Phase;
+use marionette::input::touch::{ScreenContact, ScreenFrame};
 use marionette::screen::ScreenPoint;
 
 fn frame(t: f64, contacts: Vec<ScreenContact>) -> ScreenFrame {

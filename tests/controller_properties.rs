@@ -5,8 +5,8 @@
 mod common;
 
 use marionette::control::controller::{Controller, Settings};
-use marionette::input::pipeline::ScreenFrame;
 use marionette::input::touch::Phase;
+use marionette::input::touch::ScreenFrame;
 use marionette::screen::ScreenPoint;
 use proptest::prelude::*;
 

@@ -14,7 +14,7 @@ use super::config::Config;
 use crate::character::action::timeline::ActionEvent;
 use crate::control::controller::{Character, Controller, Mode, Settings};
 use crate::control::ticker::Ticker;
-use crate::input::pipeline::ScreenFrame;
+use crate::input::touch::ScreenFrame;
 use crate::render::contact;
 use crate::render::gpu::{AdapterChoice, Gpu, GpuError};
 use crate::render::headless::{Headless, Image};

@@ -18,8 +18,8 @@ use crate::control::controller::{Character, Controller, Settings};
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::live::{EvdevOpener, HubEvent, InputHub, LiveError};
-use crate::input::pipeline::{ScreenContact, ScreenFrame};
 use crate::input::touch::Phase;
+use crate::input::touch::{ScreenContact, ScreenFrame};
 use crate::render::gpu::{AdapterChoice, GpuError};
 use crate::render::scene::{self, View};
 

@@ -26,8 +26,8 @@ use crate::character::posing::synth::{Constraint, SynthOptions, Target, synthesi
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
 use crate::character::tracking::accel::{AccelTracker, Gains};
-use crate::input::pipeline::ScreenFrame;
 use crate::input::touch::ContactId;
+use crate::input::touch::ScreenFrame;
 use crate::physics::effects::{Attenuation, Effects, free_regions};
 use crate::physics::ragdoll::{Ragdoll, RagdollSettings, Region};
 use crate::render::scene::{FingerMark, FingerUse, Marks, TrajectoryMark};

@@ -12,8 +12,8 @@ use crate::character::action::timeline::ActionEvent;
 use crate::control::controller::{Character, Controller, Settings};
 use crate::control::rig::Orbit;
 use crate::input::calibration::RawPoint;
-use crate::input::pipeline::{ScreenContact, ScreenFrame};
 use crate::input::touch::{Phase, Tool};
+use crate::input::touch::{ScreenContact, ScreenFrame};
 use crate::screen::ScreenPoint;
 
 /// Time the character is left to stand before the finger goes down (s).

@@ -4,7 +4,7 @@
 //! it, and a replay steps identically every run.
 
 use super::controller::Controller;
-use crate::input::pipeline::ScreenFrame;
+use crate::input::touch::ScreenFrame;
 
 /// Steps a controller at `hz` through `frames` (times in seconds).
 #[derive(Clone, Debug)]

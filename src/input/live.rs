@@ -26,10 +26,11 @@ use super::event::{
     ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
     ABS_Y, BTN_TOUCH, EV_KEY, EV_LED, EV_MSC, EV_REL, EV_SW, RawEvent,
 };
-use super::pipeline::{ScreenContact, screen_contacts};
+use super::pipeline::screen_contacts;
 use super::tracker::{ContactTracker, KernelState, ResyncSource, SlotState, TouchFrame};
 use crate::app::config::{Config, device_label};
 use crate::app::exit;
+use crate::input::touch::ScreenContact;
 
 /// Errors of live devices.
 #[derive(Debug, Error)]

@@ -4,12 +4,11 @@
 
 use serde::Serialize;
 
-use super::calibration::{Calibration, CalibrationError, Matrix, RawPoint};
+use super::calibration::{Calibration, CalibrationError, Matrix};
 use super::device::{DeviceDescription, Protocol};
 use super::evemu::Recording;
-use super::tracker::{
-    ContactId, Phase, Tool, TouchFrame, TrackerError, TrackerStats, track_events,
-};
+use super::touch::{ScreenContact, ScreenFrame};
+use super::tracker::{ContactId, Phase, TouchFrame, TrackerError, TrackerStats, track_events};
 use crate::app::config::Config;
 use crate::screen::ScreenPoint;
 
@@ -45,24 +44,6 @@ pub fn summarize(rec: &Recording) -> (RecordingSummary, Option<TrackerStats>) {
         touch_sequences: stats.map_or(0, |s| s.finger_sequences),
     };
     (summary, stats)
-}
-
-/// A contact in screen pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct ScreenContact {
-    pub id: ContactId,
-    pub phase: Phase,
-    pub tool: Tool,
-    pub raw: RawPoint,
-    pub screen: ScreenPoint,
-}
-
-/// A touch frame in screen pixels; `t` in seconds from the recording's
-/// first event.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ScreenFrame {
-    pub t: f64,
-    pub contacts: Vec<ScreenContact>,
 }
 
 /// Why a recording cannot be replayed as touches.

@@ -1,10 +1,12 @@
-//! Touch frames: what the tracker reports, and the kernel state it
-//! resynchronises from. Plain data shared by the tracker, the hub, replays
-//! and (later) the character controllers.
+//! Touch frames: what the tracker reports (device units), the kernel state
+//! it resynchronises from, and the same frames after calibration
+//! ([`ScreenFrame`], screen pixels). Plain data shared by the tracker, the
+//! hub, replays and the character controller.
 
 use serde::Serialize;
 
 use super::calibration::RawPoint;
+use crate::screen::ScreenPoint;
 
 /// Identifies one contact from down to up, unique across devices: the high
 /// 32 bits name the device instance, the low 32 bits count its contacts.
@@ -118,4 +120,22 @@ pub struct TrackerStats {
     pub spurious_lifts: u64,
     /// Contacts cancelled (palm, lost events, device gone).
     pub cancelled: u64,
+}
+
+/// A contact in screen pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ScreenContact {
+    pub id: ContactId,
+    pub phase: Phase,
+    pub tool: Tool,
+    pub raw: RawPoint,
+    pub screen: ScreenPoint,
+}
+
+/// A touch frame in screen pixels; `t` in seconds from the recording's
+/// first event.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScreenFrame {
+    pub t: f64,
+    pub contacts: Vec<ScreenContact>,
 }

@@ -43,8 +43,8 @@ pub fn contact(
     id: u64,
     phase: marionette::input::touch::Phase,
     at: marionette::screen::ScreenPoint,
-) -> marionette::input::pipeline::ScreenContact {
-    marionette::input::pipeline::ScreenContact {
+) -> marionette::input::touch::ScreenContact {
+    marionette::input::touch::ScreenContact {
         id,
         phase,
         tool: marionette::input::touch::Tool::Finger,
