@@ -373,7 +373,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             device,
             out,
             seconds,
-        } => record::record(config, device.as_deref(), &out, seconds)
+        } => record::record(&config.input, device.as_deref(), &out, seconds)
             .map_err(|e| Failure::new(e.exit_code(), e)),
         Command::Play { file, settle_ms } => {
             let rec = Recording::read_file(&file)?;
@@ -454,8 +454,13 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             out,
             frames,
         } => contact_sheets(&library, &out, frames),
-        Command::Watch { seconds } => live::watch(config, seconds, &mut std::io::stdout().lock())
-            .map_err(|e| Failure::new(e.exit_code(), e)),
+        Command::Watch { seconds } => live::watch(
+            &config.input,
+            config.display.picture(),
+            seconds,
+            &mut std::io::stdout().lock(),
+        )
+        .map_err(|e| Failure::new(e.exit_code(), e)),
     }
 }
 
@@ -650,10 +655,10 @@ fn eval_actions(
     let result = if models_only {
         eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
     } else {
-        use marionette::control::controller::{Character, Settings};
+        use marionette::control::controller::Character;
         let (lib, model) = load_model(library, false)?;
         let ch = std::sync::Arc::new(Character::new(lib, model));
-        let settings = Settings::from_config(config);
+        let settings = config.control_settings();
         eval::eval_with(&eval::with_primary(&actions, &tests), seed, &mut |d| {
             marionette::control::live_eval::judge(&ch, &settings, d)
         })
@@ -787,7 +792,8 @@ fn inspect_bvh(file: &Path) -> Result<(), Failure> {
 
 fn replay(config: &Config, file: &Path, contacts: bool) -> Result<(), Failure> {
     let rec = Recording::read_file(file)?;
-    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let frames = pipeline::replay(&rec, &config.input, config.display.picture())
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     if contacts {
         for f in &frames {
@@ -816,7 +822,7 @@ fn replay(config: &Config, file: &Path, contacts: bool) -> Result<(), Failure> {
 fn character(
     config: &Config,
 ) -> Result<std::sync::Arc<marionette::control::controller::Character>, Failure> {
-    let dir = config.character.library_dir();
+    let dir = config.library_dir();
     let (lib, model) = load_model(&dir, false)?;
     Ok(std::sync::Arc::new(
         marionette::control::controller::Character::new(lib, model),
@@ -879,7 +885,8 @@ fn run_kiosk(config: &Config, dri: PathBuf, seconds: Option<f64>) -> Result<(), 
 fn show(config: &Config, rec: &Recording, out: &Path, fps: f64) -> Result<(), Failure> {
     use marionette::app::headless;
     let ch = character(config)?;
-    let frames = pipeline::replay(rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let frames = pipeline::replay(rec, &config.input, config.display.picture())
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let opts = headless::Options {
         out: Some(out.to_owned()),
         fps,
@@ -923,7 +930,8 @@ fn replay_poses(
     use marionette::app::headless;
     let rec = Recording::read_file(file)?;
     let ch = character(config)?;
-    let frames = pipeline::replay(&rec, config).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let frames = pipeline::replay(&rec, &config.input, config.display.picture())
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let tick_hz = if tick_hz > 0.0 {
         tick_hz
     } else {
@@ -1092,7 +1100,7 @@ fn list_outputs(dir: &Path, json: bool) -> Result<(), Failure> {
 }
 
 fn list_devices(config: &Config, json: bool) -> Result<(), Failure> {
-    let found = live::list_devices(config).map_err(|e| Failure::new(e.exit_code(), e))?;
+    let found = live::list_devices(&config.input).map_err(|e| Failure::new(e.exit_code(), e))?;
     let mut out = std::io::stdout().lock();
     if found.is_empty() {
         writeln!(

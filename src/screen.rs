@@ -105,3 +105,24 @@ impl fmt::Display for Rotation {
         write!(f, "{}°", self.degrees())
     }
 }
+
+/// The picture on an output: the output's size in pixels and how the
+/// picture is turned on it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Picture {
+    /// The output's size in pixels (before rotation).
+    pub output: (u32, u32),
+    pub rotation: Rotation,
+}
+
+impl Picture {
+    /// The picture's size in pixels: the output's, turned by the rotation.
+    #[must_use]
+    pub fn size(self) -> (u32, u32) {
+        let (w, h) = self.output;
+        match self.rotation {
+            Rotation::R90 | Rotation::R270 => (h, w),
+            Rotation::R0 | Rotation::R180 => (w, h),
+        }
+    }
+}

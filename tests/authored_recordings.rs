@@ -38,8 +38,13 @@ fn character_demo_recording_is_regenerated_identically() {
     // Authored against the default library's character: the drags start on
     // the body parts and follow the actions' trajectories.
     let config = marionette::app::config::Config::default();
-    let settings = marionette::control::controller::Settings::from_config(&config);
-    let synth = marionette::control::demo::author_demo(common::character(), settings, &config);
+    let settings = config.control_settings();
+    let synth = marionette::control::demo::author_demo(
+        common::character(),
+        settings,
+        &config.input,
+        config.display.picture(),
+    );
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/recordings/demo.evemu");
     check(&path, &synth);
 }

@@ -74,7 +74,8 @@ fn demo_renders_frames_a_contact_sheet_and_a_summary() {
 fn a_replay_gives_the_same_poses_and_images_twice() {
     let ch = common::character();
     let config = Config::default();
-    let frames = pipeline::replay(&demo_recording(), &config).unwrap();
+    let frames =
+        pipeline::replay(&demo_recording(), &config.input, config.display.picture()).unwrap();
     let opts = Options {
         keep_poses: true,
         ..Options::default()

@@ -135,7 +135,7 @@ fn touchscreens_are_read_and_other_devices_skipped() {
         node(real("dell-canvas-pen.evemu"), 1000),
     );
     let config = Config::parse(CONFIG, Path::new("test.toml")).unwrap();
-    let mut hub = InputHub::new(opener, config);
+    let mut hub = InputHub::new(opener, config.input.clone(), config.display.picture());
     let mut out = Vec::new();
     hub.dispatch(0, &mut out);
     assert_eq!(hub.device_count(), 1, "only the touchscreen is opened");
@@ -166,7 +166,11 @@ fn unplug_cancels_contacts_and_replug_restores_calibration() {
         .borrow_mut()
         .insert("/dev/input/event7".into(), panel.clone());
     let config = Config::parse(CONFIG, Path::new("test.toml")).unwrap();
-    let mut hub = InputHub::new(opener.clone(), config);
+    let mut hub = InputHub::new(
+        opener.clone(),
+        config.input.clone(),
+        config.display.picture(),
+    );
     let mut out = Vec::new();
     hub.dispatch(0, &mut out);
     hub.dispatch(10_000, &mut out);
@@ -225,7 +229,11 @@ fn unplug_cancels_contacts_and_replug_restores_calibration() {
 fn devices_that_fail_to_open_are_retried() {
     let opener = Opener::default();
     let config = Config::parse(CONFIG, Path::new("test.toml")).unwrap();
-    let mut hub = InputHub::new(opener.clone(), config);
+    let mut hub = InputHub::new(
+        opener.clone(),
+        config.input.clone(),
+        config.display.picture(),
+    );
     let mut out = Vec::new();
     hub.dispatch(0, &mut out);
     assert_eq!(hub.device_count(), 0);

@@ -353,8 +353,9 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
             path: dev_path.clone(),
             source,
         })?;
-    let base = crate::input::pipeline::calibration_for(&config, &desc)
-        .map_err(|e| CalibrateError::Device(e.to_string()))?;
+    let base =
+        crate::input::pipeline::calibration_for(&config.input, config.display.picture(), &desc)
+            .map_err(|e| CalibrateError::Device(e.to_string()))?;
     let (xa, ya) = desc
         .position_axes()
         .ok_or_else(|| CalibrateError::Device(format!("{dev_name} has no position axes")))?;

@@ -1,5 +1,10 @@
 //! The configuration file (TOML), validated as a whole at start.
 //!
+//! The sections belong to the subsystems that read them
+//! ([`InputConfig`], [`DisplayConfig`], [`ActionConfig`],
+//! [`CharacterConfig`], [`TrackingConfig`]); this module composes them with
+//! the application's own (`[kiosk]`, `[log]`) and validates the whole.
+//!
 //! Every key is documented in `config/marionette.toml`. An unknown key, a
 //! value of the wrong type or out of range is a [`ConfigError`] that names
 //! the file, the key and what is allowed; the binary exits with
@@ -10,8 +15,10 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::input::calibration::Matrix;
-use crate::input::device::{DeviceDescription, InputId};
+use crate::control::config::{ActionConfig, CharacterConfig, TrackingConfig};
+use crate::control::controller::Settings;
+use crate::display::config::DisplayConfig;
+use crate::input::config::{InputConfig, parse_usb_id};
 use crate::screen::Rotation;
 
 /// Where `run` looks for its configuration when none is given.
@@ -71,272 +78,6 @@ impl Default for KioskConfig {
             attract: PathBuf::new(),
         }
     }
-}
-
-/// `[tracking]`: how the shown motion follows the synthesised one (the
-/// paper's section 6).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct TrackingConfig {
-    /// Acceleration-based tracking settles in about this long (s); 0 shows
-    /// the synthesised postures as they are.
-    pub settle_s: f64,
-    /// Add the ragdoll's physical effects to the untouched limbs.
-    pub physics: bool,
-    /// Attenuation of the accumulated effect per frame of 1/30 s (eq. 6).
-    pub s1: f64,
-    /// Share of the ragdoll's motion per frame of 1/30 s (eq. 6).
-    pub s2: f64,
-}
-
-impl Default for TrackingConfig {
-    fn default() -> Self {
-        let s = crate::control::controller::Settings::default();
-        Self {
-            settle_s: s.settle_s,
-            physics: s.physics,
-            s1: s.attenuation.s1,
-            s2: s.attenuation.s2,
-        }
-    }
-}
-
-/// `[character]`: the motion library and how fingers and the camera behave.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct CharacterConfig {
-    /// Folder of the motion library (with its `library.toml`); empty for
-    /// the default library shipped with marionette.
-    pub library: PathBuf,
-    /// A finger within this distance of a body part grabs it (px).
-    pub pick_radius_px: f64,
-    /// The camera eases back to its home view after this long without a
-    /// touch (s).
-    pub camera_home_after_s: f64,
-}
-
-impl Default for CharacterConfig {
-    fn default() -> Self {
-        let s = crate::control::controller::Settings::default();
-        Self {
-            library: PathBuf::new(),
-            pick_radius_px: s.pick_radius_px,
-            camera_home_after_s: s.home_after_s,
-        }
-    }
-}
-
-impl CharacterConfig {
-    /// Where the library is: the configured folder, else the shipped
-    /// default library (installed, else next to the source tree).
-    #[must_use]
-    pub fn library_dir(&self) -> PathBuf {
-        if !self.library.as_os_str().is_empty() {
-            return self.library.clone();
-        }
-        let installed = Path::new("/usr/share/marionette/library");
-        if installed.join("library.toml").exists() {
-            return installed.to_owned();
-        }
-        let here = Path::new("assets/library");
-        if here.join("library.toml").exists() {
-            return here.to_owned();
-        }
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library")
-    }
-}
-
-/// `[action]`: when a drag starts an action (the paper's section 5).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ActionConfig {
-    /// Weight of time against position in the trail match (px per second).
-    pub h: f64,
-    /// A drag may run this many times faster or slower than the action
-    /// before time counts in the match (1 = exact timing).
-    pub tempo_tolerance: f64,
-    /// Match cost under which a drag at rest starts an action (px).
-    pub threshold_px: f64,
-    /// How much the threshold grows per px/s of drag speed.
-    pub threshold_per_speed: f64,
-    /// Shortest drag that can start an action (px).
-    pub min_trail_px: f64,
-    /// Part of the action's trajectory the drag must cover (0..1).
-    pub min_coverage: f64,
-    /// Actions moving within this angle of the line of sight are not
-    /// started from this view (degrees).
-    pub min_view_angle_deg: f64,
-}
-
-impl Default for ActionConfig {
-    fn default() -> Self {
-        let r = crate::character::action::trail::StartRule::default();
-        Self {
-            h: r.h,
-            tempo_tolerance: r.tempo,
-            threshold_px: r.base_threshold_px,
-            threshold_per_speed: r.speed_gain,
-            min_trail_px: r.min_trail_px,
-            min_coverage: r.min_coverage,
-            min_view_angle_deg: r.min_view_angle_deg,
-        }
-    }
-}
-
-impl ActionConfig {
-    /// The start rule these settings make.
-    #[must_use]
-    pub fn rule(&self) -> crate::character::action::trail::StartRule {
-        crate::character::action::trail::StartRule {
-            h: self.h,
-            tempo: self.tempo_tolerance,
-            base_threshold_px: self.threshold_px,
-            speed_gain: self.threshold_per_speed,
-            min_trail_px: self.min_trail_px,
-            min_coverage: self.min_coverage,
-            min_view_angle_deg: self.min_view_angle_deg,
-        }
-    }
-}
-
-/// `[display]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct DisplayConfig {
-    /// Picture width in pixels for headless output (the demo, replays); on
-    /// KMS the output's mode decides.
-    pub width: u32,
-    /// Picture height in pixels, as `width`.
-    pub height: u32,
-    /// Clockwise turn of the picture on the panel: 0, 90, 180 or 270.
-    pub rotation: u32,
-    /// Samples per pixel for anti-aliasing: 1, 2, 4 or 8 (fewer when the
-    /// adapter cannot); 0 chooses: 4 on a GPU, 1 on a CPU renderer.
-    pub samples: u32,
-    /// Show the trajectories of the actions a held part can start.
-    pub trajectories: bool,
-    /// Show a status line (mode, action, frame time).
-    pub status_line: bool,
-    /// The KMS output to drive, by connector name (`HDMI-A-1`; see
-    /// `marionette list-outputs`); empty: the first connected one.
-    pub output: String,
-    /// Its mode, `WIDTHxHEIGHT` or `WIDTHxHEIGHT@HZ`; empty: the preferred.
-    pub mode: String,
-    /// How frames reach the output: `auto` (direct where the Vulkan driver
-    /// can drive the display, else copy), `direct` or `copy`.
-    pub presenter: String,
-}
-
-impl Default for DisplayConfig {
-    fn default() -> Self {
-        Self {
-            width: 1280,
-            height: 720,
-            rotation: 0,
-            samples: 0,
-            trajectories: true,
-            status_line: true,
-            output: String::new(),
-            mode: String::new(),
-            presenter: "auto".to_owned(),
-        }
-    }
-}
-
-impl DisplayConfig {
-    #[must_use]
-    pub fn rotation(&self) -> Rotation {
-        Rotation::from_degrees(i64::from(self.rotation)).unwrap_or_default()
-    }
-
-    /// Picture size in pixels: the output's, turned by the rotation.
-    #[must_use]
-    pub fn size(&self) -> (u32, u32) {
-        match self.rotation() {
-            Rotation::R90 | Rotation::R270 => (self.height, self.width),
-            Rotation::R0 | Rotation::R180 => (self.width, self.height),
-        }
-    }
-
-    /// Output size in pixels (before rotation).
-    #[must_use]
-    pub fn output_size(&self) -> (u32, u32) {
-        (self.width, self.height)
-    }
-}
-
-/// `[input]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct InputConfig {
-    /// Where the event devices are.
-    pub dev_dir: PathBuf,
-    /// Grab touchscreens (EVIOCGRAB) so no other program sees their touches.
-    pub grab: bool,
-    /// How often to look for panels that appeared, in milliseconds.
-    pub rescan_interval_ms: u64,
-    /// Per-device settings; the first entry that matches a device applies.
-    pub device: Vec<DeviceConfig>,
-}
-
-impl Default for InputConfig {
-    fn default() -> Self {
-        Self {
-            dev_dir: PathBuf::from("/dev/input"),
-            grab: true,
-            rescan_interval_ms: 1000,
-            device: Vec::new(),
-        }
-    }
-}
-
-/// `[[input.device]]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DeviceConfig {
-    /// Match the device's name exactly.
-    #[serde(default)]
-    pub match_name: Option<String>,
-    /// Match the device's `vendor:product` (hex, as `lsusb` prints it).
-    #[serde(default)]
-    pub match_usb: Option<String>,
-    /// libinput calibration matrix `[a, b, c, d, e, f]`.
-    #[serde(default = "identity")]
-    pub calibration: [f64; 6],
-    /// Do not read this device at all.
-    #[serde(default)]
-    pub ignore: bool,
-}
-
-fn identity() -> [f64; 6] {
-    Matrix::IDENTITY.0
-}
-
-impl DeviceConfig {
-    /// Whether this entry applies to a device.
-    #[must_use]
-    pub fn matches(&self, d: &DeviceDescription) -> bool {
-        let name_ok = self.match_name.as_ref().is_none_or(|n| *n == d.name);
-        let usb_ok = self.match_usb.as_ref().is_none_or(|u| {
-            parse_usb_id(u).is_some_and(|(v, p)| v == d.id.vendor && p == d.id.product)
-        });
-        name_ok && usb_ok
-    }
-
-    #[must_use]
-    pub fn matrix(&self) -> Matrix {
-        Matrix(self.calibration)
-    }
-}
-
-/// `vendor:product` in hex, as `lsusb` prints it.
-#[must_use]
-pub fn parse_usb_id(s: &str) -> Option<(u16, u16)> {
-    let (v, p) = s.split_once(':')?;
-    Some((
-        u16::from_str_radix(v, 16).ok()?,
-        u16::from_str_radix(p, 16).ok()?,
-    ))
 }
 
 /// `[log]`
@@ -519,23 +260,40 @@ impl Config {
         }
         Ok(())
     }
-
-    /// The settings for a device: the first matching `[[input.device]]`.
-    #[must_use]
-    pub fn device_for(&self, d: &DeviceDescription) -> Option<&DeviceConfig> {
-        self.input.device.iter().find(|c| c.matches(d))
-    }
 }
 
-/// A short label for a device in logs: name and vendor:product.
-#[must_use]
-pub fn device_label(name: &str, id: InputId) -> String {
-    format!("\"{name}\" ({id})")
+impl Config {
+    /// The controller's settings from `[action]`, `[character]` and
+    /// `[tracking]`.
+    #[must_use]
+    pub fn control_settings(&self) -> Settings {
+        Settings::from_sections(&self.action, &self.character, &self.tracking)
+    }
+
+    /// Where the library is: the configured folder, else the shipped
+    /// default library (installed, else next to the source tree).
+    #[must_use]
+    pub fn library_dir(&self) -> PathBuf {
+        let configured = &self.character.library;
+        if !configured.as_os_str().is_empty() {
+            return configured.clone();
+        }
+        let installed = Path::new("/usr/share/marionette/library");
+        if installed.join("library.toml").exists() {
+            return installed.to_owned();
+        }
+        let here = Path::new("assets/library");
+        if here.join("library.toml").exists() {
+            return here.to_owned();
+        }
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library")
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::input::device::DeviceDescription;
 
     fn parse(s: &str) -> Result<Config, ConfigError> {
         Config::parse(s, Path::new("/etc/marionette/marionette.toml"))
@@ -619,8 +377,8 @@ mod tests {
         };
         d.id.vendor = 0x0eef;
         d.id.product = 0x72a1;
-        assert_eq!(c.device_for(&d).unwrap().calibration[0], 2.0);
+        assert_eq!(c.input.device_for(&d).unwrap().calibration[0], 2.0);
         d.id.product = 1;
-        assert!(c.device_for(&d).is_none());
+        assert!(c.input.device_for(&d).is_none());
     }
 }

@@ -12,7 +12,7 @@ use thiserror::Error;
 
 use super::config::Config;
 use crate::character::action::timeline::ActionEvent;
-use crate::control::controller::{Character, Controller, Mode, Settings};
+use crate::control::controller::{Character, Controller, Mode};
 use crate::control::ticker::Ticker;
 use crate::input::touch::ScreenFrame;
 use crate::render::contact;
@@ -225,7 +225,7 @@ pub fn run(
     frames: Vec<ScreenFrame>,
     opts: &Options,
 ) -> Result<Summary, HeadlessError> {
-    let mut settings = Settings::from_config(config);
+    let mut settings = config.control_settings();
     if !opts.tracking {
         settings.settle_s = 0.0;
     }

@@ -14,7 +14,7 @@ use thiserror::Error;
 
 use super::config::Config;
 use super::notify::Notifier;
-use crate::control::controller::{Character, Controller, Settings};
+use crate::control::controller::{Character, Controller};
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::live::{EvdevOpener, HubEvent, InputHub, LiveError};
@@ -164,7 +164,8 @@ fn load_attract(config: &Config) -> Result<Option<Vec<ScreenFrame>>, RunError> {
         message,
     };
     let rec = crate::input::evemu::Recording::read_file(path).map_err(|e| err(e.to_string()))?;
-    let frames = crate::input::pipeline::replay(&rec, config).map_err(|e| err(e.to_string()))?;
+    let frames = crate::input::pipeline::replay(&rec, &config.input, config.display.picture())
+        .map_err(|e| err(e.to_string()))?;
     if frames.is_empty() {
         return Err(err("it has no touches".to_owned()));
     }
@@ -213,7 +214,7 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
     let clock = |us: i64| (us - start_us) as f64 / 1e6;
     let mut ctl = Controller::new(
         ch,
-        Settings::from_config(&config),
+        config.control_settings(),
         f64::from(pw),
         f64::from(ph),
         0.0,
@@ -465,7 +466,8 @@ impl InputThread {
         let handle = std::thread::Builder::new()
             .name("input".into())
             .spawn(move || {
-                let mut hub = InputHub::new(EvdevOpener, config.clone());
+                let mut hub =
+                    InputHub::new(EvdevOpener, config.input.clone(), config.display.picture());
                 let mut events = Vec::new();
                 let wait = Duration::from_millis(50.min(config.input.rescan_interval_ms));
                 while !stopping.load(std::sync::atomic::Ordering::SeqCst) {

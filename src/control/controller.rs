@@ -114,25 +114,6 @@ impl Default for Settings {
     }
 }
 
-impl Settings {
-    /// The settings a configuration gives.
-    #[must_use]
-    pub fn from_config(config: &crate::app::config::Config) -> Self {
-        Self {
-            rule: config.action.rule(),
-            pick_radius_px: config.character.pick_radius_px,
-            home_after_s: config.character.camera_home_after_s,
-            settle_s: config.tracking.settle_s,
-            physics: config.tracking.physics,
-            attenuation: Attenuation {
-                s1: config.tracking.s1,
-                s2: config.tracking.s2,
-            },
-            ..Self::default()
-        }
-    }
-}
-
 /// What a finger holds.
 #[derive(Clone, Debug, PartialEq)]
 enum Grab {

@@ -8,12 +8,12 @@ use std::sync::Arc;
 
 use super::controller::{Character, Controller, Mode, Settings};
 use super::ticker::Ticker;
-use crate::app::config::Config;
 use crate::character::action::trail::TrailPoint;
 use crate::character::roles::Role;
+use crate::input::config::InputConfig;
 use crate::input::pipeline;
 use crate::input::synth::{Synth, panel};
-use crate::screen::ScreenPoint;
+use crate::screen::{Picture, ScreenPoint};
 
 /// Frame interval of the authored panel (60 Hz).
 const DT_US: i64 = 16_667;
@@ -27,7 +27,8 @@ struct Author<'a> {
     synth: Synth,
     ctl: Controller,
     ticker: Ticker,
-    config: &'a Config,
+    input: &'a InputConfig,
+    picture: Picture,
     width: f64,
     height: f64,
     time: f64,
@@ -37,7 +38,8 @@ impl Author<'_> {
     /// Run the controller over what is authored so far.
     fn sync(&mut self) {
         let rec = self.synth.finish();
-        let frames = pipeline::replay(&rec, self.config).expect("the authored panel calibrates");
+        let frames = pipeline::replay(&rec, self.input, self.picture)
+            .expect("the authored panel calibrates");
         self.ticker.extend(frames);
         while self.ticker.time() + 1.0 / TICK_HZ <= self.time + 1e-9 {
             self.ticker.step(&mut self.ctl);
@@ -164,14 +166,20 @@ impl Author<'_> {
 /// one finger while another poses, camera turns and a pinch, and a rest
 /// while the camera eases home.
 #[must_use]
-pub fn author_demo(ch: Arc<Character>, settings: Settings, config: &Config) -> Synth {
-    let (width, height) = config.display.size();
+pub fn author_demo(
+    ch: Arc<Character>,
+    settings: Settings,
+    input: &InputConfig,
+    picture: Picture,
+) -> Synth {
+    let (width, height) = picture.size();
     let (width, height) = (f64::from(width), f64::from(height));
     let mut a = Author {
         synth: Synth::new(panel("marionette demo panel", 10, MAX)),
         ctl: Controller::new(ch, settings, width, height, 0.0),
         ticker: Ticker::new(Vec::new(), TICK_HZ),
-        config,
+        input,
+        picture,
         width,
         height,
         time: 0.0,

@@ -3,6 +3,7 @@
 //! paper's posing, action and tracking control; [`rig`] is the camera;
 //! [`live_eval`] judges drags through the controller.
 
+pub mod config;
 pub mod controller;
 pub mod demo;
 pub mod live_eval;

@@ -3,6 +3,7 @@
 //! display) and the copy presenter in [`present`], behind one interface in
 //! [`screen`]. The headless presenter is `render::headless`.
 
+pub mod config;
 pub mod direct;
 pub mod kms;
 pub mod present;

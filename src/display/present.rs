@@ -78,7 +78,7 @@ pub struct OutputChoice {
 impl OutputChoice {
     /// The output and mode `[display]` asks for.
     #[must_use]
-    pub fn from_config(d: &crate::app::config::DisplayConfig) -> Self {
+    pub fn from_config(d: &crate::display::config::DisplayConfig) -> Self {
         Self {
             connector: (!d.output.is_empty()).then(|| d.output.clone()),
             mode: Self::parse_mode(&d.mode),

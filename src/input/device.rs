@@ -340,3 +340,8 @@ mod tests {
         assert!(!b.contains(331));
     }
 }
+/// A short label for a device in logs: name and vendor:product.
+#[must_use]
+pub fn device_label(name: &str, id: InputId) -> String {
+    format!("\"{name}\" ({id})")
+}

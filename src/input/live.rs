@@ -21,6 +21,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use super::calibration::{Calibration, Matrix};
+use super::config::InputConfig;
 use super::device::{AbsInfo, DeviceDescription, DeviceKind, InputId};
 use super::event::{
     ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
@@ -28,9 +29,10 @@ use super::event::{
 };
 use super::pipeline::screen_contacts;
 use super::tracker::{ContactTracker, KernelState, ResyncSource, SlotState, TouchFrame};
-use crate::app::config::{Config, device_label};
 use crate::app::exit;
+use crate::input::device::device_label;
 use crate::input::touch::ScreenContact;
+use crate::screen::Picture;
 
 /// Errors of live devices.
 #[derive(Debug, Error)]
@@ -388,7 +390,9 @@ struct OpenDevice {
 /// for rescans and for the time of frames it makes itself.
 pub struct InputHub<O: DeviceOpener> {
     opener: O,
-    config: Config,
+    input: InputConfig,
+    /// The picture touches are mapped onto.
+    picture: Picture,
     open: Vec<OpenDevice>,
     /// Nodes that are not touchscreens (or are ignored), so they are not
     /// reopened on every scan; forgotten when the node disappears.
@@ -403,10 +407,11 @@ pub struct InputHub<O: DeviceOpener> {
 
 impl<O: DeviceOpener> InputHub<O> {
     #[must_use]
-    pub fn new(opener: O, config: Config) -> Self {
+    pub fn new(opener: O, input: InputConfig, picture: Picture) -> Self {
         Self {
             opener,
-            config,
+            input,
+            picture,
             open: Vec::new(),
             skipped: HashSet::new(),
             failed: BTreeMap::new(),
@@ -449,7 +454,7 @@ impl<O: DeviceOpener> InputHub<O> {
     /// Look for new devices now, whatever the interval.
     pub fn rescan(&mut self, now_us: i64, out: &mut Vec<HubEvent>) {
         self.last_scan_us = Some(now_us);
-        let dir = self.config.input.dev_dir.clone();
+        let dir = self.input.dev_dir.clone();
         let paths = match self.opener.scan(&dir) {
             Ok(p) => p,
             Err(e) => {
@@ -486,7 +491,7 @@ impl<O: DeviceOpener> InputHub<O> {
         self.failed.remove(path);
         let desc = dev.description().clone();
         let label = device_label(&desc.name, desc.id);
-        let settings = self.config.device_for(&desc).cloned();
+        let settings = self.input.device_for(&desc).cloned();
         let kind = desc.kind();
         if kind != DeviceKind::Touchscreen || settings.as_ref().is_some_and(|s| s.ignore) {
             let why = if kind == DeviceKind::Touchscreen {
@@ -502,7 +507,7 @@ impl<O: DeviceOpener> InputHub<O> {
         let instance = self.next_instance;
         let tracker = ContactTracker::new(&desc, ResyncSource::Kernel, instance);
         let calibration = desc.position_axes().ok_or(()).and_then(|(x, y)| {
-            Calibration::new(&x, &y, matrix, self.config.display.rotation(), self.config.display.size()).map_err(|e| {
+            Calibration::new(&x, &y, matrix, self.picture.rotation, self.picture.size()).map_err(|e| {
                 tracing::error!(path = %path.display(), device = %label, error = %e, "cannot calibrate; device not used");
             })
         });
@@ -510,7 +515,7 @@ impl<O: DeviceOpener> InputHub<O> {
             self.skipped.insert(path.to_owned());
             return;
         };
-        if self.config.input.grab {
+        if self.input.grab {
             if let Err(e) = dev.grab() {
                 tracing::warn!(path = %path.display(), device = %label, error = %e, "cannot grab the device; other programs will see its touches too");
             }
@@ -541,7 +546,7 @@ impl<O: DeviceOpener> InputHub<O> {
 
     /// Read every device, rescanning first when the interval has passed.
     pub fn dispatch(&mut self, now_us: i64, out: &mut Vec<HubEvent>) {
-        let interval = i64::try_from(self.config.input.rescan_interval_ms).unwrap_or(1000) * 1000;
+        let interval = i64::try_from(self.input.rescan_interval_ms).unwrap_or(1000) * 1000;
         if self
             .last_scan_us
             .is_none_or(|t| now_us - t >= interval || now_us < t)
@@ -651,9 +656,9 @@ impl fmt::Display for DeviceListing {
 
 /// Describe a device for `list-devices`.
 #[must_use]
-pub fn listing(path: &Path, desc: &DeviceDescription, config: &Config) -> DeviceListing {
+pub fn listing(path: &Path, desc: &DeviceDescription, input: &InputConfig) -> DeviceListing {
     let kind = desc.kind();
-    let settings = config.device_for(desc);
+    let settings = input.device_for(desc);
     let verdict = match (kind, settings) {
         (DeviceKind::Touchscreen, Some(s)) if s.ignore => "ignored (configuration)".to_owned(),
         (DeviceKind::Touchscreen, Some(s)) => format!("used, calibration {:?}", s.calibration),
@@ -691,21 +696,21 @@ pub(crate) fn scan_error(dir: &Path, source: io::Error) -> LiveError {
 }
 
 /// Every device node and what marionette makes of it.
-pub fn list_devices(config: &Config) -> Result<Vec<DeviceListing>, LiveError> {
-    list_devices_with(&EvdevOpener, config)
+pub fn list_devices(input: &InputConfig) -> Result<Vec<DeviceListing>, LiveError> {
+    list_devices_with(&EvdevOpener, input)
 }
 
 /// [`list_devices`] through any opener.
 pub fn list_devices_with(
     opener: &dyn DeviceOpener,
-    config: &Config,
+    input: &InputConfig,
 ) -> Result<Vec<DeviceListing>, LiveError> {
-    let dir = &config.input.dev_dir;
+    let dir = &input.dev_dir;
     let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
     Ok(paths
         .iter()
         .map(|p| match opener.open(p) {
-            Ok(d) => listing(p, d.description(), config),
+            Ok(d) => listing(p, d.description(), input),
             Err(e) => DeviceListing {
                 path: p.clone(),
                 name: None,
@@ -726,18 +731,19 @@ pub fn list_devices_with(
 /// what the hub reports, one JSON object per line, until SIGINT/SIGTERM or
 /// `seconds`. For operators checking a panel and its calibration.
 pub fn watch(
-    config: &Config,
+    input: &InputConfig,
+    picture: Picture,
     seconds: Option<f64>,
     out: &mut dyn io::Write,
 ) -> Result<(), LiveError> {
-    let dir = &config.input.dev_dir;
+    let dir = &input.dev_dir;
     if !dir.is_dir() {
         return Err(LiveError::NoDeviceDir(dir.clone()));
     }
     crate::app::signals::install_stop_handler();
     let started = std::time::Instant::now();
     let deadline = seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
-    let mut hub = InputHub::new(EvdevOpener, config.clone());
+    let mut hub = InputHub::new(EvdevOpener, input.clone(), picture);
     let mut events = Vec::new();
     let stdout_err = |source| LiveError::Write {
         path: PathBuf::from("stdout"),
@@ -751,7 +757,7 @@ pub fn watch(
             writeln!(out, "{line}").map_err(stdout_err)?;
         }
         out.flush().map_err(stdout_err)?;
-        let wait = Duration::from_millis(100.min(config.input.rescan_interval_ms));
+        let wait = Duration::from_millis(100.min(input.rescan_interval_ms));
         hub.wait(wait).map_err(|source| LiveError::Io {
             path: dir.clone(),
             source,

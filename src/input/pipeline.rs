@@ -5,12 +5,12 @@
 use serde::Serialize;
 
 use super::calibration::{Calibration, CalibrationError, Matrix};
+use super::config::InputConfig;
 use super::device::{DeviceDescription, Protocol};
 use super::evemu::Recording;
 use super::touch::{ScreenContact, ScreenFrame};
-use super::tracker::{ContactId, Phase, TouchFrame, TrackerError, TrackerStats, track_events};
-use crate::app::config::Config;
-use crate::screen::ScreenPoint;
+use super::tracker::{TouchFrame, TrackerError, TrackerStats, track_events};
+use crate::screen::Picture;
 
 /// What `marionette inspect FILE.evemu` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -61,25 +61,21 @@ pub enum ReplayError {
 
 /// The calibration the configuration gives a device.
 pub fn calibration_for(
-    config: &Config,
+    input: &InputConfig,
+    picture: Picture,
     device: &DeviceDescription,
 ) -> Result<Calibration, ReplayError> {
-    let matrix = config
+    let matrix = input
         .device_for(device)
         .map_or(Matrix::IDENTITY, |c| c.matrix());
     let (x, y) = device
         .position_axes()
         .ok_or_else(|| TrackerError::NoPositionAxes(device.name.clone()))?;
-    Calibration::new(
-        &x,
-        &y,
-        matrix,
-        config.display.rotation(),
-        config.display.size(),
-    )
-    .map_err(|source| ReplayError::Calibration {
-        device: device.name.clone(),
-        source,
+    Calibration::new(&x, &y, matrix, picture.rotation, picture.size()).map_err(|source| {
+        ReplayError::Calibration {
+            device: device.name.clone(),
+            source,
+        }
     })
 }
 
@@ -109,87 +105,13 @@ pub fn to_screen(frame: &TouchFrame, cal: &Calibration, t0_us: i64) -> ScreenFra
 }
 
 /// Replay a whole recording into screen-space frames.
-pub fn replay(rec: &Recording, config: &Config) -> Result<Vec<ScreenFrame>, ReplayError> {
-    let cal = calibration_for(config, &rec.device)?;
+pub fn replay(
+    rec: &Recording,
+    input: &InputConfig,
+    picture: Picture,
+) -> Result<Vec<ScreenFrame>, ReplayError> {
+    let cal = calibration_for(input, picture, &rec.device)?;
     let (frames, _) = track_events(&rec.device, &rec.events)?;
     let t0 = rec.events.first().map_or(0, |e| e.time_us);
     Ok(frames.iter().map(|f| to_screen(f, &cal, t0)).collect())
-}
-
-/// The demo's human-readable account of a replay.
-#[must_use]
-pub fn demo_summary(rec: &Recording, frames: &[ScreenFrame], config: &Config) -> String {
-    use std::collections::BTreeMap;
-    use std::fmt::Write;
-    let (summary, stats) = summarize(rec);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "replayed \"{}\" (protocol {}), {:.2} s, {} frames, on a {}x{} screen at {}",
-        summary.device,
-        summary.protocol.map_or("-".to_owned(), |p| p.to_string()),
-        summary.duration_s,
-        summary.frames,
-        config.display.width,
-        config.display.height,
-        config.display.rotation()
-    );
-    let _ = writeln!(
-        s,
-        "{} touch frames, {} finger contacts, at most {} at once",
-        frames.len(),
-        summary.touch_sequences,
-        summary.max_contacts
-    );
-    struct Track {
-        start: (f64, ScreenPoint),
-        end: (f64, ScreenPoint),
-        length: f64,
-        ended: Phase,
-    }
-    let mut tracks: BTreeMap<ContactId, Track> = BTreeMap::new();
-    for f in frames {
-        for c in &f.contacts {
-            let t = tracks.entry(c.id).or_insert(Track {
-                start: (f.t, c.screen),
-                end: (f.t, c.screen),
-                length: 0.0,
-                ended: Phase::Hold,
-            });
-            t.length += t.end.1.distance(c.screen);
-            t.end = (f.t, c.screen);
-            if !c.phase.is_down() {
-                t.ended = c.phase;
-            }
-        }
-    }
-    for (id, t) in &tracks {
-        let _ = writeln!(
-            s,
-            "  contact {:>3}: {:5.2}s-{:5.2}s  ({:6.1},{:6.1}) -> ({:6.1},{:6.1}) px, path {:6.1} px, {}",
-            id & 0xffff_ffff,
-            t.start.0,
-            t.end.0,
-            t.start.1.x,
-            t.start.1.y,
-            t.end.1.x,
-            t.end.1.y,
-            t.length,
-            match t.ended {
-                Phase::Up => "lifted",
-                Phase::Cancel => "cancelled",
-                _ => "still down at the end",
-            }
-        );
-    }
-    if let Some(st) = stats {
-        if st.clamped + st.bad_slots + st.dropped > 0 {
-            let _ = writeln!(
-                s,
-                "device problems: {} values clamped, {} bad slots, {} SYN_DROPPED",
-                st.clamped, st.bad_slots, st.dropped
-            );
-        }
-    }
-    s
 }

@@ -4,18 +4,18 @@ use std::io::{self, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use super::config::InputConfig;
 use super::device::DeviceKind;
 use super::evemu;
 use super::event::RawEvent;
 use super::live::{DeviceOpener, EvdevDevice, EvdevOpener, EventDevice, LiveError, scan_error};
-use crate::app::config::Config;
 use crate::app::signals;
 
 /// `marionette record`: write a device's events to an evemu file until
 /// Ctrl-C (or `seconds`). Each frame is flushed as it completes, so an
 /// interrupted recording keeps everything up to the last frame.
 pub fn record(
-    config: &Config,
+    input: &InputConfig,
     device: Option<&Path>,
     out: &Path,
     seconds: Option<f64>,
@@ -24,7 +24,7 @@ pub fn record(
     let path = match device {
         Some(p) => p.to_owned(),
         None => {
-            let dir = &config.input.dev_dir;
+            let dir = &input.dev_dir;
             let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
             paths
                 .into_iter()
