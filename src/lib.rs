@@ -34,5 +34,6 @@ pub mod control;
 pub mod display;
 pub mod input;
 pub mod physics;
+pub mod platform;
 pub mod render;
 pub mod screen;

@@ -9,9 +9,12 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use marionette::app::config::{self, Config, ConfigError};
-use marionette::app::{exit, logging};
+use marionette::app::exit::{self, ExitStatus};
+use marionette::app::logging;
 use marionette::input::evemu::{EvemuError, Recording};
-use marionette::input::{live, pipeline, record, uinput};
+use marionette::input::pipeline;
+use marionette::platform::evdev as live;
+use marionette::platform::{record, uinput};
 
 #[derive(Parser)]
 #[command(
@@ -1086,7 +1089,7 @@ const DEMO_RECORDING: &str = include_str!("../assets/recordings/demo.evemu");
 
 fn list_outputs(dir: &Path, json: bool) -> Result<(), Failure> {
     let found =
-        marionette::display::kms::list_outputs(dir).map_err(|e| Failure::new(e.exit_code(), e))?;
+        marionette::platform::kms::list_outputs(dir).map_err(|e| Failure::new(e.exit_code(), e))?;
     let mut out = std::io::stdout().lock();
     for o in &found {
         let line = if json {

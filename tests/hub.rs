@@ -14,7 +14,7 @@ use marionette::app::config::Config;
 use marionette::input::device::DeviceDescription;
 use marionette::input::evemu::Recording;
 use marionette::input::event::RawEvent;
-use marionette::input::live::{DeviceOpener, EventDevice, HubEvent, InputHub, LiveError};
+use marionette::input::hub::{DeviceOpener, EventDevice, HubEvent, InputHub, LiveError};
 use marionette::input::tracker::{KernelState, Phase};
 
 /// A device node backed by a recording: each `read` returns the next

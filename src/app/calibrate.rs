@@ -19,7 +19,7 @@ use super::run::InputThread;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::calibration::{CalibrationError, RawPoint, Solution, SolveOptions, solve};
-use crate::input::live::{HubEvent, LiveError};
+use crate::input::hub::{HubEvent, LiveError};
 use crate::input::touch::Phase;
 use crate::render::contact::draw_text;
 use crate::render::headless::Image;
@@ -54,24 +54,6 @@ pub enum CalibrateError {
     },
     #[error("{path}: {message}")]
     ConfigText { path: PathBuf, message: String },
-}
-
-impl CalibrateError {
-    /// The exit code (sysexits): 65 touches refused, 69 no display or
-    /// device, 73 cannot write, 78 a config file that cannot be edited.
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        use super::exit;
-        match self {
-            Self::Present(e) => e.exit_code(),
-            Self::Input(e) => e.exit_code(),
-            Self::Device(_) | Self::NoTouch { .. } => exit::UNAVAILABLE,
-            Self::Refused { .. } => exit::DATAERR,
-            Self::Stopped => exit::FAILURE,
-            Self::Write { .. } => exit::CANTCREAT,
-            Self::ConfigText { .. } => exit::CONFIG,
-        }
-    }
 }
 
 /// How to calibrate.
@@ -275,7 +257,7 @@ fn to_output(img: &Image, rotation: Rotation) -> Image {
 /// Calibrate a touchscreen on the display; `config` is the configuration
 /// as loaded from `opts.config_path` (or the defaults if it is missing).
 pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated, CalibrateError> {
-    super::signals::install_stop_handler();
+    crate::platform::signals::install_stop_handler();
     let choice = OutputChoice::from_config(&config.display);
     let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
     let mut presenter = Screen::open_for_pictures(&opts.dri_dir, &choice, kind)?;
@@ -318,7 +300,7 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         if let Some(d) = found {
             break d;
         }
-        if super::signals::stop_requested() {
+        if crate::platform::signals::stop_requested() {
             input.stop();
             return Err(CalibrateError::Stopped);
         }
@@ -347,8 +329,8 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
     };
     let (dev_id, dev_path, dev_name) = wanted;
     tracing::info!(device = %dev_name, path = %dev_path.display(), "calibrating");
-    let desc = crate::input::live::EvdevDevice::open(&dev_path)
-        .map(|d| crate::input::live::EventDevice::description(&d).clone())
+    let desc = crate::platform::evdev::EvdevDevice::open(&dev_path)
+        .map(|d| crate::input::hub::EventDevice::description(&d).clone())
         .map_err(|source| LiveError::Io {
             path: dev_path.clone(),
             source,
@@ -385,7 +367,7 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         let mut samples: Vec<(f64, RawPoint)> = Vec::new();
         let waited = Instant::now();
         let lifted = loop {
-            if super::signals::stop_requested() {
+            if crate::platform::signals::stop_requested() {
                 input.stop();
                 return Err(CalibrateError::Stopped);
             }

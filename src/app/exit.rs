@@ -1,5 +1,17 @@
 //! Process exit codes (sysexits.h), so that systemd units can act on them
-//! (`RestartPreventExitStatus=65 78`).
+//! (`RestartPreventExitStatus=65 78`). The subsystems' errors are typed
+//! (`thiserror`) and know nothing of exit codes; [`ExitStatus`] maps each
+//! of them to its code in this one place.
+
+use std::io;
+
+use super::calibrate::CalibrateError;
+use super::headless::HeadlessError;
+use super::run::RunError;
+use crate::display::present::PresentError;
+use crate::input::hub::LiveError;
+use crate::platform::kms::KmsError;
+use crate::platform::uinput::PlayError;
 
 /// Success.
 pub const OK: u8 = 0;
@@ -21,3 +33,102 @@ pub const IOERR: u8 = 74;
 pub const NOPERM: u8 = 77;
 /// The configuration is invalid: fix the file, restarting will not help.
 pub const CONFIG: u8 = 78;
+
+/// The exit code an error stops the process with. Every error type that
+/// can end a command is mapped here, and only here.
+pub trait ExitStatus {
+    /// The sysexits code for this error.
+    fn exit_code(&self) -> u8;
+}
+
+impl ExitStatus for LiveError {
+    /// The exit code this error deserves.
+    fn exit_code(&self) -> u8 {
+        match self {
+            LiveError::Gone(_) | LiveError::NoTouchscreen(_) | LiveError::NoDeviceDir(_) => {
+                UNAVAILABLE
+            }
+            LiveError::Io { source, .. } if source.kind() == io::ErrorKind::PermissionDenied => {
+                NOPERM
+            }
+            LiveError::Io { source, .. } if source.kind() == io::ErrorKind::NotFound => NOINPUT,
+            LiveError::Io { .. } => IOERR,
+            LiveError::Write { .. } => CANTCREAT,
+        }
+    }
+}
+
+impl ExitStatus for PlayError {
+    fn exit_code(&self) -> u8 {
+        match self {
+            PlayError::Uinput(e) if e.kind() == io::ErrorKind::PermissionDenied => NOPERM,
+            PlayError::Uinput(_) => UNAVAILABLE,
+            PlayError::Create { .. } | PlayError::Write(_) => IOERR,
+        }
+    }
+}
+
+impl ExitStatus for KmsError {
+    /// The exit code (sysexits).
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::NoDevices(_) | Self::Query { .. } => UNAVAILABLE,
+            Self::Open { source, .. } if source.kind() == io::ErrorKind::PermissionDenied => NOPERM,
+            Self::Open { .. } => UNAVAILABLE,
+        }
+    }
+}
+
+impl ExitStatus for PresentError {
+    /// The exit code (sysexits).
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::Kms(e) => e.exit_code(),
+            Self::NoOutput(_)
+            | Self::Master { .. }
+            | Self::LostMaster(_)
+            | Self::Direct { .. }
+            | Self::Gpu(_) => UNAVAILABLE,
+            Self::Io { .. } => IOERR,
+        }
+    }
+}
+
+impl ExitStatus for RunError {
+    /// The exit code (sysexits): 69 no display/adapter, 77 permissions,
+    /// 78 a bad attract recording in the configuration.
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::Present(e) => e.exit_code(),
+            Self::Gpu(_) => UNAVAILABLE,
+            Self::Input(e) => e.exit_code(),
+            Self::Attract { .. } => CONFIG,
+        }
+    }
+}
+
+impl ExitStatus for HeadlessError {
+    /// The exit code (sysexits) for systemd and scripts.
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::Gpu(_) => UNAVAILABLE,
+            Self::Write { .. } => CANTCREAT,
+        }
+    }
+}
+
+impl ExitStatus for CalibrateError {
+    /// The exit code (sysexits): 65 touches refused, 69 no display or
+    /// device, 73 cannot write, 78 a config file that cannot be edited.
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::Present(e) => e.exit_code(),
+            Self::Input(e) => e.exit_code(),
+            Self::Device(_) | Self::NoTouch { .. } => UNAVAILABLE,
+            Self::Refused { .. } => DATAERR,
+            Self::Stopped => FAILURE,
+            Self::Write { .. } => CANTCREAT,
+            Self::ConfigText { .. } => CONFIG,
+        }
+    }
+}

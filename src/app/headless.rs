@@ -33,17 +33,6 @@ pub enum HeadlessError {
     },
 }
 
-impl HeadlessError {
-    /// The exit code (sysexits) for systemd and scripts.
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            Self::Gpu(_) => super::exit::UNAVAILABLE,
-            Self::Write { .. } => super::exit::CANTCREAT,
-        }
-    }
-}
-
 /// How to run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {

@@ -5,6 +5,4 @@ pub mod config;
 pub mod exit;
 pub mod headless;
 pub mod logging;
-pub mod notify;
 pub mod run;
-pub mod signals;

@@ -13,13 +13,15 @@ use std::time::Duration;
 use thiserror::Error;
 
 use super::config::Config;
-use super::notify::Notifier;
 use crate::control::controller::{Character, Controller};
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
-use crate::input::live::{EvdevOpener, HubEvent, InputHub, LiveError};
+use crate::input::hub::{HubEvent, InputHub, LiveError};
 use crate::input::touch::Phase;
 use crate::input::touch::{ScreenContact, ScreenFrame};
+use crate::platform::clock::monotonic_us;
+use crate::platform::evdev::EvdevOpener;
+use crate::platform::notify::Notifier;
 use crate::render::gpu::{AdapterChoice, GpuError};
 use crate::render::scene::{self, View};
 
@@ -34,20 +36,6 @@ pub enum RunError {
     Input(#[from] LiveError),
     #[error("attract recording {path}: {message} (fix or empty `kiosk.attract`)")]
     Attract { path: PathBuf, message: String },
-}
-
-impl RunError {
-    /// The exit code (sysexits): 69 no display/adapter, 77 permissions,
-    /// 78 a bad attract recording in the configuration.
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            Self::Present(e) => e.exit_code(),
-            Self::Gpu(_) => super::exit::UNAVAILABLE,
-            Self::Input(e) => e.exit_code(),
-            Self::Attract { .. } => super::exit::CONFIG,
-        }
-    }
 }
 
 /// How `run` runs.
@@ -82,17 +70,6 @@ pub struct RunStats {
     /// Render plus readback plus copy, per frame (ms).
     pub render_ms_mean: f64,
     pub render_ms_max: f64,
-}
-
-/// CLOCK_MONOTONIC in microseconds: the clock evdev stamps events with.
-pub(crate) fn monotonic_us() -> i64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes the timespec it is given.
-    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &raw mut ts) };
-    ts.tv_sec * 1_000_000 + ts.tv_nsec / 1_000
 }
 
 /// Contacts from the attract recording are kept apart from real ones.
@@ -187,7 +164,7 @@ fn same_pose(a: &crate::character::skeleton::Pose, b: &crate::character::skeleto
 
 /// Run the kiosk until SIGTERM/SIGINT (or `opts.seconds`).
 pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<RunStats, RunError> {
-    super::signals::install_stop_handler();
+    crate::platform::signals::install_stop_handler();
     let notifier = Notifier::from_env();
     let choice = OutputChoice::from_config(&config.display);
     let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
@@ -234,7 +211,7 @@ pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<Run
     loop {
         let now_us = monotonic_us();
         let t = clock(now_us);
-        if super::signals::stop_requested() || opts.seconds.is_some_and(|s| t >= s) {
+        if crate::platform::signals::stop_requested() || opts.seconds.is_some_and(|s| t >= s) {
             notifier.notify("STOPPING=1");
             tracing::info!("stopping");
             break;

@@ -9,8 +9,8 @@ use std::path::PathBuf;
 
 use drm::control::Mode;
 
-use super::kms::Card;
 use super::present::{Found, OutputChoice, PresentError, become_master, find_output};
+use crate::platform::kms::Card;
 use crate::render::gpu::Gpu;
 use crate::render::headless::Image;
 use crate::render::renderer::{DrawList, Renderer};

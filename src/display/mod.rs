@@ -5,6 +5,5 @@
 
 pub mod config;
 pub mod direct;
-pub mod kms;
 pub mod present;
 pub mod screen;

@@ -13,14 +13,14 @@ use drm::control::dumbbuffer::DumbBuffer;
 use drm::control::{Device as _, Mode, PageFlipFlags, connector, crtc, framebuffer};
 use thiserror::Error;
 
-use super::kms::Card;
+use crate::platform::kms::Card;
 use crate::render::headless::Image;
 
 /// Why frames cannot be shown.
 #[derive(Debug, Error)]
 pub enum PresentError {
     #[error(transparent)]
-    Kms(#[from] super::kms::KmsError),
+    Kms(#[from] crate::platform::kms::KmsError),
     #[error("{0}")]
     NoOutput(String),
     #[error(
@@ -48,22 +48,6 @@ pub enum PresentError {
     /// back.
     #[error("{0}: the display was taken by another program (VT switch)")]
     LostMaster(PathBuf),
-}
-
-impl PresentError {
-    /// The exit code (sysexits).
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            Self::Kms(e) => e.exit_code(),
-            Self::NoOutput(_)
-            | Self::Master { .. }
-            | Self::LostMaster(_)
-            | Self::Direct { .. }
-            | Self::Gpu(_) => crate::app::exit::UNAVAILABLE,
-            Self::Io { .. } => crate::app::exit::IOERR,
-        }
-    }
 }
 
 /// Which output and mode to drive: by connector name (`HDMI-A-1`) and
@@ -159,7 +143,7 @@ pub(crate) struct Found {
 /// cards in `dir` (normally `/dev/dri`).
 pub(crate) fn find_output(dir: &Path, choice: &OutputChoice) -> Result<Found, PresentError> {
     let mut seen = Vec::new();
-    for path in super::kms::card_paths(dir)? {
+    for path in crate::platform::kms::card_paths(dir)? {
         let card = Card::open(&path)?;
         let io = |what, source| PresentError::Io {
             path: path.clone(),

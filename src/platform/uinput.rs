@@ -7,10 +7,9 @@ use std::time::{Duration, Instant};
 
 use thiserror::Error;
 
-use super::device::DeviceDescription;
-use super::evemu::Recording;
-use super::event::{EV_KEY, EV_MSC, EV_REL, EV_SW, RawEvent};
-use crate::app::exit;
+use crate::input::device::DeviceDescription;
+use crate::input::evemu::Recording;
+use crate::input::event::{EV_KEY, EV_MSC, EV_REL, EV_SW, RawEvent};
 
 /// Errors of `play`.
 #[derive(Debug, Error)]
@@ -30,17 +29,6 @@ pub enum PlayError {
     /// Writing events failed.
     #[error("cannot write events to the virtual device: {0}")]
     Write(#[source] io::Error),
-}
-
-impl PlayError {
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            PlayError::Uinput(e) if e.kind() == io::ErrorKind::PermissionDenied => exit::NOPERM,
-            PlayError::Uinput(_) => exit::UNAVAILABLE,
-            PlayError::Create { .. } | PlayError::Write(_) => exit::IOERR,
-        }
-    }
 }
 
 /// Create a uinput device that looks like `d`.

@@ -30,20 +30,6 @@ pub enum KmsError {
     },
 }
 
-impl KmsError {
-    /// The exit code (sysexits).
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            Self::NoDevices(_) | Self::Query { .. } => crate::app::exit::UNAVAILABLE,
-            Self::Open { source, .. } if source.kind() == std::io::ErrorKind::PermissionDenied => {
-                crate::app::exit::NOPERM
-            }
-            Self::Open { .. } => crate::app::exit::UNAVAILABLE,
-        }
-    }
-}
-
 /// An open DRM card.
 pub struct Card(std::fs::File);
 

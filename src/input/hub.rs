@@ -1,35 +1,28 @@
-//! Live input devices: evdev nodes read non-blocking, hotplug, resync ioctls.
+//! The input hub: every touchscreen marionette reads, through hotplug and
+//! `SYN_DROPPED`, turned into touch frames in screen pixels.
 //!
 //! Devices are reached only through a [`DeviceOpener`], so the hub's logic
 //! (which devices to read, unplug and replug, lifting every finger of a
 //! device that vanished, re-applying calibration when it returns) is tested
-//! without devices. [`EvdevOpener`] is the real one: it opens
-//! `/dev/input/event*` with `O_NONBLOCK`, switches the device's clock to
-//! `CLOCK_MONOTONIC` and reads the kernel's slot state with `EVIOCGMTSLOTS`
-//! after `SYN_DROPPED` (an ioctl the evdev crate keeps private).
+//! without devices. The real opener is `platform::evdev::EvdevOpener`; the
+//! hub polls the descriptors its devices give it and opens nothing itself.
 
 use std::collections::{BTreeMap, HashSet};
 use std::fmt;
-use std::fs::OpenOptions;
 use std::io;
-use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
-use std::os::unix::fs::OpenOptionsExt;
+use std::os::fd::BorrowedFd;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, UNIX_EPOCH};
+use std::time::Duration;
 
 use serde::Serialize;
 use thiserror::Error;
 
 use super::calibration::{Calibration, Matrix};
 use super::config::InputConfig;
-use super::device::{AbsInfo, DeviceDescription, DeviceKind, InputId};
-use super::event::{
-    ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TRACKING_ID, ABS_X,
-    ABS_Y, BTN_TOUCH, EV_KEY, EV_LED, EV_MSC, EV_REL, EV_SW, RawEvent,
-};
+use super::device::{DeviceDescription, DeviceKind};
+use super::event::{ABS_MT_SLOT, RawEvent};
 use super::pipeline::screen_contacts;
-use super::tracker::{ContactTracker, KernelState, ResyncSource, SlotState, TouchFrame};
-use crate::app::exit;
+use super::tracker::{ContactTracker, KernelState, ResyncSource, TouchFrame};
 use crate::input::device::device_label;
 use crate::input::touch::ScreenContact;
 use crate::screen::Picture;
@@ -75,26 +68,6 @@ fn hint_for(e: &io::Error) -> &'static str {
     }
 }
 
-impl LiveError {
-    /// The exit code this error deserves.
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            LiveError::Gone(_) | LiveError::NoTouchscreen(_) | LiveError::NoDeviceDir(_) => {
-                exit::UNAVAILABLE
-            }
-            LiveError::Io { source, .. } if source.kind() == io::ErrorKind::PermissionDenied => {
-                exit::NOPERM
-            }
-            LiveError::Io { source, .. } if source.kind() == io::ErrorKind::NotFound => {
-                exit::NOINPUT
-            }
-            LiveError::Io { .. } => exit::IOERR,
-            LiveError::Write { .. } => exit::CANTCREAT,
-        }
-    }
-}
-
 /// An open input device.
 pub trait EventDevice {
     fn description(&self) -> &DeviceDescription;
@@ -114,241 +87,6 @@ pub trait DeviceOpener {
     /// The candidate device nodes, in a stable order.
     fn scan(&self, dir: &Path) -> io::Result<Vec<PathBuf>>;
     fn open(&self, path: &Path) -> io::Result<Box<dyn EventDevice>>;
-}
-
-/// Opens real `/dev/input/event*` nodes.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct EvdevOpener;
-
-impl DeviceOpener for EvdevOpener {
-    fn scan(&self, dir: &Path) -> io::Result<Vec<PathBuf>> {
-        let mut found: Vec<(u32, PathBuf)> = std::fs::read_dir(dir)?
-            .filter_map(Result::ok)
-            .filter_map(|e| {
-                let name = e.file_name();
-                let n = name.to_str()?.strip_prefix("event")?.parse().ok()?;
-                Some((n, e.path()))
-            })
-            .collect();
-        found.sort();
-        Ok(found.into_iter().map(|(_, p)| p).collect())
-    }
-
-    fn open(&self, path: &Path) -> io::Result<Box<dyn EventDevice>> {
-        Ok(Box::new(EvdevDevice::open(path)?))
-    }
-}
-
-/// A real evdev device.
-pub struct EvdevDevice {
-    path: PathBuf,
-    dev: evdev::raw_stream::RawDevice,
-    desc: DeviceDescription,
-}
-
-nix::ioctl_write_ptr!(eviocsclockid, b'E', 0xa0, libc::c_int);
-
-impl EvdevDevice {
-    /// Open a device node non-blocking and read its description.
-    pub fn open(path: &Path) -> io::Result<Self> {
-        let file = OpenOptions::new()
-            .read(true)
-            .custom_flags(libc::O_NONBLOCK | libc::O_CLOEXEC)
-            .open(path)?;
-        let fd: OwnedFd = file.into();
-        let dev = evdev::raw_stream::RawDevice::from_fd(fd)?;
-        // Event times on the monotonic clock, like the rest of the program.
-        let clock: libc::c_int = libc::CLOCK_MONOTONIC;
-        // SAFETY: EVIOCSCLOCKID reads one int from the pointer we pass.
-        if let Err(e) = unsafe { eviocsclockid(dev.as_raw_fd(), &clock) } {
-            tracing::debug!(path = %path.display(), error = %e, "cannot switch the device clock to CLOCK_MONOTONIC");
-        }
-        let desc = describe(&dev)?;
-        Ok(Self {
-            path: path.to_owned(),
-            dev,
-            desc,
-        })
-    }
-}
-
-impl EvdevDevice {
-    /// The device's file descriptor, for poll(2).
-    #[must_use]
-    pub fn fd(&self) -> BorrowedFd<'_> {
-        self.dev.as_fd()
-    }
-}
-
-/// A [`DeviceDescription`] from a live device's ioctls.
-fn describe(dev: &evdev::raw_stream::RawDevice) -> io::Result<DeviceDescription> {
-    let id = dev.input_id();
-    let mut d = DeviceDescription {
-        name: dev.name().unwrap_or("").to_owned(),
-        id: InputId {
-            bustype: id.bus_type().0,
-            vendor: id.vendor(),
-            product: id.product(),
-            version: id.version(),
-        },
-        ..DeviceDescription::default()
-    };
-    for p in dev.properties().iter() {
-        d.properties.insert(p.0);
-    }
-    if let Some(keys) = dev.supported_keys() {
-        for k in keys.iter() {
-            d.set_bit(EV_KEY, k.code());
-        }
-    }
-    if let Some(rel) = dev.supported_relative_axes() {
-        for r in rel.iter() {
-            d.set_bit(EV_REL, r.0);
-        }
-    }
-    if let Some(msc) = dev.misc_properties() {
-        for m in msc.iter() {
-            d.set_bit(EV_MSC, m.0);
-        }
-    }
-    if let Some(sw) = dev.supported_switches() {
-        for s in sw.iter() {
-            d.set_bit(EV_SW, s.0);
-        }
-    }
-    if let Some(leds) = dev.supported_leds() {
-        for l in leds.iter() {
-            d.set_bit(EV_LED, l.0);
-        }
-    }
-    if let Some(axes) = dev.supported_absolute_axes() {
-        let state = dev.get_abs_state()?;
-        for a in axes.iter() {
-            if let Some(s) = state.get(usize::from(a.0)) {
-                d.set_abs(
-                    a.0,
-                    AbsInfo {
-                        value: s.value,
-                        minimum: s.minimum,
-                        maximum: s.maximum,
-                        fuzz: s.fuzz,
-                        flat: s.flat,
-                        resolution: s.resolution,
-                    },
-                );
-            }
-        }
-    }
-    // Every evdev device reports these EV_SYN codes.
-    for code in [
-        super::event::SYN_REPORT,
-        super::event::SYN_CONFIG,
-        super::event::SYN_DROPPED,
-    ] {
-        d.set_bit(super::event::EV_SYN, code);
-    }
-    Ok(d)
-}
-
-/// `EVIOCGMTSLOTS(len)`: the kernel's value of one `ABS_MT_*` code for
-/// every slot.
-fn mt_slot_values(fd: BorrowedFd<'_>, code: u16, slots: usize) -> io::Result<Vec<i32>> {
-    let mut buf = vec![0i32; slots + 1];
-    buf[0] = i32::from(code);
-    let len = std::mem::size_of_val(buf.as_slice());
-    let request = nix::request_code_read!(b'E', 0x0a, len);
-    // SAFETY: the buffer is `len` bytes, the size encoded in the request;
-    // the kernel writes at most that many.
-    let rc = unsafe { libc::ioctl(fd.as_raw_fd(), request as _, buf.as_mut_ptr()) };
-    if rc < 0 {
-        return Err(io::Error::last_os_error());
-    }
-    buf.remove(0);
-    Ok(buf)
-}
-
-impl EventDevice for EvdevDevice {
-    fn description(&self) -> &DeviceDescription {
-        &self.desc
-    }
-
-    fn poll_fd(&self) -> Option<BorrowedFd<'_>> {
-        Some(self.dev.as_fd())
-    }
-
-    fn read(&mut self, out: &mut Vec<RawEvent>) -> Result<(), LiveError> {
-        loop {
-            match self.dev.fetch_events() {
-                Ok(events) => {
-                    let mut n = 0;
-                    for e in events {
-                        n += 1;
-                        let t = e.timestamp().duration_since(UNIX_EPOCH).unwrap_or_default();
-                        out.push(RawEvent::new(
-                            i64::try_from(t.as_micros()).unwrap_or(i64::MAX),
-                            e.event_type().0,
-                            e.code(),
-                            e.value(),
-                        ));
-                    }
-                    if n == 0 {
-                        return Ok(());
-                    }
-                }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) if e.raw_os_error() == Some(libc::ENODEV) => {
-                    return Err(LiveError::Gone(self.path.clone()));
-                }
-                Err(source) => {
-                    return Err(LiveError::Io {
-                        path: self.path.clone(),
-                        source,
-                    });
-                }
-            }
-        }
-    }
-
-    fn kernel_state(&self) -> io::Result<KernelState> {
-        let fd = self.dev.as_fd();
-        let abs = self.dev.get_abs_state()?;
-        let keys = self.dev.get_key_state()?;
-        let mut state = KernelState {
-            current_slot: abs[usize::from(ABS_MT_SLOT)].value,
-            slots: Vec::new(),
-            touch: self
-                .desc
-                .has(EV_KEY, BTN_TOUCH)
-                .then(|| keys.contains(evdev::KeyCode(BTN_TOUCH))),
-            x: abs[usize::from(ABS_X)].value,
-            y: abs[usize::from(ABS_Y)].value,
-        };
-        if self.desc.has_abs(ABS_MT_SLOT) {
-            let n = self.desc.slot_count().min(super::tracker::MAX_SLOTS);
-            let ids = mt_slot_values(fd, ABS_MT_TRACKING_ID, n)?;
-            let xs = mt_slot_values(fd, ABS_MT_POSITION_X, n)?;
-            let ys = mt_slot_values(fd, ABS_MT_POSITION_Y, n)?;
-            let tools = if self.desc.has_abs(ABS_MT_TOOL_TYPE) {
-                mt_slot_values(fd, ABS_MT_TOOL_TYPE, n)?
-            } else {
-                vec![0; n]
-            };
-            state.slots = (0..n)
-                .map(|i| SlotState {
-                    tracking_id: ids[i],
-                    x: xs[i],
-                    y: ys[i],
-                    tool_type: tools[i],
-                })
-                .collect();
-        }
-        Ok(state)
-    }
-
-    fn grab(&mut self) -> io::Result<()> {
-        self.dev.grab()
-    }
 }
 
 /// What the hub reports.
@@ -695,11 +433,6 @@ pub(crate) fn scan_error(dir: &Path, source: io::Error) -> LiveError {
     }
 }
 
-/// Every device node and what marionette makes of it.
-pub fn list_devices(input: &InputConfig) -> Result<Vec<DeviceListing>, LiveError> {
-    list_devices_with(&EvdevOpener, input)
-}
-
 /// [`list_devices`] through any opener.
 pub fn list_devices_with(
     opener: &dyn DeviceOpener,
@@ -725,43 +458,4 @@ pub fn list_devices_with(
             },
         })
         .collect())
-}
-
-/// `marionette watch`: read every touchscreen as the kiosk will and print
-/// what the hub reports, one JSON object per line, until SIGINT/SIGTERM or
-/// `seconds`. For operators checking a panel and its calibration.
-pub fn watch(
-    input: &InputConfig,
-    picture: Picture,
-    seconds: Option<f64>,
-    out: &mut dyn io::Write,
-) -> Result<(), LiveError> {
-    let dir = &input.dev_dir;
-    if !dir.is_dir() {
-        return Err(LiveError::NoDeviceDir(dir.clone()));
-    }
-    crate::app::signals::install_stop_handler();
-    let started = std::time::Instant::now();
-    let deadline = seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
-    let mut hub = InputHub::new(EvdevOpener, input.clone(), picture);
-    let mut events = Vec::new();
-    let stdout_err = |source| LiveError::Write {
-        path: PathBuf::from("stdout"),
-        source,
-    };
-    while !crate::app::signals::stop_requested() && deadline.is_none_or(|d| started.elapsed() < d) {
-        let now_us = i64::try_from(started.elapsed().as_micros()).unwrap_or(i64::MAX);
-        hub.dispatch(now_us, &mut events);
-        for e in events.drain(..) {
-            let line = serde_json::to_string(&e).map_err(|e| stdout_err(e.into()))?;
-            writeln!(out, "{line}").map_err(stdout_err)?;
-        }
-        out.flush().map_err(stdout_err)?;
-        let wait = Duration::from_millis(100.min(input.rescan_interval_ms));
-        hub.wait(wait).map_err(|source| LiveError::Io {
-            path: dir.clone(),
-            source,
-        })?;
-    }
-    Ok(())
 }

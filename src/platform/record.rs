@@ -4,12 +4,13 @@ use std::io::{self, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use super::config::InputConfig;
-use super::device::DeviceKind;
-use super::evemu;
-use super::event::RawEvent;
-use super::live::{DeviceOpener, EvdevDevice, EvdevOpener, EventDevice, LiveError, scan_error};
-use crate::app::signals;
+use super::evdev::{EvdevDevice, EvdevOpener};
+use crate::input::config::InputConfig;
+use crate::input::device::DeviceKind;
+use crate::input::evemu;
+use crate::input::event::RawEvent;
+use crate::input::hub::{DeviceOpener, EventDevice, LiveError, scan_error};
+use crate::platform::signals;
 
 /// `marionette record`: write a device's events to an evemu file until
 /// Ctrl-C (or `seconds`). Each frame is flushed as it completes, so an
