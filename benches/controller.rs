@@ -7,9 +7,9 @@ use std::sync::Arc;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use marionette::character::library::Library;
-use marionette::character::posing::model::{LearnedModel, posing_samples};
 use marionette::character::roles::Role;
 use marionette::control::controller::{Character, Controller, Settings};
+use marionette::control::posing::model::{LearnedModel, posing_samples};
 use marionette::input::calibration::RawPoint;
 use marionette::input::touch::{Phase, Tool};
 use marionette::input::touch::{ScreenContact, ScreenFrame};

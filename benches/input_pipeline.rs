@@ -12,9 +12,9 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 use marionette::input::calibration::{Calibration, Matrix};
 use marionette::input::evemu::Recording;
-use marionette::input::synth::{Synth, panel};
 use marionette::input::tracker::{ContactTracker, ResyncSource};
 use marionette::screen::Rotation;
+use marionette::tools::synth::{Synth, panel};
 
 /// Ten fingers wandering for `frames` frames at 120 Hz.
 fn ten_fingers(frames: u32) -> String {

@@ -10,11 +10,11 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
-use marionette::character::posing::model::{LearnedModel, posing_samples};
-use marionette::character::posing::sample::Placement;
-use marionette::character::posing::synth::{Constraint, SynthOptions, Target, select, synthesize};
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
+use marionette::control::posing::model::{LearnedModel, posing_samples};
+use marionette::control::posing::sample::Placement;
+use marionette::control::posing::synth::{Constraint, SynthOptions, Target, select, synthesize};
 
 fn posing(c: &mut Criterion) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/libraries/cmu-cc");

@@ -11,9 +11,10 @@ use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
+use marionette::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
 use marionette::render::gpu::{AdapterChoice, Gpu};
 use marionette::render::headless::Headless;
-use marionette::render::scene::{self, FingerMark, FingerUse, Marks, TrajectoryMark, View};
+use marionette::render::scene::{self, View};
 use marionette::screen::Rotation;
 
 fn view(w: u32, h: u32) -> View {

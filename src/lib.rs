@@ -37,3 +37,4 @@ pub mod physics;
 pub mod platform;
 pub mod render;
 pub mod screen;
+pub mod tools;

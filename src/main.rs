@@ -437,14 +437,12 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             }
         }
         Command::AuthorLibrary { src, out } => {
-            let n = marionette::character::author::author_library(&src, &out).map_err(|e| {
+            let n = marionette::tools::author::author_library(&src, &out).map_err(|e| {
                 let code = match &e {
-                    marionette::character::author::compile::AuthorError::Write { .. } => {
+                    marionette::tools::author::compile::AuthorError::Write { .. } => {
                         exit::CANTCREAT
                     }
-                    marionette::character::author::compile::AuthorError::List { .. } => {
-                        exit::NOINPUT
-                    }
+                    marionette::tools::author::compile::AuthorError::List { .. } => exit::NOINPUT,
                     _ => exit::DATAERR,
                 };
                 Failure::new(code, e)
@@ -566,12 +564,12 @@ fn load_model(
 ) -> Result<
     (
         marionette::character::library::Library,
-        marionette::character::posing::model::LearnedModel,
+        marionette::control::posing::model::LearnedModel,
     ),
     Failure,
 > {
+    use marionette::app::cache::{self, Source};
     use marionette::character::library::Library;
-    use marionette::character::posing::cache::{self, Source};
     use std::io::IsTerminal;
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
     let dir = cache::cache_dir();
@@ -613,8 +611,9 @@ fn eval_actions(
     seed: u64,
     models_only: bool,
 ) -> Result<(), Failure> {
-    use marionette::character::action::{eval, model::ActionModel};
     use marionette::character::library::Library;
+    use marionette::control::action::model::ActionModel;
+    use marionette::tools::eval::actions as eval;
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
     let actions: Vec<ActionModel> = lib
         .actions
@@ -663,7 +662,7 @@ fn eval_actions(
         let ch = std::sync::Arc::new(Character::new(lib, model));
         let settings = config.control_settings();
         eval::eval_with(&eval::with_primary(&actions, &tests), seed, &mut |d| {
-            marionette::control::live_eval::judge(&ch, &settings, d)
+            marionette::tools::eval::live::judge(&ch, &settings, d)
         })
     };
     let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
@@ -690,8 +689,8 @@ fn pose_setup(
     mode: EvalMode,
     method: EvalMethod,
     frames: usize,
-) -> marionette::character::posing::eval::EvalSetup {
-    use marionette::character::posing::eval;
+) -> marionette::tools::eval::posing::EvalSetup {
+    use marionette::tools::eval::posing as eval;
     eval::EvalSetup {
         parts: usize::from(parts),
         mode: match mode {
@@ -718,9 +717,9 @@ fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
 fn eval_pose(
     library: &Path,
     tests: &[PathBuf],
-    setup: marionette::character::posing::eval::EvalSetup,
+    setup: marionette::tools::eval::posing::EvalSetup,
 ) -> Result<(), Failure> {
-    use marionette::character::posing::eval;
+    use marionette::tools::eval::posing as eval;
     let (lib, learned) = load_model(library, false)?;
     let mut clips = Vec::new();
     for t in tests {
@@ -758,10 +757,10 @@ fn eval_pose(
 
 fn eval_pose_leave_one_out(
     library: &Path,
-    setup: marionette::character::posing::eval::EvalSetup,
+    setup: marionette::tools::eval::posing::EvalSetup,
 ) -> Result<(), Failure> {
     use marionette::character::library::Library;
-    use marionette::character::posing::eval;
+    use marionette::tools::eval::posing as eval;
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
     let mut progress = |done: usize, of: usize| {
         tracing::info!(done, of, "leave one out: clips tested");
@@ -979,7 +978,7 @@ fn replay_metrics(
     no_tracking: bool,
 ) -> Result<(), Failure> {
     let (ch, summary, tick_hz) = replay_poses(config, file, 30.0, !no_tracking)?;
-    let m = marionette::control::metrics::measure(
+    let m = marionette::tools::metrics::measure(
         &ch.lib.skeleton,
         &ch.roles,
         &summary.poses,
@@ -1009,7 +1008,7 @@ fn replay_metrics(
         m.max_joint_speed_jump_rad_s,
         m.worst_jump,
         m.pops,
-        marionette::control::metrics::POP_RAD_S,
+        marionette::tools::metrics::POP_RAD_S,
         m.foot_skate_mm_per_frame,
         m.foot_skate_max_mm,
         m.worst_skate,
@@ -1044,7 +1043,8 @@ fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(), Failure> {
 }
 
 fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failure> {
-    use marionette::character::{checks, library::Library, sheet};
+    use marionette::character::library::Library;
+    use marionette::tools::{checks, sheet};
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
     std::fs::create_dir_all(out).map_err(|e| {
         Failure::new(

@@ -2,12 +2,12 @@
 //! drag of its primary part.
 
 use glam::{DQuat, DVec3};
-use marionette::character::action::model::{ActionModel, recognize};
-use marionette::character::action::trail::{StartRule, TrailPoint};
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
-use marionette::character::posing::sample::{Anchor, Placement};
 use marionette::character::roles::Role;
+use marionette::control::action::model::{ActionModel, recognize};
+use marionette::control::action::trail::{StartRule, TrailPoint};
+use marionette::control::posing::sample::{Anchor, Placement};
 
 fn setup() -> (Library, Vec<ActionModel>) {
     let lib =
@@ -110,10 +110,10 @@ fn a_quick_drag_along_a_punch_starts_the_punch() {
 /// have: a little slower, wider, higher, and each mirrored action a little
 /// faster.
 fn held_out_clips() -> Vec<(String, marionette::character::motion::Clip)> {
-    use marionette::character::author::compile::{FPS, frames};
-    use marionette::character::author::rig;
-    use marionette::character::author::score::{Kind, Score, Variant};
     use marionette::character::motion::{Clip, ImportSettings};
+    use marionette::tools::author::compile::{FPS, frames};
+    use marionette::tools::author::rig;
+    use marionette::tools::author::score::{Kind, Score, Variant};
     let src = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library-src");
     let mut clips: Vec<(String, Clip)> = Vec::new();
     let skeleton = rig::skeleton();
@@ -176,8 +176,8 @@ fn held_out_clips() -> Vec<(String, marionette::character::motion::Clip)> {
 
 #[test]
 fn held_out_variants_are_recognised_and_slow_drags_are_not() {
-    use marionette::character::action::eval::eval_actions;
     use marionette::character::motion::Clip;
+    use marionette::tools::eval::actions::eval_actions;
     let (_, actions) = setup();
     let clips = held_out_clips();
     let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();
@@ -195,11 +195,11 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
 
 #[test]
 fn held_out_variants_through_the_controller() {
-    use marionette::character::action::eval::{eval_with, with_primary};
     use marionette::character::motion::Clip;
-    use marionette::character::posing::model::{LearnedModel, posing_samples};
     use marionette::control::controller::{Character, Settings};
-    use marionette::control::live_eval::judge;
+    use marionette::control::posing::model::{LearnedModel, posing_samples};
+    use marionette::tools::eval::actions::{eval_with, with_primary};
+    use marionette::tools::eval::live::judge;
     let (lib, actions) = setup();
     let (_, samples) = posing_samples(&lib);
     let ch = std::sync::Arc::new(Character::new(lib, LearnedModel::build(samples)));
@@ -222,10 +222,10 @@ fn held_out_variants_through_the_controller() {
 
 #[test]
 fn a_punch_follows_the_finger_then_finishes_by_itself() {
-    use marionette::character::action::player::ActionPlayer;
-    use marionette::character::action::timeline::{ActionEvent, Status};
-    use marionette::character::posing::synth::{Constraint, Target};
     use marionette::character::skeleton::forward_kinematics;
+    use marionette::control::action::player::ActionPlayer;
+    use marionette::control::action::timeline::{ActionEvent, Status};
+    use marionette::control::posing::synth::{Constraint, Target};
     let (lib, actions) = setup();
     let punch = actions
         .iter()

@@ -6,7 +6,8 @@ mod common;
 
 use std::path::Path;
 
-use marionette::input::synth::{self, Synth};
+use marionette::tools::synth;
+use marionette::tools::synth::Synth;
 
 fn check(path: &Path, synth: &Synth) {
     let text = synth.to_text();
@@ -39,7 +40,7 @@ fn character_demo_recording_is_regenerated_identically() {
     // the body parts and follow the actions' trajectories.
     let config = marionette::app::config::Config::default();
     let settings = config.control_settings();
-    let synth = marionette::control::demo::author_demo(
+    let synth = marionette::tools::demo::author_demo(
         common::character(),
         settings,
         &config.input,

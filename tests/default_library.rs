@@ -7,12 +7,13 @@
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
-use marionette::character::author;
-use marionette::character::checks::{self, Limits};
 use marionette::character::library::Library;
 use marionette::character::motion::Clip;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
+use marionette::tools::author;
+use marionette::tools::checks;
+use marionette::tools::checks::Limits;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

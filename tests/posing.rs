@@ -8,15 +8,16 @@ use glam::DVec3;
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::motion::Clip;
-use marionette::character::posing::eval::{self, Method, Mode};
-use marionette::character::posing::model::{LearnedModel, posing_samples};
-use marionette::character::posing::pick::pick;
-use marionette::character::posing::sample::{Anchor, Placement};
-use marionette::character::posing::synth::{
-    Constraint, SynthOptions, Target, blend, choose, refit_limbs, select, synthesize, two_bone,
-};
 use marionette::character::roles::{Role, RoleMap};
 use marionette::character::skeleton::{Skeleton, forward_kinematics};
+use marionette::control::posing::model::{LearnedModel, posing_samples};
+use marionette::control::posing::pick::pick;
+use marionette::control::posing::sample::{Anchor, Placement};
+use marionette::control::posing::synth::{
+    Constraint, SynthOptions, Target, blend, choose, refit_limbs, select, synthesize, two_bone,
+};
+use marionette::tools::eval::posing as eval;
+use marionette::tools::eval::posing::{Method, Mode};
 
 fn default_library() -> Library {
     Library::load(&std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
@@ -536,7 +537,7 @@ fn picking_finds_the_part_under_the_finger() {
 
 #[test]
 fn the_cache_is_used_when_it_matches_and_rebuilt_when_stale_or_corrupt() {
-    use marionette::character::posing::cache::{Source, posing_model};
+    use marionette::app::cache::{Source, posing_model};
     let lib = default_library();
     let dir = tempfile::tempdir().unwrap();
     let (first, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();

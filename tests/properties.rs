@@ -9,8 +9,8 @@ use proptest::prelude::*;
 use marionette::input::device::AbsInfo;
 use marionette::input::evemu::Recording;
 use marionette::input::event::*;
-use marionette::input::synth::panel;
 use marionette::input::tracker::{ContactTracker, ResyncSource, TouchFrame};
+use marionette::tools::synth::panel;
 
 /// An event that a buggy or hostile device might send to a touchscreen.
 fn any_event() -> impl Strategy<Value = (u16, u16, i32)> {

@@ -9,10 +9,10 @@ use std::path::PathBuf;
 
 use marionette::input::evemu::Recording;
 use marionette::input::event::*;
-use marionette::input::synth::{Synth, panel};
 use marionette::input::tracker::{
     ContactTracker, KernelState, Phase, ResyncSource, SlotState, TouchFrame, track_events,
 };
+use marionette::tools::synth::{Synth, panel};
 
 const DT: i64 = 10_000;
 

@@ -6,7 +6,7 @@
 use libfuzzer_sys::fuzz_target;
 use marionette::input::device::{AbsInfo, DeviceDescription};
 use marionette::input::event::*;
-use marionette::input::synth::panel;
+use marionette::tools::synth::panel;
 use marionette::input::tracker::{ContactTracker, ResyncSource};
 
 fn device(which: u8) -> DeviceDescription {

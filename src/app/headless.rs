@@ -11,7 +11,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use super::config::Config;
-use crate::character::action::timeline::ActionEvent;
+use crate::control::action::timeline::ActionEvent;
 use crate::control::controller::{Character, Controller, Mode};
 use crate::control::ticker::Ticker;
 use crate::input::touch::ScreenFrame;

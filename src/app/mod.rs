@@ -1,5 +1,6 @@
 //! The application edge: configuration, exit codes, logging.
 
+pub mod cache;
 pub mod calibrate;
 pub mod config;
 pub mod exit;

@@ -164,6 +164,39 @@ pub fn forward_kinematics(skeleton: &Skeleton, pose: &Pose) -> WorldPose {
     w
 }
 
+/// The rotation from `from` to `to` as a rotation vector (axis × angle),
+/// the shorter way round: the paper's "difference between two rotations".
+#[must_use]
+pub fn rotation_difference(from: DQuat, to: DQuat) -> DVec3 {
+    let mut q = to * from.inverse();
+    if q.w < 0.0 {
+        q = -q;
+    }
+    let (axis, angle) = q.normalize().to_axis_angle();
+    if angle.abs() < 1e-12 {
+        DVec3::ZERO
+    } else {
+        axis * angle
+    }
+}
+
+/// The sole of a foot: its lowest point (ankle, toes, End Sites).
+#[must_use]
+pub fn sole(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> DVec3 {
+    let mut best = w.positions[ankle];
+    for i in 0..skeleton.len() {
+        if i != ankle && !skeleton.is_ancestor(ankle, i) {
+            continue;
+        }
+        for p in std::iter::once(w.positions[i]).chain(w.end_site(skeleton, i)) {
+            if p.y < best.y {
+                best = p;
+            }
+        }
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

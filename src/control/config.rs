@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use serde::Deserialize;
 
 use super::controller::Settings;
-use crate::character::action::trail::StartRule;
+use crate::control::action::trail::StartRule;
 
 /// `[tracking]`: how the shown motion follows the synthesised one (the
 /// paper's section 6).

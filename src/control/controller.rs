@@ -14,23 +14,23 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::rig::Rig;
-use crate::character::action::model::{ActionModel, recognize};
-use crate::character::action::player::ActionPlayer;
-use crate::character::action::timeline::{ActionEvent, Status};
-use crate::character::action::trail::{StartRule, TrailPoint, view_angle_deg};
 use crate::character::library::Library;
-use crate::character::posing::model::LearnedModel;
-use crate::character::posing::pick::pick;
-use crate::character::posing::sample::{Anchor, Placement, pose_of, samples_of};
-use crate::character::posing::synth::{Constraint, SynthOptions, Target, synthesize};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
-use crate::character::tracking::accel::{AccelTracker, Gains};
+use crate::control::action::model::{ActionModel, recognize};
+use crate::control::action::player::ActionPlayer;
+use crate::control::action::timeline::{ActionEvent, Status};
+use crate::control::action::trail::{StartRule, TrailPoint, view_angle_deg};
+use crate::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
+use crate::control::posing::model::LearnedModel;
+use crate::control::posing::pick::pick;
+use crate::control::posing::sample::{Anchor, Placement, pose_of, samples_of};
+use crate::control::posing::synth::{Constraint, SynthOptions, Target, synthesize};
+use crate::control::tracking::accel::{AccelTracker, Gains};
 use crate::input::touch::ContactId;
 use crate::input::touch::ScreenFrame;
 use crate::physics::effects::{Attenuation, Effects, free_regions};
 use crate::physics::ragdoll::{Ragdoll, RagdollSettings, Region};
-use crate::render::scene::{FingerMark, FingerUse, Marks, TrajectoryMark};
 use crate::screen::ScreenPoint;
 
 /// What the character is made of: the library, its posing model and its
@@ -444,7 +444,7 @@ impl Controller {
                 let d0 = a0.distance(*b0);
                 let d1 = a1.distance(*b1);
                 let ang = |p: &ScreenPoint, q: &ScreenPoint| (q.y - p.y).atan2(q.x - p.x);
-                let twist = crate::character::posing::sample::wrap(ang(a1, b1) - ang(a0, b0));
+                let twist = crate::control::posing::sample::wrap(ang(a1, b1) - ang(a0, b0));
                 if d0 > 10.0 {
                     self.rig.pinch(d1 / d0, twist);
                 }
@@ -586,7 +586,7 @@ impl Controller {
         .into_iter()
         .enumerate()
         {
-            let sole = crate::control::metrics::sole(sk, &shown, roles.get(role)).y;
+            let sole = crate::character::skeleton::sole(sk, &shown, roles.get(role)).y;
             if self.feet[k].anchor.is_some() || sole < GROUND_CONTACT_M {
                 touching.push(region);
             }
@@ -673,7 +673,7 @@ impl Controller {
             }
         }
         if goals.iter().any(Option::is_some) {
-            crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
+            crate::control::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
         }
         // The floor: a sole below it (tracking straightens a leg before the
         // pelvis rises, toes tip down) is lifted onto it: the leg bends,
@@ -692,7 +692,7 @@ impl Controller {
             };
         }
         if lifted {
-            crate::character::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
+            crate::control::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
         }
         for _ in 0..2 {
             let w = forward_kinematics(sk, &self.output);
@@ -700,7 +700,7 @@ impl Controller {
             for role in feet {
                 let j = roles.get(role);
                 let ankle = w.positions[j];
-                let v = crate::control::metrics::sole(sk, &w, j) - ankle;
+                let v = crate::character::skeleton::sole(sk, &w, j) - ankle;
                 let len = v.length();
                 if ankle.y + v.y >= -1e-4 || len < 1e-6 || v.with_y(0.0).length() < 1e-6 {
                     continue;

@@ -1,12 +1,20 @@
-//! Control: turning touches into the character's motion and the view.
-//! [`controller`] routes fingers to body parts or the camera and runs the
-//! paper's posing, action and tracking control; [`rig`] is the camera;
-//! [`live_eval`] judges drags through the controller.
+//! Control: turning touches into the character's motion and the view,
+//! after the paper's sections 4 to 6.
+//!
+//! - [`posing`]: the posing model and posture synthesis from touches.
+//! - [`action`]: action models, recognising a drag, playing the action.
+//! - [`tracking`]: acceleration-based tracking (eq. 2-4).
+//! - [`controller`]: routes fingers to body parts or the camera and runs
+//!   posing, action and tracking control with the ragdoll's effects.
+//! - [`marks`]: what is drawn over the picture for the fingers.
+//! - [`rig`]: the camera; [`ticker`]: stepping a controller through
+//!   touch frames at a fixed rate; [`config`]: its configuration sections.
 
+pub mod action;
 pub mod config;
 pub mod controller;
-pub mod demo;
-pub mod live_eval;
-pub mod metrics;
+pub mod marks;
+pub mod posing;
 pub mod rig;
 pub mod ticker;
+pub mod tracking;

@@ -135,7 +135,7 @@ impl Rig {
         if go_home {
             let h = self.home;
             let o = &mut self.orbit;
-            let dyaw = crate::character::posing::sample::wrap(h.yaw - o.yaw);
+            let dyaw = crate::control::posing::sample::wrap(h.yaw - o.yaw);
             o.yaw += dyaw * k;
             o.pitch += (h.pitch - o.pitch) * k;
             o.distance += (h.distance - o.distance) * k;

@@ -29,6 +29,5 @@ pub mod evemu;
 pub mod event;
 pub mod hub;
 pub mod pipeline;
-pub mod synth;
 pub mod touch;
 pub mod tracker;

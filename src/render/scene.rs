@@ -11,7 +11,8 @@ use super::renderer::DrawList;
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
-use crate::screen::{Rotation, ScreenPoint};
+use crate::control::marks::{FingerUse, Marks};
+use crate::screen::Rotation;
 
 /// Linear RGB of the background the floor fades into.
 pub const BACKGROUND: [f32; 3] = [0.035, 0.045, 0.07];
@@ -87,38 +88,6 @@ impl View {
             ..DrawList::default()
         }
     }
-}
-
-/// What a finger is doing, for its mark.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FingerUse {
-    /// Holds a body part.
-    Part(crate::character::roles::Role),
-    /// Turns, tilts or zooms the camera.
-    Camera,
-}
-
-/// A mark under a finger.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FingerMark {
-    pub at: ScreenPoint,
-    pub usage: FingerUse,
-}
-
-/// An action's trajectory as seen from the camera (the paper's Fig. 4).
-#[derive(Clone, Debug, PartialEq)]
-pub struct TrajectoryMark {
-    pub points: Vec<ScreenPoint>,
-    /// Whether a drag along it can start the action from this view.
-    pub executable: bool,
-}
-
-/// Everything drawn over the picture.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Marks {
-    pub fingers: Vec<FingerMark>,
-    pub trajectories: Vec<TrajectoryMark>,
-    pub status: Option<String>,
 }
 
 /// A body segment: which part it belongs to, for highlighting.

@@ -31,8 +31,8 @@ pub fn character() -> std::sync::Arc<marionette::control::controller::Character>
     CH.get_or_init(|| {
         let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library");
         let lib = marionette::character::library::Library::load(&dir).expect("default library");
-        let (_, samples) = marionette::character::posing::model::posing_samples(&lib);
-        let model = marionette::character::posing::model::LearnedModel::build(samples);
+        let (_, samples) = marionette::control::posing::model::posing_samples(&lib);
+        let model = marionette::control::posing::model::LearnedModel::build(samples);
         Arc::new(marionette::control::controller::Character::new(lib, model))
     })
     .clone()

@@ -7,9 +7,9 @@
 //! panel's kernel driver would: `ABS_MT_SLOT` switches, tracking ids,
 //! positions, `BTN_TOUCH` and `SYN_REPORT` per frame.
 
-use super::device::{AbsInfo, DeviceDescription, InputId};
-use super::evemu::Recording;
-use super::event::*;
+use crate::input::device::{AbsInfo, DeviceDescription, InputId};
+use crate::input::evemu::Recording;
+use crate::input::event::*;
 
 /// A protocol-B panel description: `slots` slots, axes `0..=max`.
 #[must_use]

@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use super::model::{LearnedModel, posing_samples};
-use super::sample::distance;
 use crate::character::library::Library;
+use crate::control::posing::model::{LearnedModel, posing_samples};
+use crate::control::posing::sample::distance;
 
 const MAGIC: &[u8; 8] = b"MRNTPOSE";
 /// Bumped whenever samples, the distance or the embedding change.
@@ -149,9 +149,9 @@ pub fn posing_model(
             Err(e) => format!("cannot read cache {}: {e}", path.display()),
         }
     };
-    let coords = super::mds::embed_with_progress(
+    let coords = crate::control::posing::mds::embed_with_progress(
         samples.len(),
-        super::mds::DEFAULT_LANDMARKS,
+        crate::control::posing::mds::DEFAULT_LANDMARKS,
         &|a, b| distance(&samples[a], &samples[b]),
         progress,
     );

@@ -10,7 +10,6 @@
 //! - [`trail`]: matching a finger's trail against an action's projected
 //!   trajectory by dynamic programming (eq. 1), and the start conditions.
 
-pub mod eval;
 pub mod model;
 pub mod player;
 pub mod timeline;

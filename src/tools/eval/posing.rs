@@ -13,13 +13,13 @@ use std::time::Instant;
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 
-use super::model::LearnedModel;
-use super::sample::{Placement, pose_of};
-use super::synth::{Constraint, SynthOptions, Target, apply_ik, synthesize};
 use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::character::skeleton::{Skeleton, forward_kinematics};
+use crate::control::posing::model::LearnedModel;
+use crate::control::posing::sample::{Placement, pose_of};
+use crate::control::posing::synth::{Constraint, SynthOptions, Target, apply_ik, synthesize};
 
 /// The order in which parts are constrained.
 pub const PARTS: [Role; 5] = [
@@ -226,7 +226,7 @@ pub fn leave_one_out(
     setup: EvalSetup,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Option<LeaveOneOut> {
-    let (names, samples) = super::model::posing_samples(lib);
+    let (names, samples) = crate::control::posing::model::posing_samples(lib);
     if lib.posing.len() < 2 {
         return None;
     }

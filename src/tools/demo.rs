@@ -6,14 +6,14 @@
 
 use std::sync::Arc;
 
-use super::controller::{Character, Controller, Mode, Settings};
-use super::ticker::Ticker;
-use crate::character::action::trail::TrailPoint;
 use crate::character::roles::Role;
+use crate::control::action::trail::TrailPoint;
+use crate::control::controller::{Character, Controller, Mode, Settings};
+use crate::control::ticker::Ticker;
 use crate::input::config::InputConfig;
 use crate::input::pipeline;
-use crate::input::synth::{Synth, panel};
 use crate::screen::{Picture, ScreenPoint};
+use crate::tools::synth::{Synth, panel};
 
 /// Frame interval of the authored panel (60 Hz).
 const DT_US: i64 = 16_667;

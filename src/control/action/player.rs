@@ -11,10 +11,10 @@ use std::collections::BTreeMap;
 use super::model::ActionModel;
 use super::timeline::{ActionEvent, ActionTimeline, Drive, Status};
 use crate::character::library::Library;
-use crate::character::posing::model::LearnedModel;
-use crate::character::posing::sample::{Placement, samples_of};
-use crate::character::posing::synth::{Constraint, SynthOptions, apply_ik, blend, choose};
 use crate::character::skeleton::Pose;
+use crate::control::posing::model::LearnedModel;
+use crate::control::posing::sample::{Placement, samples_of};
+use crate::control::posing::synth::{Constraint, SynthOptions, apply_ik, blend, choose};
 
 /// An action being played.
 #[derive(Clone, Debug)]

@@ -8,7 +8,7 @@
 
 use glam::{DQuat, DVec3};
 
-use crate::character::skeleton::Pose;
+use crate::character::skeleton::{Pose, rotation_difference};
 
 /// Default bound on the joints' acceleration (rad/s²): above what the
 /// library's quickest motions need (kicks and punches reach about
@@ -64,22 +64,6 @@ impl Gains {
 impl Default for Gains {
     fn default() -> Self {
         Self::critical(0.15)
-    }
-}
-
-/// The rotation from `from` to `to` as a rotation vector (axis × angle),
-/// the shorter way round: the paper's "difference between two rotations".
-#[must_use]
-pub fn rotation_difference(from: DQuat, to: DQuat) -> DVec3 {
-    let mut q = to * from.inverse();
-    if q.w < 0.0 {
-        q = -q;
-    }
-    let (axis, angle) = q.normalize().to_axis_angle();
-    if angle.abs() < 1e-12 {
-        DVec3::ZERO
-    } else {
-        axis * angle
     }
 }
 

@@ -5,8 +5,8 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use super::roles::{Role, RoleMap};
-use super::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
 
 /// What [`check`] measured.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics, sole};
 
 /// A jump in a joint's angular speed larger than this between two frames
 /// (rad/s) counts as a pop: 10 rad/s in one 1/30 s frame is 300 rad/s²,
@@ -46,23 +46,6 @@ fn finite(p: &Pose) -> bool {
         .iter()
         .all(|q| q.to_array().iter().all(|v| v.is_finite()))
         && p.translations.iter().all(|t| t.is_finite())
-}
-
-/// The sole of a foot: its lowest point (ankle, toes, End Sites).
-#[must_use]
-pub fn sole(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> glam::DVec3 {
-    let mut best = w.positions[ankle];
-    for i in 0..skeleton.len() {
-        if i != ankle && !skeleton.is_ancestor(ankle, i) {
-            continue;
-        }
-        for p in std::iter::once(w.positions[i]).chain(w.end_site(skeleton, i)) {
-            if p.y < best.y {
-                best = p;
-            }
-        }
-    }
-    best
 }
 
 /// Measure postures stepped every `dt` seconds.

@@ -7,14 +7,14 @@
 
 use std::sync::Arc;
 
-use crate::character::action::eval::Drag;
-use crate::character::action::timeline::ActionEvent;
+use crate::control::action::timeline::ActionEvent;
 use crate::control::controller::{Character, Controller, Settings};
 use crate::control::rig::Orbit;
 use crate::input::calibration::RawPoint;
 use crate::input::touch::{Phase, Tool};
 use crate::input::touch::{ScreenContact, ScreenFrame};
 use crate::screen::ScreenPoint;
+use crate::tools::eval::actions::Drag;
 
 /// Time the character is left to stand before the finger goes down (s).
 const SETTLE_S: f64 = 0.3;

@@ -11,13 +11,13 @@
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 
-use super::model::{ActionModel, recognize};
-use super::trail::{StartRule, TrailPoint};
 use crate::character::camera::Camera;
 use crate::character::motion::Clip;
-use crate::character::posing::sample::{Anchor, Placement};
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
+use crate::control::action::model::{ActionModel, recognize};
+use crate::control::action::trail::{StartRule, TrailPoint};
+use crate::control::posing::sample::{Anchor, Placement};
 use crate::screen::ScreenPoint;
 
 /// What `eval actions` prints.

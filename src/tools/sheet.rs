@@ -6,8 +6,8 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::roles::{Role, RoleMap};
-use super::skeleton::{Pose, Skeleton, forward_kinematics};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 
 const PANEL_W: usize = 150;
 const PANEL_H: usize = 230;

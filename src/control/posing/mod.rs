@@ -9,8 +9,6 @@
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 
-pub mod cache;
-pub mod eval;
 pub mod limbs;
 pub mod mds;
 pub mod model;

@@ -11,7 +11,7 @@ use glam::{DQuat, DVec3};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::Skeleton;
 
-/// The limbs, in the order of [`crate::character::posing::sample::Sample::reach`].
+/// The limbs, in the order of [`crate::control::posing::sample::Sample::reach`].
 pub const LIMBS: [Role; 5] = [
     Role::Head,
     Role::RightHand,

@@ -1,0 +1,38 @@
+//! What the controller asks to be drawn over the picture: a mark under
+//! every finger, the trajectories of the actions a held part can start (the
+//! paper's Fig. 4), and a status line. The renderer draws them.
+
+use crate::character::roles::Role;
+use crate::screen::ScreenPoint;
+
+/// What a finger is doing, for its mark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FingerUse {
+    /// Holds a body part.
+    Part(Role),
+    /// Turns, tilts or zooms the camera.
+    Camera,
+}
+
+/// A mark under a finger.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FingerMark {
+    pub at: ScreenPoint,
+    pub usage: FingerUse,
+}
+
+/// An action's trajectory as seen from the camera (the paper's Fig. 4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrajectoryMark {
+    pub points: Vec<ScreenPoint>,
+    /// Whether a drag along it can start the action from this view.
+    pub executable: bool,
+}
+
+/// Everything drawn over the picture.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Marks {
+    pub fingers: Vec<FingerMark>,
+    pub trajectories: Vec<TrajectoryMark>,
+    pub status: Option<String>,
+}

@@ -1,0 +1,9 @@
+//! Measuring the controllers on held-out motion capture.
+//!
+//! - [`posing`]: postures reconstructed from constrained parts.
+//! - [`actions`]: drags replayed as finger trails, recognised or not.
+//! - [`live`]: the same drags through a whole controller.
+
+pub mod actions;
+pub mod live;
+pub mod posing;

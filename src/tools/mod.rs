@@ -1,0 +1,19 @@
+//! Tools around the product, apart from what the kiosk runs: evaluation
+//! of the controllers on held-out motion capture, authoring of the
+//! default library and of recordings, contact sheets, motion checks and
+//! quality metrics. The kiosk's path (`app::run`) uses none of it.
+//!
+//! - [`eval`]: posing and action control measured on held-out clips.
+//! - [`author`]: the default library's scores compiled into BVH.
+//! - [`synth`]: recordings authored from gestures; [`demo`]: the demo
+//!   recording, authored against the character.
+//! - [`sheet`], [`checks`], [`metrics`]: stick-figure sheets, foot sliding
+//!   and joint limits of clips, and motion quality of a replay.
+
+pub mod author;
+pub mod checks;
+pub mod demo;
+pub mod eval;
+pub mod metrics;
+pub mod sheet;
+pub mod synth;
