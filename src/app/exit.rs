@@ -6,9 +6,11 @@
 use std::io;
 
 use super::calibrate::CalibrateError;
+use super::config::ConfigError;
 use super::headless::HeadlessError;
 use super::run::RunError;
 use crate::display::present::PresentError;
+use crate::input::evemu::EvemuError;
 use crate::input::hub::LiveError;
 use crate::platform::kms::KmsError;
 use crate::platform::uinput::PlayError;
@@ -129,6 +131,29 @@ impl ExitStatus for CalibrateError {
             Self::Stopped => FAILURE,
             Self::Write { .. } => CANTCREAT,
             Self::ConfigText { .. } => CONFIG,
+        }
+    }
+}
+
+impl ExitStatus for ConfigError {
+    fn exit_code(&self) -> u8 {
+        CONFIG
+    }
+}
+
+impl ExitStatus for EvemuError {
+    fn exit_code(&self) -> u8 {
+        match self {
+            EvemuError::Io { source, .. }
+                if matches!(
+                    source.kind(),
+                    io::ErrorKind::NotFound | io::ErrorKind::PermissionDenied
+                ) =>
+            {
+                NOINPUT
+            }
+            EvemuError::Io { .. } => IOERR,
+            _ => DATAERR,
         }
     }
 }

@@ -2,6 +2,7 @@
 
 pub mod cache;
 pub mod calibrate;
+pub mod cli;
 pub mod config;
 pub mod exit;
 pub mod headless;

@@ -272,6 +272,12 @@ impl DeviceDescription {
     }
 }
 
+/// A short label for a device in logs: name and vendor:product.
+#[must_use]
+pub fn device_label(name: &str, id: InputId) -> String {
+    format!("\"{name}\" ({id})")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -339,9 +345,4 @@ mod tests {
         assert_eq!(b.iter().collect::<Vec<_>>(), vec![0, 7, 8, 330]);
         assert!(!b.contains(331));
     }
-}
-/// A short label for a device in logs: name and vendor:product.
-#[must_use]
-pub fn device_label(name: &str, id: InputId) -> String {
-    format!("\"{name}\" ({id})")
 }

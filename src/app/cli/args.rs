@@ -1,0 +1,256 @@
+//! The command line's arguments (clap).
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "marionette",
+    version,
+    about = "Touch-table character puppeteering kiosk"
+)]
+pub(super) struct Cli {
+    /// Configuration file [default: /etc/marionette/marionette.toml if it
+    /// exists, else built-in defaults]
+    #[arg(long, global = true, value_name = "PATH")]
+    pub(super) config: Option<PathBuf>,
+    #[command(subcommand)]
+    pub(super) command: Command,
+}
+
+#[derive(Subcommand)]
+pub(super) enum Command {
+    /// Replay the bundled demo recording through the input stack and print
+    /// what it does
+    Demo {
+        /// Where the frames, contact sheet and summary go.
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+        /// Frames written per second of recording.
+        #[arg(long, default_value_t = 10.0)]
+        fps: f64,
+    },
+    Inspect {
+        /// An evemu recording, or a .bvh file
+        file: PathBuf,
+    },
+    /// Replay a recording through the input stack
+    Replay {
+        file: PathBuf,
+        /// Print every touch frame as a JSON line.
+        #[arg(long)]
+        contacts: bool,
+        /// Run the whole pipeline into images (needs --out).
+        #[arg(long, requires = "out")]
+        headless: bool,
+        /// Where the frames, contact sheet and summary go.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Frames written per second of recording.
+        #[arg(long, default_value_t = 10.0)]
+        fps: f64,
+        /// Run the whole pipeline without rendering and write motion
+        /// quality metrics (JSON) to this file.
+        #[arg(long, value_name = "OUT.json", conflicts_with = "headless")]
+        metrics: Option<PathBuf>,
+        /// With --metrics: turn tracking control off, to compare.
+        #[arg(long, requires = "metrics")]
+        no_tracking: bool,
+    },
+    /// Write the motion the character performs for a recording as BVH
+    /// (the library's skeleton, at its frame rate).
+    ExportBvh {
+        file: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    Record {
+        /// Device node [default: the first touchscreen found]
+        #[arg(long)]
+        device: Option<PathBuf>,
+        /// Output file
+        #[arg(long)]
+        out: PathBuf,
+        /// Stop after this many seconds
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// Replay a recording through a virtual (uinput) device with its timing
+    Play {
+        /// An evemu recording
+        file: PathBuf,
+        /// Wait this long after creating the device before the first event,
+        /// so that readers can open it
+        #[arg(long, default_value_t = 500)]
+        settle_ms: u64,
+    },
+    /// Read the touchscreens as the kiosk does and print what they report
+    /// (devices added and removed, touches in screen pixels) as JSON lines
+    Watch {
+        /// Stop after this many seconds [default: until Ctrl-C]
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// Rewrite a BVH file in metres with a conventional channel layout
+    /// (a converter's T-pose frame dropped)
+    ConvertBvh {
+        /// Input BVH file
+        file: PathBuf,
+        /// Output BVH file
+        #[arg(long)]
+        out: PathBuf,
+        /// File units to metres [default: detected]
+        #[arg(long)]
+        scale_to_m: Option<f64>,
+    },
+    /// Build the learned models of a library and cache them (run and demo
+    /// use the cache when it matches the library, and bake when it does not)
+    Bake {
+        /// Library folder (with library.toml)
+        #[arg(long, default_value = "assets/library")]
+        library: PathBuf,
+        /// Bake even if a matching cache exists
+        #[arg(long)]
+        force: bool,
+    },
+    /// Measure the character controllers on held-out motion capture
+    Eval {
+        #[command(subcommand)]
+        what: EvalCommand,
+    },
+    /// Compile the default library's scores (keyframes) into BVH clips and
+    /// library.toml
+    AuthorLibrary {
+        /// Folder of score files (*.toml)
+        #[arg(long, default_value = "assets/library-src")]
+        src: PathBuf,
+        /// Output folder for the BVH files and library.toml
+        #[arg(long, default_value = "assets/library")]
+        out: PathBuf,
+    },
+    /// Draw each clip of a library as a contact sheet (stick figures, front
+    /// and side views) and report foot sliding, floor contact and joint limits
+    ContactSheet {
+        /// Library folder (with library.toml)
+        #[arg(long, default_value = "assets/library")]
+        library: PathBuf,
+        /// Output folder for the PNG files
+        #[arg(long, default_value = "contact-sheets")]
+        out: PathBuf,
+        /// Frames per sheet
+        #[arg(long, default_value_t = 10)]
+        frames: usize,
+    },
+    /// List the input devices and what marionette makes of each
+    ListDevices {
+        /// One JSON object per line instead of a table
+        #[arg(long)]
+        json: bool,
+    },
+    /// The kiosk: fullscreen on the KMS output, reading every touchscreen,
+    /// until SIGTERM/SIGINT (what systemd starts)
+    Run {
+        /// Where the DRM device nodes are
+        #[arg(long, default_value = "/dev/dri")]
+        dri: PathBuf,
+        /// Stop after this many seconds (for tests)
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// Calibrate a touchscreen on the KMS display: touch the targets shown;
+    /// the device's calibration is written into the configuration file
+    Calibrate {
+        /// The touchscreen's name (see list-devices); needed when there
+        /// are several
+        #[arg(long)]
+        device: Option<String>,
+        /// Where the DRM device nodes are
+        #[arg(long, default_value = "/dev/dri")]
+        dri: PathBuf,
+        /// Give up when a target is not touched within this many seconds
+        #[arg(long, default_value_t = 60)]
+        timeout: u64,
+    },
+    /// List the DRM/KMS outputs: cards, connectors, their state and modes
+    ListOutputs {
+        /// One JSON object per connector
+        #[arg(long)]
+        json: bool,
+        /// Where the DRM device nodes are
+        #[arg(long, default_value = "/dev/dri")]
+        dir: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+pub(super) enum EvalCommand {
+    /// Posing control: reconstruct held-out frames from N constrained parts
+    /// and print one JSON object (mpjpe_cm, constraint_err_px,
+    /// constraint_err_cm, ms_per_pose, poses; with --leave-one-out, their
+    /// means and each clip's)
+    Pose {
+        /// Library folder (with library.toml)
+        #[arg(long)]
+        library: PathBuf,
+        /// Held-out BVH clips of the library's skeleton
+        #[arg(long, num_args = 1.., required_unless_present = "leave_one_out")]
+        test: Vec<PathBuf>,
+        /// Test each posing clip of the library in turn on a model of the
+        /// others (instead of --test; --frames per clip)
+        #[arg(long, conflicts_with = "test")]
+        leave_one_out: bool,
+        /// Constrained parts, first N of right_hand, left_hand, right_foot, left_foot, head
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u8).range(1..=5))]
+        parts: u8,
+        #[arg(long, value_enum, default_value = "touch")]
+        mode: EvalMode,
+        #[arg(long, value_enum, default_value = "model")]
+        method: EvalMethod,
+        /// Frames sampled evenly from the test clips (from each clip with
+        /// --leave-one-out)
+        #[arg(long, default_value_t = 200)]
+        frames: usize,
+        /// Blocks of cells the grid search looks into, the best first
+        /// (--method model; 0: every cell) [default: the synthesis's, 16]
+        #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+        blocks: Option<u32>,
+        /// Cells whose samples the grid search scores (--method model)
+        /// [default: the synthesis's, 16]
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        cells: Option<u32>,
+    },
+    /// Action control: replay held-out clips' primary-part paths as drags
+    /// through the controller (touch frames, as live input) and print one
+    /// JSON object (trials, correct, wrong_action, missed,
+    /// false_trigger_slow, decided_at)
+    Actions {
+        /// Library folder (with library.toml)
+        #[arg(long)]
+        library: PathBuf,
+        /// Folder of held-out clips named <action>_*.bvh
+        #[arg(long)]
+        test: PathBuf,
+        /// Seed of the noise and the slow drags
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Judge the drags with the action models alone (faster; no
+        /// controller, no posing model)
+        #[arg(long)]
+        models_only: bool,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(super) enum EvalMode {
+    Touch,
+    Targets,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(super) enum EvalMethod {
+    Model,
+    Scan,
+    Nearest,
+    CcdRest,
+}

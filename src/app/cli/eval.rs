@@ -1,0 +1,165 @@
+//! `eval pose` and `eval actions`: the controllers measured on held-out
+//! motion capture.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::args::{EvalMethod, EvalMode};
+use super::motion::{load_model, read_clip};
+use super::{Failure, print_json, stdout_error};
+use crate::app::config::Config;
+use crate::app::exit::{self};
+
+pub(super) fn eval_actions(
+    config: &Config,
+    library: &Path,
+    test_dir: &Path,
+    seed: u64,
+    models_only: bool,
+) -> Result<(), Failure> {
+    use crate::character::library::Library;
+    use crate::control::action::model::ActionModel;
+    use crate::tools::eval::actions as eval;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let actions: Vec<ActionModel> = lib
+        .actions
+        .iter()
+        .map(|a| ActionModel::build(&lib, a))
+        .collect();
+    let mut files: Vec<PathBuf> = std::fs::read_dir(test_dir)
+        .map_err(|e| {
+            Failure::new(
+                exit::NOINPUT,
+                format!("cannot list {}: {e}", test_dir.display()),
+            )
+        })?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
+        .collect();
+    files.sort();
+    let mut clips = Vec::new();
+    for f in &files {
+        let stem = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let Some(action) = actions
+            .iter()
+            .map(|a| a.def.name.clone())
+            .filter(|n| stem.starts_with(&format!("{n}_")))
+            .max_by_key(String::len)
+        else {
+            tracing::warn!(file = %f.display(), "not named after an action of the library (<action>_*.bvh); skipped");
+            continue;
+        };
+        // Any rig in any unit will do: only the primary part's path is
+        // used, in metres as its bone lengths say.
+        let (_, clip) = read_clip(f, None)?;
+        clips.push((action, clip));
+    }
+    let tests: Vec<(String, &crate::character::motion::Clip)> =
+        clips.iter().map(|(a, c)| (a.clone(), c)).collect();
+    let result = if models_only {
+        eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
+    } else {
+        use crate::control::controller::Character;
+        let (lib, model) = load_model(library, false)?;
+        let ch = std::sync::Arc::new(Character::new(lib, model));
+        let settings = config.control_settings();
+        eval::eval_with(&eval::with_primary(&actions, &tests), seed, &mut |d| {
+            crate::tools::eval::live::judge(&ch, &settings, d)
+        })
+    };
+    let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+pub(super) fn pose_setup(
+    parts: u8,
+    mode: EvalMode,
+    method: EvalMethod,
+    frames: usize,
+) -> crate::tools::eval::posing::EvalSetup {
+    use crate::tools::eval::posing as eval;
+    eval::EvalSetup {
+        parts: usize::from(parts),
+        mode: match mode {
+            EvalMode::Touch => eval::Mode::Touch,
+            EvalMode::Targets => eval::Mode::Targets,
+        },
+        method: match method {
+            EvalMethod::Model => eval::Method::Model,
+            EvalMethod::Scan => eval::Method::Scan,
+            EvalMethod::Nearest => eval::Method::Nearest,
+            EvalMethod::CcdRest => eval::Method::CcdRest,
+        },
+        frames,
+        blocks: None,
+        cells: None,
+    }
+}
+
+pub(super) fn eval_pose(
+    library: &Path,
+    tests: &[PathBuf],
+    setup: crate::tools::eval::posing::EvalSetup,
+) -> Result<(), Failure> {
+    use crate::tools::eval::posing as eval;
+    let (lib, learned) = load_model(library, false)?;
+    let mut clips = Vec::new();
+    for t in tests {
+        let (_, clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;
+        if let Some(why) =
+            crate::character::library::hierarchy_difference(&lib.skeleton, &clip.skeleton)
+        {
+            return Err(Failure::new(
+                exit::DATAERR,
+                format!("{}: not the library's skeleton ({why})", t.display()),
+            ));
+        }
+        clips.push(clip);
+    }
+    if learned.samples.is_empty() {
+        return Err(Failure::new(
+            exit::DATAERR,
+            format!("{}: the library has no posing samples", library.display()),
+        ));
+    }
+    let rest = lib
+        .clips
+        .get(&lib.posing[0])
+        .or_else(|| lib.clips.values().next())
+        .expect("library has clips");
+    let refs: Vec<&crate::character::motion::Clip> = clips.iter().collect();
+    print_json(&eval::eval_pose(
+        &lib.skeleton,
+        &learned,
+        rest,
+        &refs,
+        setup,
+    ))
+}
+
+pub(super) fn eval_pose_leave_one_out(
+    library: &Path,
+    setup: crate::tools::eval::posing::EvalSetup,
+) -> Result<(), Failure> {
+    use crate::character::library::Library;
+    use crate::tools::eval::posing as eval;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let mut progress = |done: usize, of: usize| {
+        tracing::info!(done, of, "leave one out: clips tested");
+    };
+    let result = eval::leave_one_out(&lib, setup, &mut progress).ok_or_else(|| {
+        Failure::new(
+            exit::DATAERR,
+            format!(
+                "{}: leaving one clip out needs at least two posing clips, the library has {}",
+                library.display(),
+                lib.posing.len()
+            ),
+        )
+    })?;
+    print_json(&result)
+}

@@ -1,0 +1,235 @@
+//! The `marionette` command line. Output meant for people or scripts goes to
+//! stdout; logs go to stderr (the journal under systemd). Exit codes follow
+//! sysexits.h, see [`exit`](super::exit). One file per command group:
+//! [`input`] (recordings and panels), [`motion`] (BVH and libraries),
+//! [`eval`], [`replay`] (recordings through the whole pipeline) and
+//! [`kiosk`] (the display).
+
+mod args;
+mod eval;
+mod input;
+mod kiosk;
+mod motion;
+mod replay;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use self::args::{Cli, Command, EvalCommand, EvalMethod};
+use self::eval::{eval_actions, eval_pose, eval_pose_leave_one_out, pose_setup};
+use self::input::{inspect, list_devices, replay};
+use self::kiosk::{calibrate, list_outputs, run_kiosk};
+use self::motion::{bake, contact_sheets, convert_bvh};
+use self::replay::{demo, export_bvh, replay_metrics, show};
+use crate::app::config::{self, Config, ConfigError};
+use crate::app::exit::{self, ExitStatus};
+use crate::app::logging;
+use crate::input::evemu::Recording;
+use crate::platform::evdev as live;
+use crate::platform::{record, uinput};
+
+/// An error with the exit code it deserves.
+struct Failure {
+    code: u8,
+    message: String,
+}
+
+/// Every typed error converts with the exit code [`ExitStatus`] gives it.
+impl<E: ExitStatus + std::fmt::Display> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Self::new(e.exit_code(), e)
+    }
+}
+
+impl Failure {
+    fn new(code: u8, message: impl std::fmt::Display) -> Self {
+        Self {
+            code,
+            message: message.to_string(),
+        }
+    }
+}
+
+/// Parse the command line, load the configuration, run the command and
+/// say how it ended.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() {
+                exit::USAGE
+            } else {
+                exit::OK
+            });
+        }
+    };
+    let config = match load_config(cli.config.as_deref()) {
+        Ok(c) => c,
+        Err(e) => {
+            logging::init("info");
+            eprintln!("marionette: {e}");
+            return ExitCode::from(exit::CONFIG);
+        }
+    };
+    logging::init(&config.log.level);
+    let config_path = cli
+        .config
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(config::DEFAULT_PATH));
+    match run(cli.command, &config, &config_path) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            eprintln!("marionette: {}", f.message);
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
+    match path {
+        Some(p) => Config::load(p),
+        None if Path::new(config::DEFAULT_PATH).exists() => {
+            Config::load(Path::new(config::DEFAULT_PATH))
+        }
+        None => Ok(Config::default()),
+    }
+}
+
+fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
+    match command {
+        Command::Demo { out, fps } => demo(config, &out, fps),
+        Command::Inspect { file } => inspect(&file),
+        Command::Replay {
+            file,
+            headless: true,
+            out: Some(out),
+            fps,
+            ..
+        } => {
+            let rec = Recording::read_file(&file)?;
+            show(config, &rec, &out, fps)
+        }
+        Command::Replay {
+            file,
+            metrics: Some(out),
+            no_tracking,
+            ..
+        } => replay_metrics(config, &file, &out, no_tracking),
+        Command::Replay { file, contacts, .. } => replay(config, &file, contacts),
+        Command::ExportBvh { file, out } => export_bvh(config, &file, &out),
+        Command::Record {
+            device,
+            out,
+            seconds,
+        } => record::record(&config.input, device.as_deref(), &out, seconds).map_err(Failure::from),
+        Command::Play { file, settle_ms } => {
+            let rec = Recording::read_file(&file)?;
+            uinput::play(&rec, std::time::Duration::from_millis(settle_ms)).map_err(Failure::from)
+        }
+        Command::ListDevices { json } => list_devices(config, json),
+        Command::ListOutputs { json, dir } => list_outputs(&dir, json),
+        Command::Run { dri, seconds } => run_kiosk(config, dri, seconds),
+        Command::Calibrate {
+            device,
+            dri,
+            timeout,
+        } => calibrate(config, config_path, device, dri, timeout),
+        Command::ConvertBvh {
+            file,
+            out,
+            scale_to_m,
+        } => convert_bvh(&file, &out, scale_to_m),
+        Command::Bake { library, force } => bake(&library, force),
+        Command::Eval {
+            what:
+                EvalCommand::Actions {
+                    library,
+                    test,
+                    seed,
+                    models_only,
+                },
+        } => eval_actions(config, &library, &test, seed, models_only),
+        Command::Eval {
+            what:
+                EvalCommand::Pose {
+                    library,
+                    test,
+                    leave_one_out,
+                    parts,
+                    mode,
+                    method,
+                    frames,
+                    blocks,
+                    cells,
+                },
+        } => {
+            if !matches!(method, EvalMethod::Model) && (blocks.is_some() || cells.is_some()) {
+                return Err(Failure::new(
+                    exit::USAGE,
+                    "--blocks and --cells size the grid search of --method model; \
+                     the other methods do not search the grid",
+                ));
+            }
+            let mut setup = pose_setup(parts, mode, method, frames);
+            setup.blocks = blocks.map(|b| b as usize);
+            setup.cells = cells.map(|c| c as usize);
+            if leave_one_out {
+                eval_pose_leave_one_out(&library, setup)
+            } else {
+                eval_pose(&library, &test, setup)
+            }
+        }
+        Command::AuthorLibrary { src, out } => {
+            let n = crate::tools::author::author_library(&src, &out).map_err(|e| {
+                let code = match &e {
+                    crate::tools::author::compile::AuthorError::Write { .. } => exit::CANTCREAT,
+                    crate::tools::author::compile::AuthorError::List { .. } => exit::NOINPUT,
+                    _ => exit::DATAERR,
+                };
+                Failure::new(code, e)
+            })?;
+            writeln!(std::io::stdout(), "wrote {n} files to {}", out.display())
+                .map_err(stdout_error)
+        }
+        Command::ContactSheet {
+            library,
+            out,
+            frames,
+        } => contact_sheets(&library, &out, frames),
+        Command::Watch { seconds } => live::watch(
+            &config.input,
+            config.display.picture(),
+            seconds,
+            &mut std::io::stdout().lock(),
+        )
+        .map_err(Failure::from),
+    }
+}
+
+fn stdout_error(e: std::io::Error) -> Failure {
+    Failure::new(exit::IOERR, format!("cannot write to stdout: {e}"))
+}
+
+fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
+    let json = serde_json::to_string(value).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+/// Write `text` to `out` through a temporary file renamed into place.
+fn write_atomically(out: &Path, text: &str) -> Result<(), Failure> {
+    let mut tmp = out.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, text)
+        .and_then(|()| std::fs::rename(&tmp, out))
+        .map_err(|e| {
+            Failure::new(
+                exit::CANTCREAT,
+                format!("cannot write {}: {e}", out.display()),
+            )
+        })
+}

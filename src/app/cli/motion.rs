@@ -1,0 +1,202 @@
+//! Motion data: `inspect` (BVH), `convert-bvh`, `bake`, `contact-sheet`,
+//! and loading a library with its posing model.
+
+use std::io::Write;
+use std::path::Path;
+
+use super::{Failure, stdout_error};
+use crate::app::exit::{self};
+
+/// What `inspect FILE.bvh` prints.
+#[derive(serde::Serialize)]
+pub(super) struct BvhSummary {
+    joints: usize,
+    frames: usize,
+    frame_time: f64,
+    height_m: f64,
+    scale_to_m: f64,
+    roles: std::collections::BTreeMap<String, String>,
+}
+
+/// Read and import a BVH file, with exit codes for its errors.
+pub(super) fn read_clip(
+    file: &Path,
+    scale_to_m: Option<f64>,
+) -> Result<(usize, crate::character::motion::Clip), Failure> {
+    read_clip_with(file, |_| scale_to_m)
+}
+
+pub(super) fn read_clip_with(
+    file: &Path,
+    scale_to_m: impl FnOnce(&crate::character::bvh::BvhFile) -> Option<f64>,
+) -> Result<(usize, crate::character::motion::Clip), Failure> {
+    use crate::character::bvh::{self, BvhError};
+    use crate::character::motion::{Clip, ImportSettings};
+    let parsed = bvh::read_file(file).map_err(|e| {
+        let code = match &e {
+            BvhError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+                exit::NOINPUT
+            }
+            BvhError::Io { .. } => exit::IOERR,
+            BvhError::Syntax { .. } => exit::DATAERR,
+        };
+        Failure::new(code, e)
+    })?;
+    let frames = parsed.frames.len();
+    let settings = ImportSettings {
+        scale_to_m: scale_to_m(&parsed),
+        ..ImportSettings::default()
+    };
+    let clip = Clip::from_bvh(parsed, &settings)
+        .map_err(|e| Failure::new(exit::DATAERR, format!("{}: {e}", file.display())))?;
+    Ok((frames, clip))
+}
+
+pub(super) fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> Result<(), Failure> {
+    let (_, clip) = read_clip(file, scale_to_m)?;
+    let text = crate::character::bvh::write(
+        &clip.skeleton,
+        &clip.translates,
+        &clip.frames,
+        clip.frame_time,
+    );
+    std::fs::write(out, text).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", out.display()),
+        )
+    })?;
+    writeln!(
+        std::io::stdout(),
+        "wrote {} ({} frames, {} joints, unit {} m{})",
+        out.display(),
+        clip.frames.len(),
+        clip.skeleton.len(),
+        clip.scale_to_m,
+        if clip.dropped_tpose {
+            ", T-pose frame dropped"
+        } else {
+            ""
+        }
+    )
+    .map_err(stdout_error)
+}
+
+/// Load a library and its posing model (from the cache when it matches).
+pub(super) fn load_model(
+    library: &Path,
+    force: bool,
+) -> Result<
+    (
+        crate::character::library::Library,
+        crate::control::posing::model::LearnedModel,
+    ),
+    Failure,
+> {
+    use crate::app::cache::{self, Source};
+    use crate::character::library::Library;
+    use std::io::IsTerminal;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let dir = cache::cache_dir();
+    let tty = std::io::stderr().is_terminal();
+    let mut last = -1i32;
+    let mut progress = |f: f64| {
+        let pct = (f * 100.0) as i32;
+        if tty {
+            eprint!("\rbaking the posing model: {pct:3}%");
+        } else if pct / 25 != last / 25 {
+            tracing::info!(percent = pct, "baking the posing model");
+        }
+        last = pct;
+    };
+    let (model, source) = cache::posing_model(&lib, &dir, force, &mut progress).map_err(|e| {
+        Failure::new(
+            exit::IOERR,
+            format!("cannot bake or cache {}: {e}", library.display()),
+        )
+    })?;
+    if tty && last >= 0 {
+        eprintln!();
+    }
+    match source {
+        Source::Cache(path) => {
+            tracing::info!(cache = %path.display(), samples = model.samples.len(), "posing model loaded from the cache")
+        }
+        Source::Baked { reason } => {
+            tracing::info!(%reason, samples = model.samples.len(), cells = model.cells.len(), cache = %dir.display(), "posing model baked")
+        }
+    }
+    Ok((lib, model))
+}
+
+pub(super) fn bake(library: &Path, force: bool) -> Result<(), Failure> {
+    let started = std::time::Instant::now();
+    let (lib, model) = load_model(library, force)?;
+    writeln!(
+        std::io::stdout(),
+        "{}: posing model of {} samples from {} clips in {} cells ({:.1} s)",
+        lib.dir.display(),
+        model.samples.len(),
+        lib.clips.len(),
+        model.cells.len(),
+        started.elapsed().as_secs_f64()
+    )
+    .map_err(stdout_error)
+}
+
+pub(super) fn inspect_bvh(file: &Path) -> Result<(), Failure> {
+    let (frames, clip) = read_clip(file, None)?;
+    let summary = BvhSummary {
+        joints: clip.skeleton.len(),
+        frames,
+        frame_time: clip.frame_time,
+        height_m: (clip.height_m * 1e4).round() / 1e4,
+        scale_to_m: clip.scale_to_m,
+        roles: clip.roles.names(&clip.skeleton),
+    };
+    let json = serde_json::to_string(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failure> {
+    use crate::character::library::Library;
+    use crate::tools::{checks, sheet};
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    std::fs::create_dir_all(out).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot create {}: {e}", out.display()),
+        )
+    })?;
+    let mut stdout = std::io::stdout().lock();
+    for (name, clip) in &lib.clips {
+        let png = out.join(name.replace(".bvh", ".png"));
+        sheet::write_sheet(&png, &clip.skeleton, &clip.roles, &clip.frames, frames).map_err(
+            |e| {
+                Failure::new(
+                    exit::CANTCREAT,
+                    format!("cannot write {}: {e}", png.display()),
+                )
+            },
+        )?;
+        let r = checks::check(
+            &clip.skeleton,
+            &clip.roles,
+            &clip.frames,
+            0.0,
+            &checks::Limits::default(),
+        );
+        writeln!(
+            stdout,
+            "{name}: {} frames, slide {:.2} mm/frame ({}), below floor {:.1} mm, {} limit problems{}",
+            clip.frames.len(),
+            r.max_slide_mm,
+            r.worst_slide,
+            r.max_penetration_mm,
+            r.violations.len(),
+            r.violations.first().map(|v| format!(" ({v})")).unwrap_or_default()
+        )
+        .map_err(stdout_error)?;
+    }
+    writeln!(stdout, "sheets written to {}", out.display()).map_err(stdout_error)
+}

@@ -1,0 +1,160 @@
+//! Recordings through the whole pipeline: `demo`, `replay --headless`,
+//! `replay --metrics`, `export-bvh`.
+
+use std::io::Write;
+use std::path::Path;
+
+use super::motion::load_model;
+use super::{Failure, stdout_error, write_atomically};
+use crate::app::config::Config;
+use crate::app::exit::{self};
+use crate::input::evemu::Recording;
+use crate::input::pipeline;
+
+/// The character: the configured library, its posing model (baked or from
+/// the cache) and its action models.
+pub(super) fn character(
+    config: &Config,
+) -> Result<std::sync::Arc<crate::control::controller::Character>, Failure> {
+    let dir = config.library_dir();
+    let (lib, model) = load_model(&dir, false)?;
+    Ok(std::sync::Arc::new(
+        crate::control::controller::Character::new(lib, model),
+    ))
+}
+
+/// A recording through the whole pipeline into images.
+pub(super) fn show(config: &Config, rec: &Recording, out: &Path, fps: f64) -> Result<(), Failure> {
+    use crate::app::headless;
+    let ch = character(config)?;
+    let frames = pipeline::replay(rec, &config.input, config.display.picture())
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let opts = headless::Options {
+        out: Some(out.to_owned()),
+        fps,
+        until: Some(pipeline::summarize(rec).0.duration_s),
+        ..headless::Options::default()
+    };
+    let summary = headless::run(ch, config, frames, &opts).map_err(Failure::from)?;
+    writeln!(std::io::stdout(), "{summary}").map_err(stdout_error)
+}
+
+pub(super) fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Failure> {
+    // The recording is built into the binary: the demo works from anywhere.
+    let rec = Recording::parse(DEMO_RECORDING, Path::new("assets/recordings/demo.evemu"))?;
+    let (summary, _) = pipeline::summarize(&rec);
+    writeln!(
+        std::io::stdout(),
+        "demo: assets/recordings/demo.evemu ({:.1} s, {} finger contacts)",
+        summary.duration_s,
+        summary.touch_sequences
+    )
+    .map_err(stdout_error)?;
+    show(config, &rec, out_dir, fps)
+}
+
+/// A recording's postures, the controller stepped at `tick_hz` (0: the
+/// library's frame rate) up to the recording's end, without rendering.
+pub(super) fn replay_poses(
+    config: &Config,
+    file: &Path,
+    tick_hz: f64,
+    tracking: bool,
+) -> Result<
+    (
+        std::sync::Arc<crate::control::controller::Character>,
+        crate::app::headless::Summary,
+        f64,
+    ),
+    Failure,
+> {
+    use crate::app::headless;
+    let rec = Recording::read_file(file)?;
+    let ch = character(config)?;
+    let frames = pipeline::replay(&rec, &config.input, config.display.picture())
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let tick_hz = if tick_hz > 0.0 {
+        tick_hz
+    } else {
+        1.0 / ch
+            .lib
+            .clips
+            .values()
+            .next()
+            .map_or(1.0 / 30.0, |c| c.frame_time)
+    };
+    let opts = headless::Options {
+        tick_hz,
+        keep_poses: true,
+        until: Some(pipeline::summarize(&rec).0.duration_s),
+        tracking,
+        ..headless::Options::default()
+    };
+    let summary = headless::run(ch.clone(), config, frames, &opts).map_err(Failure::from)?;
+    Ok((ch, summary, tick_hz))
+}
+
+pub(super) fn replay_metrics(
+    config: &Config,
+    file: &Path,
+    out: &Path,
+    no_tracking: bool,
+) -> Result<(), Failure> {
+    let (ch, summary, tick_hz) = replay_poses(config, file, 30.0, !no_tracking)?;
+    let m =
+        crate::tools::metrics::measure(&ch.lib.skeleton, &ch.roles, &summary.poses, 1.0 / tick_hz);
+    let mut json = serde_json::to_value(&m).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    json["tracking"] = serde_json::Value::Bool(!no_tracking);
+    json["actions"] = summary
+        .actions
+        .iter()
+        .map(|a| {
+            serde_json::json!({
+                "name": a.action,
+                "start_s": a.started_s,
+                "end_s": a.ended_s,
+                "outcome": a.outcome,
+            })
+        })
+        .collect();
+    let text = serde_json::to_string_pretty(&json).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    write_atomically(out, &(text + "\n"))?;
+    writeln!(
+        std::io::stdout(),
+        "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}; {} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}, {}), ground penetration {:.1} mm ({}), {} actions; written to {}",
+        m.frames,
+        m.nan_frames,
+        m.max_joint_speed_jump_rad_s,
+        m.worst_jump,
+        m.pops,
+        crate::tools::metrics::POP_RAD_S,
+        m.foot_skate_mm_per_frame,
+        m.foot_skate_max_mm,
+        m.worst_skate,
+        m.ground_penetration_mm,
+        m.worst_penetration,
+        summary.actions.len(),
+        out.display()
+    )
+    .map_err(stdout_error)
+}
+
+pub(super) fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(), Failure> {
+    let (ch, summary, tick_hz) = replay_poses(config, file, 0.0, true)?;
+    let translates: Vec<bool> = (0..ch.lib.skeleton.len()).map(|j| j == 0).collect();
+    let text =
+        crate::character::bvh::write(&ch.lib.skeleton, &translates, &summary.poses, 1.0 / tick_hz);
+    write_atomically(out, &text)?;
+    writeln!(
+        std::io::stdout(),
+        "wrote {} frames ({:.1} s at {:.0} fps, {} actions) to {}",
+        summary.poses.len(),
+        summary.duration_s,
+        tick_hz,
+        summary.actions.len(),
+        out.display()
+    )
+    .map_err(stdout_error)
+}
+
+pub(super) const DEMO_RECORDING: &str = include_str!("../../../assets/recordings/demo.evemu");
