@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use thiserror::Error;
 
 use super::config::Config;
-use super::run::InputThread;
+use super::kiosk::InputThread;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::calibration::{CalibrationError, RawPoint, Solution, SolveOptions, solve};

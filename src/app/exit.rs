@@ -8,7 +8,7 @@ use std::io;
 use super::calibrate::CalibrateError;
 use super::config::ConfigError;
 use super::headless::HeadlessError;
-use super::run::RunError;
+use super::kiosk::RunError;
 use crate::display::present::PresentError;
 use crate::input::evemu::EvemuError;
 use crate::input::hub::LiveError;

@@ -18,7 +18,6 @@ use crate::input::touch::ScreenFrame;
 use crate::render::contact;
 use crate::render::gpu::{AdapterChoice, Gpu, GpuError};
 use crate::render::headless::{Headless, Image};
-use crate::render::scene::{self, View};
 
 /// Why a headless run stopped.
 #[derive(Debug, Error)]
@@ -295,23 +294,11 @@ pub fn run(
         if let (Some(h), Some(dir)) = (headless.as_mut(), opts.out.as_ref()) {
             let is_key = key.binary_search(&summary.steps).is_ok();
             if summary.steps % every == 0 || is_key {
-                let view = View {
-                    camera: ctl.rig.camera(),
-                    rotation: config.display.rotation(),
-                };
                 let mut marks = ctl.marks(config.display.trajectories);
                 if config.display.status_line {
                     marks.status = Some(status(&ctl, t));
                 }
-                let ch = ctl.character();
-                let list = scene::compose(
-                    &view,
-                    &ch.lib.skeleton,
-                    &ch.roles,
-                    ctl.world(),
-                    &held,
-                    &marks,
-                );
+                let list = super::frame::compose(&ctl, config.display.rotation(), &marks);
                 let started = std::time::Instant::now();
                 let img = h.render(&list)?;
                 times.push(started.elapsed().as_secs_f64() * 1e3);

@@ -1,10 +1,24 @@
-//! The application edge: configuration, exit codes, logging.
+//! The application, at the top of the crate: it composes the
+//! configuration from the subsystems' sections, builds the character,
+//! and runs the commands.
+//!
+//! - [`cli`]: the command line, one file per command group.
+//! - [`config`]: the configuration file, composed and validated.
+//! - [`kiosk`]: `marionette run`, the kiosk loop on KMS.
+//! - [`headless`]: recordings replayed through the whole pipeline into
+//!   images (the demo, `replay --headless`).
+//! - [`calibrate`]: on-screen calibration of a touchscreen.
+//! - [`frame`]: one frame's picture from the controller's state.
+//! - [`cache`]: the posing model's cache on disk.
+//! - [`exit`]: exit codes, and every error's mapping to one.
+//! - [`logging`]: tracing to stderr (the journal under systemd).
 
 pub mod cache;
 pub mod calibrate;
 pub mod cli;
 pub mod config;
 pub mod exit;
+pub mod frame;
 pub mod headless;
+pub mod kiosk;
 pub mod logging;
-pub mod run;

@@ -52,7 +52,7 @@ pub(super) fn run_kiosk(
     dri: PathBuf,
     seconds: Option<f64>,
 ) -> Result<(), Failure> {
-    use crate::app::run;
+    use crate::app::kiosk as run;
     let ch = character(config)?;
     let opts = run::RunOptions {
         dri_dir: dri,

@@ -1,0 +1,371 @@
+//! `marionette run`: the kiosk. Fullscreen on a KMS output, reading every
+//! touchscreen through evdev, stepping the character with the real time
+//! and showing a frame per vblank; idle, it returns to rest and performs
+//! an attract recording; panels come and go, a VT switch or a lost GPU
+//! pause it and it carries on; SIGTERM/SIGINT end it cleanly within a
+//! second. systemd hears READY=1 after the first page flip and WATCHDOG=1
+//! from the loop.
+//!
+//! The loop's timing decisions are in [`timers`], tested with a made-up
+//! clock; the attract loop is [`attract`]; the touchscreens are read on
+//! the thread in [`input_thread`].
+
+mod attract;
+mod input_thread;
+pub mod timers;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use thiserror::Error;
+
+use super::config::Config;
+use crate::control::controller::{Character, Controller};
+use crate::display::present::{OutputChoice, PresentError, PresenterKind};
+use crate::display::screen::Screen;
+use crate::input::hub::{HubEvent, LiveError};
+use crate::input::touch::ScreenFrame;
+use crate::platform::clock::{Clock, Monotonic};
+use crate::platform::notify::Notifier;
+use crate::render::gpu::{AdapterChoice, GpuError};
+
+use self::attract::Attract;
+pub(crate) use self::input_thread::InputThread;
+use self::timers::{ATTRACT_DELAY_S, Timers};
+use super::frame;
+
+/// Why the kiosk stopped.
+#[derive(Debug, Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Present(#[from] PresentError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Input(#[from] LiveError),
+    #[error("attract recording {path}: {message} (fix or empty `kiosk.attract`)")]
+    Attract { path: PathBuf, message: String },
+}
+
+/// How `run` runs.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Where the DRM card nodes are.
+    pub dri_dir: PathBuf,
+    /// Stop after this long (for tests); `None` runs until a signal.
+    pub seconds: Option<f64>,
+    pub adapter: AdapterChoice,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            dri_dir: PathBuf::from("/dev/dri"),
+            seconds: None,
+            adapter: AdapterChoice::Auto,
+        }
+    }
+}
+
+/// What a run did, logged when it stops.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunStats {
+    pub seconds: f64,
+    pub frames: u64,
+    pub flips: u64,
+    pub touch_frames: u64,
+    pub gpu_rebuilds: u64,
+    pub display_losses: u64,
+    /// Render plus readback plus copy, per frame (ms).
+    pub render_ms_mean: f64,
+    pub render_ms_max: f64,
+}
+
+fn load_attract(config: &Config) -> Result<Option<Vec<ScreenFrame>>, RunError> {
+    let path = &config.kiosk.attract;
+    if path.as_os_str().is_empty() {
+        return Ok(None);
+    }
+    let err = |message: String| RunError::Attract {
+        path: path.clone(),
+        message,
+    };
+    let rec = crate::input::evemu::Recording::read_file(path).map_err(|e| err(e.to_string()))?;
+    let frames = crate::input::pipeline::replay(&rec, &config.input, config.display.picture())
+        .map_err(|e| err(e.to_string()))?;
+    if frames.is_empty() {
+        return Err(err("it has no touches".to_owned()));
+    }
+    tracing::info!(path = %path.display(), frames = frames.len(), "attract recording loaded");
+    Ok(Some(frames))
+}
+
+/// Whether two postures are the same to the eye.
+fn same_pose(a: &crate::character::skeleton::Pose, b: &crate::character::skeleton::Pose) -> bool {
+    a.rotations
+        .iter()
+        .zip(&b.rotations)
+        .all(|(p, q)| p.abs_diff_eq(*q, 1e-6))
+        && a.translations
+            .iter()
+            .zip(&b.translations)
+            .all(|(p, q)| p.abs_diff_eq(*q, 1e-6))
+}
+
+/// Run the kiosk until SIGTERM/SIGINT (or `opts.seconds`), on the
+/// monotonic clock.
+pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<RunStats, RunError> {
+    run_with_clock(ch, config, opts, &Monotonic)
+}
+
+/// [`run`] on any clock: the loop reads the time only through `clock`,
+/// and every timing decision is made by [`Timers`].
+pub fn run_with_clock(
+    ch: Arc<Character>,
+    config: &Config,
+    opts: &RunOptions,
+    clock: &dyn Clock,
+) -> Result<RunStats, RunError> {
+    crate::platform::signals::install_stop_handler();
+    let notifier = Notifier::from_env();
+    let choice = OutputChoice::from_config(&config.display);
+    let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
+    let mut screen = Screen::open(
+        &opts.dri_dir,
+        &choice,
+        kind,
+        opts.adapter,
+        config.display.samples,
+    )?;
+    // The picture fills the output: touches are mapped to its size.
+    let (ow, oh) = screen.size();
+    let mut config = config.clone();
+    config.display.width = ow;
+    config.display.height = oh;
+    let (pw, ph) = config.display.size();
+    let attract_frames = load_attract(&config)?;
+    let dev_dir = &config.input.dev_dir;
+    if !dev_dir.is_dir() {
+        return Err(LiveError::NoDeviceDir(dev_dir.clone()).into());
+    }
+    let input = InputThread::start(config.clone())?;
+    let start_us = clock.now_us();
+    let seconds = |us: i64| (us - start_us) as f64 / 1e6;
+    let mut ctl = Controller::new(
+        ch,
+        config.control_settings(),
+        f64::from(pw),
+        f64::from(ph),
+        0.0,
+    );
+    let mut stats = RunStats::default();
+    let mut events = Vec::new();
+    let mut attract: Option<Attract> = None;
+    let mut ready = false;
+    let mut timers = Timers::new(
+        config.kiosk.idle_after_s,
+        opts.seconds,
+        notifier.watchdog_interval().map(|d| d.as_secs_f64()),
+    );
+    let mut last_shown: Option<(crate::character::skeleton::Pose, f64, f64, f64, usize)> = None;
+    let frame_s = 1.0 / f64::from(screen.refresh_hz());
+    loop {
+        let t = seconds(clock.now_us());
+        if crate::platform::signals::stop_requested() || timers.stop_due(t) {
+            notifier.notify("STOPPING=1");
+            tracing::info!("stopping");
+            break;
+        }
+        // Touches: real ones first end the attract loop.
+        input.drain(&mut events);
+        for e in events.drain(..) {
+            match e {
+                HubEvent::Touch {
+                    device,
+                    time_us,
+                    mut contacts,
+                } => {
+                    if let Some(mut a) = attract.take() {
+                        tracing::info!("touched: attract loop ends");
+                        if let Some(f) = a.lift(t) {
+                            ctl.touch(&f);
+                        }
+                    }
+                    stats.touch_frames += 1;
+                    for c in &mut contacts {
+                        c.id += u64::from(device) << 32;
+                    }
+                    let ft = timers.touch(seconds(time_us), t);
+                    ctl.touch(&ScreenFrame { t: ft, contacts });
+                }
+                HubEvent::Added { path, name, .. } => {
+                    tracing::info!(path = %path.display(), %name, "touchscreen added");
+                }
+                HubEvent::Removed { path, name, .. } => {
+                    tracing::info!(path = %path.display(), %name, "touchscreen removed");
+                }
+            }
+        }
+        // Idle: rest, then the attract loop.
+        if timers.rest_due(ctl.idle_s()) {
+            tracing::info!(idle_s = ctl.idle_s(), "nobody touched: back to rest");
+            ctl.go_to_rest();
+            attract = attract_frames
+                .as_ref()
+                .map(|frames| Attract::new(frames.clone(), t + ATTRACT_DELAY_S));
+        }
+        if let Some(a) = attract.as_mut() {
+            let mut due = Vec::new();
+            a.due(t, &mut due);
+            for f in &due {
+                ctl.touch(f);
+            }
+        }
+        ctl.advance(t);
+        // Show it, unless the display is another program's for now.
+        if timers.display_retry_due(t) && screen.reacquire() {
+            tracing::info!("display back: showing again");
+            timers.display_back();
+            last_shown = None;
+        }
+        if timers.gpu_retry_due(t) {
+            match screen.rebuild() {
+                Ok(()) => {
+                    stats.gpu_rebuilds += 1;
+                    timers.gpu_back();
+                    last_shown = None;
+                    tracing::info!("GPU device rebuilt");
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "GPU still unavailable; retrying");
+                }
+            }
+        }
+        let orbit = ctl.rig.orbit;
+        let marks = ctl.marks(config.display.trajectories);
+        let key = (
+            ctl.pose().clone(),
+            orbit.yaw,
+            orbit.pitch,
+            orbit.distance,
+            marks.fingers.len(),
+        );
+        let changed = last_shown.as_ref().is_none_or(|s| {
+            !same_pose(&s.0, &key.0)
+                || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
+                || !marks.fingers.is_empty()
+                || ctl.action().is_some()
+        });
+        if timers.can_draw() && !screen.flip_pending() && changed {
+            let mut marks = marks;
+            if config.display.status_line {
+                marks.status = status_line(&ctl);
+            }
+            let list = frame::compose(&ctl, config.display.rotation(), &marks);
+            let started = std::time::Instant::now();
+            match screen.draw(&list) {
+                Ok(shown) => {
+                    if shown {
+                        let ms = started.elapsed().as_secs_f64() * 1e3;
+                        stats.render_ms_mean += ms;
+                        stats.render_ms_max = stats.render_ms_max.max(ms);
+                        stats.frames += 1;
+                        last_shown = Some(key);
+                        if !ready && screen.fd().is_none() {
+                            // The swapchain shows it at the next vblank.
+                            ready = true;
+                            notifier.notify("READY=1\nSTATUS=showing the character");
+                            tracing::info!(
+                                output = screen.name(),
+                                "first frame queued to the display: ready"
+                            );
+                        }
+                    }
+                }
+                Err(PresentError::LostMaster(card)) => {
+                    stats.display_losses += 1;
+                    tracing::warn!(card = %card.display(), "the display was taken (VT switch?): paused until it comes back");
+                    timers.display_lost(t);
+                }
+                Err(PresentError::Gpu(e)) => {
+                    tracing::error!(error = %e, "rendering failed: rebuilding the GPU device");
+                    timers.gpu_lost(t);
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        if !ready && screen.flip_pending() {
+            // The first frame reaches the screen at this flip.
+            if screen.wait_flip(Duration::from_millis(500))? {
+                ready = true;
+                notifier.notify("READY=1\nSTATUS=showing the character");
+                tracing::info!(output = screen.name(), "first frame on screen: ready");
+            }
+        }
+        if timers.watchdog_due(t) {
+            notifier.notify("WATCHDOG=1");
+        }
+        // Wait for a flip, a touch, or the next frame's time; longer when
+        // nothing moves (no busy-wait when idle).
+        let moving = changed || attract.is_some();
+        let wait_s = timers::wait_s(moving, screen.fd().is_none(), frame_s);
+        wait(&input, &mut screen, Duration::from_secs_f64(wait_s))?;
+    }
+    input.stop();
+    stats.seconds = seconds(clock.now_us());
+    stats.flips = screen.flips();
+    if stats.frames > 0 {
+        stats.render_ms_mean /= stats.frames as f64;
+    }
+    tracing::info!(
+        seconds = stats.seconds,
+        frames = stats.frames,
+        flips = stats.flips,
+        touch_frames = stats.touch_frames,
+        gpu_rebuilds = stats.gpu_rebuilds,
+        display_losses = stats.display_losses,
+        render_ms_mean = stats.render_ms_mean,
+        render_ms_max = stats.render_ms_max,
+        "stopped"
+    );
+    Ok(stats)
+}
+
+/// The kiosk's status line: the action and its progress, or the held
+/// parts; nothing when nothing is held.
+fn status_line(ctl: &Controller) -> Option<String> {
+    let held: Vec<&str> = ctl.held().iter().map(|r| r.name()).collect();
+    Some(match ctl.action() {
+        Some((name, time)) => format!("{name} {:>3.0}%", time * 100.0),
+        None if held.is_empty() => String::new(),
+        None => format!("holding {}", held.join(", ")),
+    })
+    .filter(|s| !s.is_empty())
+}
+
+/// Wait for the card (a page flip) or the input thread, up to `timeout`.
+fn wait(input: &InputThread, screen: &mut Screen, timeout: Duration) -> Result<(), RunError> {
+    use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+    let card_ready = {
+        let mut fds = vec![PollFd::new(input.wake_fd(), PollFlags::POLLIN)];
+        if let Some(fd) = screen.fd() {
+            fds.push(PollFd::new(fd, PollFlags::POLLIN));
+        }
+        let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
+        match poll(&mut fds, PollTimeout::from(ms)) {
+            Ok(_) | Err(nix::errno::Errno::EINTR) => {}
+            Err(e) => {
+                tracing::warn!(error = %e, "poll failed");
+                std::thread::sleep(timeout);
+            }
+        }
+        fds.get(1)
+            .and_then(PollFd::revents)
+            .is_some_and(|r| r.contains(PollFlags::POLLIN))
+    };
+    if card_ready {
+        screen.dispatch()?;
+    }
+    Ok(())
+}
