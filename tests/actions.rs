@@ -196,7 +196,8 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
 #[test]
 fn held_out_variants_through_the_controller() {
     use marionette::character::motion::Clip;
-    use marionette::control::controller::{Character, Settings};
+    use marionette::control::character::Character;
+    use marionette::control::controller::Settings;
     use marionette::control::posing::model::{LearnedModel, posing_samples};
     use marionette::tools::eval::actions::{eval_with, with_primary};
     use marionette::tools::eval::live::judge;

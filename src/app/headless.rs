@@ -12,7 +12,8 @@ use thiserror::Error;
 
 use super::config::Config;
 use crate::control::action::timeline::ActionEvent;
-use crate::control::controller::{Character, Controller, Mode};
+use crate::control::character::Character;
+use crate::control::controller::{Controller, Mode};
 use crate::control::ticker::Ticker;
 use crate::input::touch::ScreenFrame;
 use crate::render::contact;

@@ -11,6 +11,7 @@
 //!   touch frames at a fixed rate; [`config`]: its configuration sections.
 
 pub mod action;
+pub mod character;
 pub mod config;
 pub mod controller;
 pub mod marks;

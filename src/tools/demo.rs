@@ -8,7 +8,8 @@ use std::sync::Arc;
 
 use crate::character::roles::Role;
 use crate::control::action::trail::TrailPoint;
-use crate::control::controller::{Character, Controller, Mode, Settings};
+use crate::control::character::Character;
+use crate::control::controller::{Controller, Mode, Settings};
 use crate::control::ticker::Ticker;
 use crate::input::config::InputConfig;
 use crate::input::pipeline;

@@ -25,15 +25,15 @@ pub fn data_dir() -> PathBuf {
 
 /// The default library's character (library, posing model, action models),
 /// built once per test binary.
-pub fn character() -> std::sync::Arc<marionette::control::controller::Character> {
+pub fn character() -> std::sync::Arc<marionette::control::character::Character> {
     use std::sync::{Arc, OnceLock};
-    static CH: OnceLock<Arc<marionette::control::controller::Character>> = OnceLock::new();
+    static CH: OnceLock<Arc<marionette::control::character::Character>> = OnceLock::new();
     CH.get_or_init(|| {
         let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library");
         let lib = marionette::character::library::Library::load(&dir).expect("default library");
         let (_, samples) = marionette::control::posing::model::posing_samples(&lib);
         let model = marionette::control::posing::model::LearnedModel::build(samples);
-        Arc::new(marionette::control::controller::Character::new(lib, model))
+        Arc::new(marionette::control::character::Character::new(lib, model))
     })
     .clone()
 }

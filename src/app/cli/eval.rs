@@ -63,7 +63,7 @@ pub(super) fn eval_actions(
     let result = if models_only {
         eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
     } else {
-        use crate::control::controller::Character;
+        use crate::control::character::Character;
         let (lib, model) = load_model(library, false)?;
         let ch = std::sync::Arc::new(Character::new(lib, model));
         let settings = config.control_settings();

@@ -15,11 +15,11 @@ use crate::input::pipeline;
 /// the cache) and its action models.
 pub(super) fn character(
     config: &Config,
-) -> Result<std::sync::Arc<crate::control::controller::Character>, Failure> {
+) -> Result<std::sync::Arc<crate::control::character::Character>, Failure> {
     let dir = config.library_dir();
     let (lib, model) = load_model(&dir, false)?;
     Ok(std::sync::Arc::new(
-        crate::control::controller::Character::new(lib, model),
+        crate::control::character::Character::new(lib, model),
     ))
 }
 
@@ -62,7 +62,7 @@ pub(super) fn replay_poses(
     tracking: bool,
 ) -> Result<
     (
-        std::sync::Arc<crate::control::controller::Character>,
+        std::sync::Arc<crate::control::character::Character>,
         crate::app::headless::Summary,
         f64,
     ),

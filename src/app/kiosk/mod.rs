@@ -21,7 +21,8 @@ use std::time::Duration;
 use thiserror::Error;
 
 use super::config::Config;
-use crate::control::controller::{Character, Controller};
+use crate::control::character::Character;
+use crate::control::controller::Controller;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::hub::{HubEvent, LiveError};

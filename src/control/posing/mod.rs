@@ -9,6 +9,8 @@
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 
+pub mod fit;
+pub mod ik;
 pub mod limbs;
 pub mod mds;
 pub mod model;

@@ -8,7 +8,8 @@
 use std::sync::Arc;
 
 use crate::control::action::timeline::ActionEvent;
-use crate::control::controller::{Character, Controller, Settings};
+use crate::control::character::Character;
+use crate::control::controller::{Controller, Settings};
 use crate::control::rig::Orbit;
 use crate::input::calibration::RawPoint;
 use crate::input::touch::{Phase, Tool};

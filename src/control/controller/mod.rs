@@ -13,71 +13,25 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+mod actions;
+mod effects;
+
+use super::character::Character;
 use super::rig::Rig;
-use crate::character::library::Library;
-use crate::character::roles::{Role, RoleMap};
+use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
-use crate::control::action::model::{ActionModel, recognize};
 use crate::control::action::player::ActionPlayer;
 use crate::control::action::timeline::{ActionEvent, Status};
-use crate::control::action::trail::{StartRule, TrailPoint, view_angle_deg};
-use crate::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
-use crate::control::posing::model::LearnedModel;
+use crate::control::action::trail::{StartRule, TrailPoint};
 use crate::control::posing::pick::pick;
-use crate::control::posing::sample::{Anchor, Placement, pose_of, samples_of};
+use crate::control::posing::sample::{Anchor, Placement};
 use crate::control::posing::synth::{Constraint, SynthOptions, Target, synthesize};
 use crate::control::tracking::accel::{AccelTracker, Gains};
 use crate::input::touch::ContactId;
 use crate::input::touch::ScreenFrame;
-use crate::physics::effects::{Attenuation, Effects, free_regions};
-use crate::physics::ragdoll::{Ragdoll, RagdollSettings, Region};
+use crate::physics::effects::{Attenuation, Effects};
+use crate::physics::ragdoll::{Ragdoll, RagdollSettings};
 use crate::screen::ScreenPoint;
-
-/// What the character is made of: the library, its posing model and its
-/// action models. Built once, shared by controllers.
-#[derive(Debug)]
-pub struct Character {
-    pub lib: Library,
-    pub roles: RoleMap,
-    pub posing: LearnedModel,
-    pub actions: Vec<ActionModel>,
-}
-
-impl Character {
-    /// Build the action models of `lib`; `posing` is its posing model.
-    #[must_use]
-    pub fn new(lib: Library, posing: LearnedModel) -> Self {
-        let actions = lib
-            .actions
-            .iter()
-            .map(|def| ActionModel::build(&lib, def))
-            .collect();
-        let roles = lib
-            .posing
-            .first()
-            .or_else(|| lib.clips.keys().next())
-            .and_then(|n| lib.clips.get(n))
-            .map(|c| c.roles.clone())
-            .unwrap_or_default();
-        Self {
-            lib,
-            roles,
-            posing,
-            actions,
-        }
-    }
-
-    /// The rest posture: the first frame of the first posing clip, standing
-    /// at `at`.
-    #[must_use]
-    pub fn rest_pose(&self, at: &Placement) -> Pose {
-        let clip = self.lib.posing.first().and_then(|n| self.lib.clips.get(n));
-        match clip.and_then(|c| samples_of(0, c, std::iter::once(0)).pop()) {
-            Some(s) => pose_of(&self.lib.skeleton, &s, at),
-            None => self.lib.skeleton.rest_pose(),
-        }
-    }
-}
 
 /// How the controller behaves; the recognition thresholds come from the
 /// configuration.
@@ -562,264 +516,11 @@ impl Controller {
         self.rig.settle(floor, idle, dt);
     }
 
-    /// Physics-based tracking: step the ragdoll towards the target and add
-    /// its physical effects to the regions no finger holds and that do not
-    /// touch the floor (eq. 5–7).
-    fn physical_effects(&mut self, dt: f64) {
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
-        let target = forward_kinematics(sk, &self.target);
-        let shown = forward_kinematics(sk, &self.output);
-        let resets = self.ragdoll.resets();
-        self.ragdoll.step(&target, &shown, dt);
-        if self.ragdoll.resets() != resets {
-            self.effects.forget();
-        }
-        self.effects
-            .update(self.ragdoll.segments(), &self.ragdoll.states(), dt);
-        let held: Vec<Region> = self.held().into_iter().map(Region::of).collect();
-        let mut touching = Vec::new();
-        for (k, (role, region)) in [
-            (Role::LeftFoot, Region::LeftLeg),
-            (Role::RightFoot, Region::RightLeg),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let sole = crate::character::skeleton::sole(sk, &shown, roles.get(role)).y;
-            if self.feet[k].anchor.is_some() || sole < GROUND_CONTACT_M {
-                touching.push(region);
-            }
-        }
-        for (role, region) in [
-            (Role::LeftHand, Region::LeftArm),
-            (Role::RightHand, Region::RightArm),
-            (Role::Head, Region::Torso),
-            (Role::Chest, Region::Torso),
-        ] {
-            if shown.positions[roles.get(role)].y < GROUND_CONTACT_M * 2.0 {
-                touching.push(region);
-            }
-        }
-        let pelvis_free = !self.held().contains(&Role::Pelvis);
-        self.effects
-            .set_active(free_regions(&held, &touching), pelvis_free, dt);
-        self.effects
-            .apply(sk, self.ragdoll.segments(), &mut self.output, &shown);
-    }
-
-    /// Foot contact and foot IK: a foot of the target posture that is near
-    /// the floor and nearly still carries the body; it is held where it was
-    /// when it came down while tracking moves the pelvis. Feet held by a
-    /// finger are the finger's. No sole goes below the floor.
-    fn fix_feet(&mut self, dt: f64) {
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
-        let target = forward_kinematics(sk, &self.target);
-        let shown = forward_kinematics(sk, &self.output);
-        let held = self.held();
-        // A held foot whose target slid away (more than 2 cm) follows it at
-        // a walking foot's creep at most, so that a planted foot never
-        // skates visibly; a released foot returns to the tracked posture
-        // within about 0.1 s, never in one jump.
-        let creep = FOOT_CREEP_M_S * dt;
-        let fade = (-dt / 0.04).exp();
-        let settle = 1.0 - (-dt / 0.06).exp();
-        let switched = std::mem::take(&mut self.switched);
-        let mut goals = [None; 2];
-        let feet = [Role::LeftFoot, Role::RightFoot];
-        for (k, role) in feet.into_iter().enumerate() {
-            let p = target.positions[roles.get(role)];
-            // Across a switch of controller the target's feet jump: that
-            // is not the foot moving.
-            let speed = if dt > 0.0 && !switched {
-                (p - self.last_feet[k]).length() / dt
-            } else {
-                0.0
-            };
-            self.last_feet[k] = p;
-            let support = p.y <= self.ankle_rest + 0.03 && speed < 0.3 && !held.contains(&role);
-            let tracked = shown.positions[roles.get(role)];
-            let foot = &mut self.feet[k];
-            if support {
-                let a = match foot.anchor {
-                    Some(a) => {
-                        let off = (p - a).with_y(0.0);
-                        if off.length() > 0.02 {
-                            a + off.clamp_length_max(creep)
-                        } else {
-                            a
-                        }
-                    }
-                    // Where the foot is shown now: no jump.
-                    None => foot
-                        .release
-                        .map_or(tracked, |(r, w)| tracked + (r - tracked) * w),
-                };
-                // Height from the target (a heel may rise over planted
-                // toes), reached smoothly from where the foot came down.
-                foot.anchor = Some(a.with_y(a.y + (p.y - a.y) * settle));
-                foot.release = None;
-                goals[k] = foot.anchor;
-            } else {
-                if let Some(a) = foot.anchor.take() {
-                    foot.release = Some((a, 1.0));
-                }
-                foot.release = foot
-                    .release
-                    .map(|(r, w)| (r, w * fade))
-                    .filter(|(_, w)| *w > 0.02);
-                goals[k] = foot.release.map(|(r, w)| tracked + (r - tracked) * w);
-            }
-        }
-        if goals.iter().any(Option::is_some) {
-            crate::control::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
-        }
-        // The floor: a sole below it (tracking straightens a leg before the
-        // pelvis rises, toes tip down) is lifted onto it: the leg bends,
-        // then the foot turns at the ankle so that its lowest point rests
-        // on the floor, as toes flatten on the ground.
-        let mut lifted = false;
-        let ankle_min = self.ankle_rest * 0.5;
-        let w = forward_kinematics(sk, &self.output);
-        for (k, role) in feet.into_iter().enumerate() {
-            let ankle = w.positions[roles.get(role)];
-            goals[k] = if ankle.y < ankle_min {
-                lifted = true;
-                Some(ankle.with_y(ankle_min))
-            } else {
-                goals[k].map(|_| ankle)
-            };
-        }
-        if lifted {
-            crate::control::posing::synth::plant_feet(sk, roles, &mut self.output, goals);
-        }
-        for _ in 0..2 {
-            let w = forward_kinematics(sk, &self.output);
-            let mut turned = false;
-            for role in feet {
-                let j = roles.get(role);
-                let ankle = w.positions[j];
-                let v = crate::character::skeleton::sole(sk, &w, j) - ankle;
-                let len = v.length();
-                if ankle.y + v.y >= -1e-4 || len < 1e-6 || v.with_y(0.0).length() < 1e-6 {
-                    continue;
-                }
-                let want = (-ankle.y / len).clamp(-1.0, 1.0).asin();
-                let turn = glam::DQuat::from_axis_angle(
-                    v.cross(DVec3::Y).normalize(),
-                    want - (v.y / len).asin(),
-                );
-                let parent = sk.joints[j]
-                    .parent
-                    .map_or(glam::DQuat::IDENTITY, |p| w.rotations[p]);
-                self.output.rotations[j] = (parent.inverse() * turn * w.rotations[j]).normalize();
-                turned = true;
-            }
-            if !turned {
-                break;
-            }
-        }
-    }
-
     /// Touches up to `t`, then advance to `t`.
     pub fn step(&mut self, frames: &[ScreenFrame], t: f64) {
         for f in frames {
             self.touch(f);
         }
         self.advance(t);
-    }
-
-    fn reset_trails(&mut self, t: f64) {
-        for g in self.grabs.values_mut() {
-            if let Grab::Part {
-                at,
-                trail,
-                trail_start,
-                ..
-            } = g
-            {
-                trail.clear();
-                trail.push(TrailPoint { at: *at, t: 0.0 });
-                *trail_start = t;
-            }
-        }
-    }
-
-    /// A drag that starts an action, if any.
-    fn recognise(
-        &mut self,
-        camera: &crate::character::camera::Camera,
-        t: f64,
-    ) -> Option<ActionPlayer> {
-        let at = self.placement_now();
-        let found = self.grabs.values().find_map(|g| match g {
-            Grab::Part {
-                role,
-                trail,
-                moved: true,
-                ..
-            } if trail.len() >= 2 => recognize(
-                &self.ch.actions,
-                *role,
-                trail,
-                camera,
-                &at,
-                &self.settings.rule,
-            ),
-            _ => None,
-        })?;
-        let a = &self.ch.actions[found.action];
-        tracing::info!(
-            action = %a.def.name,
-            cost_px = found.matched.cost,
-            coverage = found.matched.coverage,
-            "drag recognised"
-        );
-        let player = ActionPlayer::start(
-            &self.ch.actions,
-            found.action,
-            found.matched.coverage,
-            at,
-            t,
-            &mut self.events,
-        );
-        self.reset_trails(t);
-        Some(player)
-    }
-
-    /// Finger marks and, while a part is held in posing, the trajectories
-    /// of the actions that part can start (executable ones marked).
-    #[must_use]
-    pub fn marks(&self, trajectories: bool) -> Marks {
-        let mut marks = Marks::default();
-        for g in self.grabs.values() {
-            marks.fingers.push(match g {
-                Grab::Part { role, at, .. } => FingerMark {
-                    at: *at,
-                    usage: FingerUse::Part(*role),
-                },
-                Grab::Camera { at } => FingerMark {
-                    at: *at,
-                    usage: FingerUse::Camera,
-                },
-            });
-        }
-        if trajectories && matches!(self.mode, Mode::Posing) {
-            let camera = self.rig.camera();
-            let at = self.placement_now();
-            let eye = camera.eye_vector();
-            for role in self.held() {
-                for a in self.ch.actions.iter().filter(|a| a.def.primary == role) {
-                    let dir = glam::DQuat::from_rotation_y(at.yaw) * a.direction;
-                    marks.trajectories.push(TrajectoryMark {
-                        points: a.projected(&camera, &at).iter().map(|p| p.at).collect(),
-                        executable: view_angle_deg(dir, eye)
-                            > self.settings.rule.min_view_angle_deg,
-                    });
-                }
-            }
-        }
-        marks
     }
 }
