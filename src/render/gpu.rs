@@ -139,3 +139,55 @@ impl Gpu {
             .unwrap_or(1)
     }
 }
+
+/// A vertex or index buffer that grows when a frame needs more.
+pub(crate) struct GrowBuffer {
+    pub(crate) buffer: wgpu::Buffer,
+    usage: wgpu::BufferUsages,
+    label: &'static str,
+}
+
+impl GrowBuffer {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        label: &'static str,
+        usage: wgpu::BufferUsages,
+    ) -> Self {
+        Self {
+            buffer: Self::make(device, label, usage, 1 << 16),
+            usage,
+            label,
+        }
+    }
+
+    fn make(
+        device: &wgpu::Device,
+        label: &str,
+        usage: wgpu::BufferUsages,
+        size: u64,
+    ) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    pub(crate) fn write(&mut self, gpu: &Gpu, bytes: &[u8]) {
+        let need = (bytes.len() as u64).next_multiple_of(4);
+        if need > self.buffer.size() {
+            self.buffer = Self::make(
+                &gpu.device,
+                self.label,
+                self.usage,
+                need.next_power_of_two(),
+            );
+        }
+        if !bytes.is_empty() {
+            let mut padded = bytes.to_vec();
+            padded.resize(need as usize, 0);
+            gpu.queue.write_buffer(&self.buffer, 0, &padded);
+        }
+    }
+}

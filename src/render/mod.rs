@@ -4,6 +4,7 @@
 //! offscreen output read back as images ([`headless`]).
 
 pub mod contact;
+pub mod damage;
 pub mod gpu;
 pub mod headless;
 pub mod mesh;

@@ -6,7 +6,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use super::gpu::Gpu;
+use super::damage::{Rect, damage};
+use super::gpu::{Gpu, GrowBuffer};
 use super::mesh::{Mesh, Overlay, Vertex2, Vertex3};
 
 /// Everything one frame draws, in world and picture coordinates.
@@ -109,54 +110,6 @@ fn clear(bg: [f32; 3]) -> wgpu::Color {
     }
 }
 
-/// A vertex or index buffer that grows when a frame needs more.
-struct GrowBuffer {
-    buffer: wgpu::Buffer,
-    usage: wgpu::BufferUsages,
-    label: &'static str,
-}
-
-impl GrowBuffer {
-    fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages) -> Self {
-        Self {
-            buffer: Self::make(device, label, usage, 1 << 16),
-            usage,
-            label,
-        }
-    }
-
-    fn make(
-        device: &wgpu::Device,
-        label: &str,
-        usage: wgpu::BufferUsages,
-        size: u64,
-    ) -> wgpu::Buffer {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size,
-            usage: usage | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
-    }
-
-    fn write(&mut self, gpu: &Gpu, bytes: &[u8]) {
-        let need = (bytes.len() as u64).next_multiple_of(4);
-        if need > self.buffer.size() {
-            self.buffer = Self::make(
-                &gpu.device,
-                self.label,
-                self.usage,
-                need.next_power_of_two(),
-            );
-        }
-        if !bytes.is_empty() {
-            let mut padded = bytes.to_vec();
-            padded.resize(need as usize, 0);
-            gpu.queue.write_buffer(&self.buffer, 0, &padded);
-        }
-    }
-}
-
 /// The floor as last drawn, reused while the view does not change (on
 /// single-sampled targets the floor is most of a frame's cost on a CPU
 /// renderer; the camera is still most of the time).
@@ -195,97 +148,6 @@ pub struct Renderer {
     /// The target last drawn with the floor cache, and what was drawn over
     /// the floor there.
     last: Option<(wgpu::Texture, Rect)>,
-}
-
-/// A pixel rectangle, `x1`/`y1` exclusive.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Rect {
-    pub x0: u32,
-    pub y0: u32,
-    pub x1: u32,
-    pub y1: u32,
-}
-
-impl Rect {
-    const EMPTY: Rect = Rect {
-        x0: u32::MAX,
-        y0: u32::MAX,
-        x1: 0,
-        y1: 0,
-    };
-
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.x0 >= self.x1 || self.y0 >= self.y1
-    }
-
-    #[must_use]
-    pub fn union(self, o: Rect) -> Rect {
-        if self.is_empty() {
-            return o;
-        }
-        if o.is_empty() {
-            return self;
-        }
-        Rect {
-            x0: self.x0.min(o.x0),
-            y0: self.y0.min(o.y0),
-            x1: self.x1.max(o.x1),
-            y1: self.y1.max(o.y1),
-        }
-    }
-
-    fn clamp(self, size: (u32, u32)) -> Rect {
-        Rect {
-            x0: self.x0.min(size.0),
-            y0: self.y0.min(size.1),
-            x1: self.x1.min(size.0),
-            y1: self.y1.min(size.1),
-        }
-    }
-}
-
-/// The output pixels the body, its shadow and the overlays cover (with a
-/// margin), from their vertices.
-#[must_use]
-pub fn damage(list: &DrawList, shadow_view_proj: Mat4, size: (u32, u32)) -> Rect {
-    let (w, h) = (size.0 as f32, size.1 as f32);
-    let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
-    let mut add = |m: &Mat4, p: Vec4| {
-        let c = *m * p;
-        if c.w <= 1e-6 {
-            // Behind the eye: give up on bounds.
-            lo = glam::Vec2::splat(f32::MIN);
-            hi = glam::Vec2::splat(f32::MAX);
-            return;
-        }
-        let ndc = glam::Vec2::new(c.x / c.w, c.y / c.w);
-        let px = glam::Vec2::new((ndc.x + 1.0) * 0.5 * w, (1.0 - ndc.y) * 0.5 * h);
-        lo = lo.min(px);
-        hi = hi.max(px);
-    };
-    for v in &list.body.vertices {
-        add(&list.view_proj, Vec3::from(v.pos).extend(1.0));
-    }
-    if list.floor {
-        for v in &list.shadow.vertices {
-            add(&shadow_view_proj, Vec3::from(v.pos).extend(1.0));
-        }
-    }
-    for v in &list.overlay.vertices {
-        add(&list.screen, Vec4::new(v.pos[0], v.pos[1], 0.0, 1.0));
-    }
-    if lo.x > hi.x {
-        return Rect::EMPTY;
-    }
-    let lo = (lo - 3.0).max(glam::Vec2::ZERO).min(glam::Vec2::new(w, h));
-    let hi = (hi + 3.0).max(glam::Vec2::ZERO).min(glam::Vec2::new(w, h));
-    Rect {
-        x0: lo.x.floor() as u32,
-        y0: lo.y.floor() as u32,
-        x1: hi.x.ceil() as u32,
-        y1: hi.y.ceil() as u32,
-    }
 }
 
 /// Half-size of the floor square (m).
