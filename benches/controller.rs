@@ -10,7 +10,6 @@ use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::control::character::Character;
 use marionette::control::controller::{Controller, Settings};
-use marionette::control::posing::model::{LearnedModel, posing_samples};
 use marionette::input::calibration::RawPoint;
 use marionette::input::touch::{Phase, Tool};
 use marionette::input::touch::{ScreenContact, ScreenFrame};
@@ -30,8 +29,7 @@ fn bench(c: &mut Criterion) {
     let lib =
         Library::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"))
             .unwrap();
-    let (_, samples) = posing_samples(&lib);
-    let ch = Arc::new(Character::new(lib, LearnedModel::build(samples)));
+    let ch = Arc::new(Character::from_library(lib));
     let make = || {
         let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
         ctl.advance(1.0 / 30.0);

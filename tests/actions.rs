@@ -198,12 +198,10 @@ fn held_out_variants_through_the_controller() {
     use marionette::character::motion::Clip;
     use marionette::control::character::Character;
     use marionette::control::controller::Settings;
-    use marionette::control::posing::model::{LearnedModel, posing_samples};
     use marionette::tools::eval::actions::{eval_with, with_primary};
     use marionette::tools::eval::live::judge;
     let (lib, actions) = setup();
-    let (_, samples) = posing_samples(&lib);
-    let ch = std::sync::Arc::new(Character::new(lib, LearnedModel::build(samples)));
+    let ch = std::sync::Arc::new(Character::from_library(lib));
     let settings = Settings::default();
     let clips = held_out_clips();
     let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();

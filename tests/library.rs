@@ -179,3 +179,36 @@ clips = ["002_05.bvh#900-2000", "002_05.bvh#fast", "002_05.bvh#50-40", "nothere.
         assert!(text.contains(want), "missing `{want}` in:\n{text}");
     }
 }
+
+#[test]
+fn the_content_key_follows_the_files_and_not_where_they_are() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+    let original = Library::load(&src).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for entry in std::fs::read_dir(&src).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, dir.path().join(path.file_name().unwrap())).unwrap();
+    }
+    let copy = Library::load(dir.path()).unwrap();
+    assert_eq!(
+        copy.content_key, original.content_key,
+        "same files, same key"
+    );
+    // One clip's file changes (a trailing blank line): another key.
+    let name = copy.clips.keys().next().unwrap().clone();
+    let clip = copy.clip_path(&name);
+    let mut bytes = std::fs::read(&clip).unwrap();
+    bytes.extend_from_slice(b"\n");
+    std::fs::write(&clip, bytes).unwrap();
+    let changed = Library::load(dir.path()).unwrap();
+    assert_ne!(changed.content_key, original.content_key);
+    assert_eq!(
+        marionette::app::cache::library_key(&copy),
+        marionette::app::cache::library_key(&original),
+        "a copied library uses the same cache"
+    );
+    assert_ne!(
+        marionette::app::cache::library_key(&changed),
+        marionette::app::cache::library_key(&copy)
+    );
+}

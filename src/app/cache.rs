@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::character::library::Library;
+use crate::character::library::{Fnv, Library};
 use crate::control::posing::model::{LearnedModel, posing_samples};
 use crate::control::posing::sample::distance;
 
@@ -14,32 +14,14 @@ const MAGIC: &[u8; 8] = b"MRNTPOSE";
 /// Bumped whenever samples, the distance or the embedding change.
 const FORMAT: u32 = 1;
 
-/// FNV-1a, 64 bits: stable across builds and platforms.
-#[derive(Clone, Copy)]
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.0 ^= u64::from(*b);
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-}
-
-/// The content key of a library: its `library.toml` and every clip's bytes.
-pub fn library_key(lib: &Library) -> std::io::Result<u64> {
+/// The content key of a library: the cache format and the library's own
+/// content key (computed as its files were read: nothing is read again).
+#[must_use]
+pub fn library_key(lib: &Library) -> u64 {
     let mut h = Fnv::new();
     h.write(&FORMAT.to_le_bytes());
-    h.write(&std::fs::read(lib.dir.join("library.toml"))?);
-    for name in lib.clips.keys() {
-        h.write(name.as_bytes());
-        h.write(&std::fs::read(lib.clip_path(name))?);
-    }
-    Ok(h.0)
+    h.write(&lib.content_key.to_le_bytes());
+    h.finish()
 }
 
 /// Where caches live: `$CACHE_DIRECTORY` (systemd), else
@@ -70,7 +52,7 @@ fn encode(key: u64, coords: &[[f64; 2]]) -> Vec<u8> {
     }
     let mut h = Fnv::new();
     h.write(&out);
-    out.extend_from_slice(&h.0.to_le_bytes());
+    out.extend_from_slice(&h.finish().to_le_bytes());
     out
 }
 
@@ -82,7 +64,7 @@ fn decode(bytes: &[u8], key: u64, n: usize) -> Result<Vec<[f64; 2]>, String> {
     let (body, sum) = bytes.split_at(bytes.len() - 8);
     let mut h = Fnv::new();
     h.write(body);
-    if sum != h.0.to_le_bytes() {
+    if sum != h.finish().to_le_bytes() {
         return Err("checksum mismatch (corrupt)".into());
     }
     if &body[..8] != MAGIC {
@@ -127,7 +109,7 @@ pub fn posing_model(
     force: bool,
     progress: &mut dyn FnMut(f64),
 ) -> std::io::Result<(LearnedModel, Source)> {
-    let key = library_key(lib)?;
+    let key = library_key(lib);
     let (_, samples) = posing_samples(lib);
     let path = dir.join(format!("posing-{key:016x}.bin"));
     let reason = if force {

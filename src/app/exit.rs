@@ -6,6 +6,7 @@
 use std::io;
 
 use super::calibrate::CalibrateError;
+use super::character::LoadError;
 use super::config::ConfigError;
 use super::headless::HeadlessError;
 use super::kiosk::RunError;
@@ -154,6 +155,15 @@ impl ExitStatus for EvemuError {
             }
             EvemuError::Io { .. } => IOERR,
             _ => DATAERR,
+        }
+    }
+}
+
+impl ExitStatus for LoadError {
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::Library(_) => DATAERR,
+            Self::Cache { .. } => IOERR,
         }
     }
 }

@@ -9,12 +9,14 @@
 //!   images (the demo, `replay --headless`).
 //! - [`calibrate`]: on-screen calibration of a touchscreen.
 //! - [`frame`]: one frame's picture from the controller's state.
-//! - [`cache`]: the posing model's cache on disk.
+//! - [`character`]: the configured library loaded into a character;
+//!   [`cache`]: the posing model's cache on disk.
 //! - [`exit`]: exit codes, and every error's mapping to one.
 //! - [`logging`]: tracing to stderr (the journal under systemd).
 
 pub mod cache;
 pub mod calibrate;
+pub mod character;
 pub mod cli;
 pub mod config;
 pub mod exit;

@@ -144,6 +144,9 @@ pub struct Library {
     pub skeleton: Skeleton,
     /// Every clip by file name.
     pub clips: BTreeMap<String, Clip>,
+    /// A digest of the library's content as it was read (`library.toml`
+    /// and every clip's file): equal keys, equal libraries.
+    pub content_key: u64,
     pub posing: Vec<String>,
     pub actions: Vec<ActionDef>,
     /// Fraction (generalized time) of each action clip that also feeds the
@@ -236,7 +239,8 @@ impl Library {
         let mut clips = BTreeMap::new();
         let mut skeleton: Option<(String, Skeleton)> = None;
         // Each file is read once, however many clips it gives.
-        let mut files: BTreeMap<&str, Option<bvh::BvhFile>> = BTreeMap::new();
+        // Each file's digest feeds the library's content key.
+        let mut files: BTreeMap<&str, Option<(bvh::BvhFile, u64)>> = BTreeMap::new();
         for name in names {
             let clip_ref = match ClipRef::parse(name) {
                 Ok(r) => r,
@@ -246,7 +250,17 @@ impl Library {
                 }
             };
             let file = files.entry(clip_ref.file).or_insert_with(|| {
-                match bvh::read_file(&clips_dir.join(clip_ref.file)) {
+                let path = clips_dir.join(clip_ref.file);
+                let read = std::fs::read(&path)
+                    .map_err(|source| bvh::BvhError::Io {
+                        path: path.clone(),
+                        source,
+                    })
+                    .and_then(|bytes| {
+                        let parsed = bvh::parse(&String::from_utf8_lossy(&bytes), &path)?;
+                        Ok((parsed, Fnv::digest(&bytes)))
+                    });
+                match read {
                     Ok(p) => Some(p),
                     Err(e) => {
                         problems.push(e.to_string());
@@ -254,7 +268,7 @@ impl Library {
                     }
                 }
             });
-            let Some(file) = file.as_ref() else {
+            let Some((file, _)) = file.as_ref() else {
                 continue;
             };
             let parsed = match clip_ref.frames {
@@ -337,15 +351,66 @@ impl Library {
             .next()
             .map(|c| c.skeleton.clone())
             .unwrap_or_default();
+        // The content key: library.toml, then every clip's name and its
+        // file's digest, in name order.
+        let mut key = Fnv::new();
+        key.write(text.as_bytes());
+        for name in clips.keys() {
+            key.write(name.as_bytes());
+            let digest = ClipRef::parse(name)
+                .ok()
+                .and_then(|r| files.get(r.file))
+                .and_then(|f| f.as_ref().map(|(_, d)| *d))
+                .unwrap_or(0);
+            key.write(&digest.to_le_bytes());
+        }
         Ok(Self {
             dir: dir.to_owned(),
             clips_dir,
             skeleton,
             clips,
+            content_key: key.finish(),
             posing: file.posing.clips,
             actions,
             action_lead_in: lead_in,
         })
+    }
+}
+
+/// FNV-1a, 64 bits: stable across builds and platforms.
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv(u64);
+
+impl Fnv {
+    #[must_use]
+    pub fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+
+    pub fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 ^= u64::from(*b);
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    #[must_use]
+    pub fn finish(self) -> u64 {
+        self.0
+    }
+
+    /// The digest of `bytes` alone.
+    #[must_use]
+    pub fn digest(bytes: &[u8]) -> u64 {
+        let mut h = Self::new();
+        h.write(bytes);
+        h.finish()
+    }
+}
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Self::new()
     }
 }
 

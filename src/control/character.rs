@@ -5,7 +5,7 @@ use crate::character::library::Library;
 use crate::character::roles::RoleMap;
 use crate::character::skeleton::Pose;
 use crate::control::action::model::ActionModel;
-use crate::control::posing::model::LearnedModel;
+use crate::control::posing::model::{LearnedModel, posing_samples};
 use crate::control::posing::sample::{Placement, pose_of, samples_of};
 
 /// What the character is made of: the library, its posing model and its
@@ -19,6 +19,15 @@ pub struct Character {
 }
 
 impl Character {
+    /// The character of a library with its posing model baked here, in
+    /// memory (no cache): for tests, benches and tools.
+    #[must_use]
+    pub fn from_library(lib: Library) -> Self {
+        let (_, samples) = posing_samples(&lib);
+        let posing = LearnedModel::build(samples);
+        Self::new(lib, posing)
+    }
+
     /// Build the action models of `lib`; `posing` is its posing model.
     #[must_use]
     pub fn new(lib: Library, posing: LearnedModel) -> Self {

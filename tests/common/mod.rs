@@ -31,9 +31,7 @@ pub fn character() -> std::sync::Arc<marionette::control::character::Character> 
     CH.get_or_init(|| {
         let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library");
         let lib = marionette::character::library::Library::load(&dir).expect("default library");
-        let (_, samples) = marionette::control::posing::model::posing_samples(&lib);
-        let model = marionette::control::posing::model::LearnedModel::build(samples);
-        Arc::new(marionette::control::character::Character::new(lib, model))
+        Arc::new(marionette::control::character::Character::from_library(lib))
     })
     .clone()
 }

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::args::{EvalMethod, EvalMode};
-use super::motion::{load_model, read_clip};
+use super::motion::read_clip;
 use super::{Failure, print_json, stdout_error};
 use crate::app::config::Config;
 use crate::app::exit::{self};
@@ -63,9 +63,7 @@ pub(super) fn eval_actions(
     let result = if models_only {
         eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
     } else {
-        use crate::control::character::Character;
-        let (lib, model) = load_model(library, false)?;
-        let ch = std::sync::Arc::new(Character::new(lib, model));
+        let ch = crate::app::character::load(library)?;
         let settings = config.control_settings();
         eval::eval_with(&eval::with_primary(&actions, &tests), seed, &mut |d| {
             crate::tools::eval::live::judge(&ch, &settings, d)
@@ -106,7 +104,7 @@ pub(super) fn eval_pose(
     setup: crate::tools::eval::posing::EvalSetup,
 ) -> Result<(), Failure> {
     use crate::tools::eval::posing as eval;
-    let (lib, learned) = load_model(library, false)?;
+    let (lib, learned) = crate::app::character::load_models(library, false)?;
     let mut clips = Vec::new();
     for t in tests {
         let (_, clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;

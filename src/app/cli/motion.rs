@@ -82,56 +82,9 @@ pub(super) fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> R
     .map_err(stdout_error)
 }
 
-/// Load a library and its posing model (from the cache when it matches).
-pub(super) fn load_model(
-    library: &Path,
-    force: bool,
-) -> Result<
-    (
-        crate::character::library::Library,
-        crate::control::posing::model::LearnedModel,
-    ),
-    Failure,
-> {
-    use crate::app::cache::{self, Source};
-    use crate::character::library::Library;
-    use std::io::IsTerminal;
-    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
-    let dir = cache::cache_dir();
-    let tty = std::io::stderr().is_terminal();
-    let mut last = -1i32;
-    let mut progress = |f: f64| {
-        let pct = (f * 100.0) as i32;
-        if tty {
-            eprint!("\rbaking the posing model: {pct:3}%");
-        } else if pct / 25 != last / 25 {
-            tracing::info!(percent = pct, "baking the posing model");
-        }
-        last = pct;
-    };
-    let (model, source) = cache::posing_model(&lib, &dir, force, &mut progress).map_err(|e| {
-        Failure::new(
-            exit::IOERR,
-            format!("cannot bake or cache {}: {e}", library.display()),
-        )
-    })?;
-    if tty && last >= 0 {
-        eprintln!();
-    }
-    match source {
-        Source::Cache(path) => {
-            tracing::info!(cache = %path.display(), samples = model.samples.len(), "posing model loaded from the cache")
-        }
-        Source::Baked { reason } => {
-            tracing::info!(%reason, samples = model.samples.len(), cells = model.cells.len(), cache = %dir.display(), "posing model baked")
-        }
-    }
-    Ok((lib, model))
-}
-
 pub(super) fn bake(library: &Path, force: bool) -> Result<(), Failure> {
     let started = std::time::Instant::now();
-    let (lib, model) = load_model(library, force)?;
+    let (lib, model) = crate::app::character::load_models(library, force)?;
     writeln!(
         std::io::stdout(),
         "{}: posing model of {} samples from {} clips in {} cells ({:.1} s)",

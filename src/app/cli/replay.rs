@@ -4,23 +4,17 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::motion::load_model;
 use super::{Failure, stdout_error, write_atomically};
 use crate::app::config::Config;
 use crate::app::exit::{self};
 use crate::input::evemu::Recording;
 use crate::input::pipeline;
 
-/// The character: the configured library, its posing model (baked or from
-/// the cache) and its action models.
+/// The configured library's character.
 pub(super) fn character(
     config: &Config,
 ) -> Result<std::sync::Arc<crate::control::character::Character>, Failure> {
-    let dir = config.library_dir();
-    let (lib, model) = load_model(&dir, false)?;
-    Ok(std::sync::Arc::new(
-        crate::control::character::Character::new(lib, model),
-    ))
+    Ok(crate::app::character::load(&config.library_dir())?)
 }
 
 /// A recording through the whole pipeline into images.

@@ -1,0 +1,73 @@
+//! The character the application runs: a library folder loaded, its
+//! posing model taken from the cache when it matches the library (else
+//! baked and cached), and its action models built. Every command that
+//! needs a character loads it here.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use thiserror::Error;
+
+use super::cache::{self, Source};
+use crate::character::library::{Library, LibraryError};
+use crate::control::character::Character;
+use crate::control::posing::model::LearnedModel;
+
+/// Why a character could not be loaded.
+#[derive(Debug, Error)]
+pub enum LoadError {
+    /// The library folder, its `library.toml` or a clip is wrong.
+    #[error(transparent)]
+    Library(#[from] LibraryError),
+    /// The posing model could neither be read from nor written to the
+    /// cache.
+    #[error("cannot bake or cache {library}: {source}")]
+    Cache {
+        library: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// A library and its posing model (from the cache when it matches; baked
+/// when it does not, or when `force_bake`). Baking reports its progress on
+/// a terminal, or in the log.
+pub fn load_models(dir: &Path, force_bake: bool) -> Result<(Library, LearnedModel), LoadError> {
+    let lib = Library::load(dir)?;
+    let cache_dir = cache::cache_dir();
+    let tty = std::io::stderr().is_terminal();
+    let mut last = -1i32;
+    let mut progress = |f: f64| {
+        let pct = (f * 100.0) as i32;
+        if tty {
+            eprint!("\rbaking the posing model: {pct:3}%");
+        } else if pct / 25 != last / 25 {
+            tracing::info!(percent = pct, "baking the posing model");
+        }
+        last = pct;
+    };
+    let (model, source) = cache::posing_model(&lib, &cache_dir, force_bake, &mut progress)
+        .map_err(|source| LoadError::Cache {
+            library: dir.to_owned(),
+            source,
+        })?;
+    if tty && last >= 0 {
+        eprintln!();
+    }
+    match source {
+        Source::Cache(path) => {
+            tracing::info!(cache = %path.display(), samples = model.samples.len(), "posing model loaded from the cache");
+        }
+        Source::Baked { reason } => {
+            tracing::info!(%reason, samples = model.samples.len(), cells = model.cells.len(), cache = %cache_dir.display(), "posing model baked");
+        }
+    }
+    Ok((lib, model))
+}
+
+/// The character of the library in `dir`, ready for controllers.
+pub fn load(dir: &Path) -> Result<Arc<Character>, LoadError> {
+    let (lib, model) = load_models(dir, false)?;
+    Ok(Arc::new(Character::new(lib, model)))
+}
