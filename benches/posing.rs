@@ -4,6 +4,12 @@
 //! and baking a model of about 10,000 postures. `cargo bench --bench posing` (needs
 //! ../shared/mocap).
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 use std::path::PathBuf;
 use std::time::Duration;
 

@@ -1,6 +1,12 @@
 //! Action control on the default library: recognising an action from a
 //! drag of its primary part.
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 use glam::{DQuat, DVec3};
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;

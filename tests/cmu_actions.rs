@@ -6,6 +6,12 @@
 //! walk of subject 7 left out of the library. `marionette eval actions`
 //! runs on them as an operator would run it.
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 mod common;
 
 use std::path::{Path, PathBuf};

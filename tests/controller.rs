@@ -2,6 +2,12 @@
 //! headless presenter drive it: grabbing, pinning, camera gestures, and a
 //! touch's effect showing at the next step (the next rendered frame).
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 mod common;
 
 use common::contact;

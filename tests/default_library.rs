@@ -4,6 +4,12 @@
 //! not slide, nothing goes through the floor, no joint beyond human limits,
 //! anticipation before the big moves, weight over the supporting foot.
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;

@@ -2,6 +2,12 @@
 //! capture: synthesis meets its constraints, beats its baselines, and
 //! picking finds the part under a finger.
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 mod common;
 
 use glam::DVec3;

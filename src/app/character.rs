@@ -33,6 +33,7 @@ pub enum LoadError {
 /// A library and its posing model (from the cache when it matches; baked
 /// when it does not, or when `force_bake`). Baking reports its progress on
 /// a terminal, or in the log.
+#[allow(clippy::print_stderr, reason = "baking's progress on a terminal")]
 pub fn load_models(dir: &Path, force_bake: bool) -> Result<(Library, LearnedModel), LoadError> {
     let lib = Library::load(dir)?;
     let cache_dir = cache::cache_dir();

@@ -14,6 +14,11 @@
 //! - [`exit`]: exit codes, and every error's mapping to one.
 //! - [`logging`]: tracing to stderr (the journal under systemd).
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "the application, the device edges and the tools measure and wait in real time"
+)]
+
 pub mod cache;
 pub mod calibrate;
 pub mod character;

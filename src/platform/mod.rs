@@ -13,6 +13,11 @@
 //! Nothing in `input`, `character`, `control`, `physics` or `render`
 //! imports this module.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "the application, the device edges and the tools measure and wait in real time"
+)]
+
 pub mod clock;
 pub mod evdev;
 pub mod kms;

@@ -5,6 +5,11 @@
 //! [`eval`], [`replay`] (recordings through the whole pipeline) and
 //! [`kiosk`] (the display).
 
+#![allow(
+    clippy::print_stderr,
+    reason = "the command line says why it stopped on stderr"
+)]
+
 mod args;
 mod eval;
 mod input;
