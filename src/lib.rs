@@ -31,10 +31,10 @@
 pub mod app;
 pub mod character;
 pub mod control;
-pub mod display;
+pub(crate) mod display;
 pub mod input;
 pub mod physics;
-pub mod platform;
+pub(crate) mod platform;
 pub mod render;
 pub mod screen;
 pub mod tools;

@@ -20,12 +20,12 @@
 )]
 
 pub mod cache;
-pub mod calibrate;
-pub mod character;
+pub(crate) mod calibrate;
+pub(crate) mod character;
 pub mod cli;
 pub mod config;
-pub mod exit;
-pub mod frame;
+pub(crate) mod exit;
+pub(crate) mod frame;
 pub mod headless;
-pub mod kiosk;
-pub mod logging;
+pub(crate) mod kiosk;
+pub(crate) mod logging;

@@ -12,10 +12,10 @@
 
 pub mod action;
 pub mod character;
-pub mod config;
+pub(crate) mod config;
 pub mod controller;
 pub mod marks;
 pub mod posing;
-pub mod rig;
-pub mod ticker;
-pub mod tracking;
+pub(crate) mod rig;
+pub(crate) mod ticker;
+pub(crate) mod tracking;

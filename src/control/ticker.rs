@@ -38,12 +38,6 @@ impl Ticker {
         self.frames.last().map_or(0.0, |f| f.t)
     }
 
-    /// Frames fed so far.
-    #[must_use]
-    pub fn fed(&self) -> usize {
-        self.next
-    }
-
     /// Replace the frames by a longer list with the same beginning (a
     /// recording being authored).
     pub fn extend(&mut self, frames: Vec<ScreenFrame>) {

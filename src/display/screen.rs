@@ -123,15 +123,6 @@ impl Screen {
         })
     }
 
-    /// `direct` or `copy`.
-    #[must_use]
-    pub fn kind(&self) -> &'static str {
-        match &self.presenter {
-            Presenter::Direct(_) => "direct",
-            Presenter::Copy { .. } => "copy",
-        }
-    }
-
     /// The output's size in pixels.
     #[must_use]
     pub fn size(&self) -> (u32, u32) {
@@ -165,17 +156,6 @@ impl Screen {
         match &self.presenter {
             Presenter::Direct(d) => d.flips(),
             Presenter::Copy { presenter, .. } => presenter.flips(),
-        }
-    }
-
-    /// Samples per pixel of the renderer.
-    #[must_use]
-    pub fn samples(&self) -> u32 {
-        match &self.presenter {
-            Presenter::Direct(d) => d.renderer.samples(),
-            Presenter::Copy { headless, .. } => {
-                headless.as_ref().map_or(1, |h| h.renderer.samples())
-            }
         }
     }
 

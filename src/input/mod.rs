@@ -23,7 +23,7 @@
 //! devices.
 
 pub mod calibration;
-pub mod config;
+pub(crate) mod config;
 pub mod device;
 pub mod evemu;
 pub mod event;

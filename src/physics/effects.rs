@@ -176,17 +176,6 @@ impl Effects {
             pose.translations[0] += self.root * self.root_weight;
         }
     }
-
-    /// The largest effect on any joint now (rad), as shown.
-    #[must_use]
-    pub fn largest(&self, segments: &[Segment]) -> f64 {
-        segments
-            .iter()
-            .zip(&self.delta)
-            .filter(|(s, _)| s.parent().is_some())
-            .map(|(s, d)| d.length() * self.weight[s.region().index()])
-            .fold(0.0, f64::max)
-    }
 }
 
 /// The rotation of a rotation vector (axis × angle).

@@ -2,6 +2,6 @@
 //! pushed towards the target posture, and the physical effects taken
 //! from it.
 
-pub mod body;
-pub mod effects;
+pub(crate) mod body;
+pub(crate) mod effects;
 pub mod ragdoll;

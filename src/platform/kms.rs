@@ -77,16 +77,7 @@ pub struct OutputInfo {
     pub modes: Vec<ModeInfo>,
 }
 
-impl OutputInfo {
-    /// The mode to use: the preferred one, else the first.
-    #[must_use]
-    pub fn preferred_mode(&self) -> Option<&ModeInfo> {
-        self.modes
-            .iter()
-            .find(|m| m.preferred)
-            .or_else(|| self.modes.first())
-    }
-}
+impl OutputInfo {}
 
 impl std::fmt::Display for OutputInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

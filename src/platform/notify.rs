@@ -43,12 +43,6 @@ impl Notifier {
         Self { socket, watchdog }
     }
 
-    /// Whether systemd is listening.
-    #[must_use]
-    pub fn enabled(&self) -> bool {
-        self.socket.is_some()
-    }
-
     /// How often to send `WATCHDOG=1`: half of systemd's `WatchdogSec`.
     #[must_use]
     pub fn watchdog_interval(&self) -> Option<Duration> {

@@ -3,10 +3,10 @@
 //! ([`scene`]), the pipelines ([`renderer`], WGSL in `shaders/`) and
 //! offscreen output read back as images ([`headless`]).
 
-pub mod contact;
-pub mod damage;
+pub(crate) mod contact;
+pub(crate) mod damage;
 pub mod gpu;
 pub mod headless;
-pub mod mesh;
+pub(crate) mod mesh;
 pub mod renderer;
 pub mod scene;

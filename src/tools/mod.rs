@@ -19,6 +19,6 @@ pub mod author;
 pub mod checks;
 pub mod demo;
 pub mod eval;
-pub mod metrics;
-pub mod sheet;
+pub(crate) mod metrics;
+pub(crate) mod sheet;
 pub mod synth;

@@ -12,7 +12,7 @@
 
 mod attract;
 mod input_thread;
-pub mod timers;
+pub(crate) mod timers;
 
 use std::path::PathBuf;
 use std::sync::Arc;

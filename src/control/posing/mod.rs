@@ -11,10 +11,10 @@
 
 pub mod fit;
 pub mod ik;
-pub mod limbs;
-pub mod mds;
+pub(crate) mod limbs;
+pub(crate) mod mds;
 pub mod model;
 pub mod pick;
-pub mod reach;
+pub(crate) mod reach;
 pub mod sample;
 pub mod synth;

@@ -49,16 +49,6 @@ impl Gains {
             max_accel_root: MAX_ACCEL_ROOT,
         }
     }
-
-    /// The same gains without saturation: the pure eq. 2–3.
-    #[must_use]
-    pub fn unlimited(self) -> Self {
-        Self {
-            max_accel: f64::INFINITY,
-            max_accel_root: f64::INFINITY,
-            ..self
-        }
-    }
 }
 
 impl Default for Gains {
@@ -134,6 +124,15 @@ impl AccelTracker {
 mod tests {
     use super::*;
 
+    /// The same gains without saturation: the pure eq. 2–3.
+    fn unlimited(g: Gains) -> Gains {
+        Gains {
+            max_accel: f64::INFINITY,
+            max_accel_root: f64::INFINITY,
+            ..g
+        }
+    }
+
     fn pose(angle: f64, x: f64) -> Pose {
         Pose {
             translations: vec![DVec3::new(x, 0.9, 0.0), DVec3::Y * 0.5],
@@ -171,7 +170,7 @@ mod tests {
             } else {
                 pose(1.0, 0.0)
             };
-            t.step(&target, gains.unlimited(), dt);
+            t.step(&target, unlimited(gains), dt);
             speeds.push(t.angular_velocity[1].length());
         }
         let max_jump = speeds
