@@ -6,27 +6,34 @@
 //! # How the pieces fit
 //!
 //! ```text
-//! input ─────────────> character ───────────> physics ──────> render ──────> display
-//! evdev / evemu        posing | action        tracking        wgpu           KMS | headless
-//! tracker, calibration  (learned models)      (PD + ragdoll)
+//! input ──────────> control ─────────────────────> render ────> display
+//! evdev / evemu     posing | action | tracking     wgpu         KMS | headless
+//! tracker,          (learned models from           (scene,
+//! calibration        character data; physics)       overlays)
 //! ```
 //!
-//! - [`input`] turns panels (live evdev devices or evemu recordings) into
-//!   touch frames in screen pixels. Pure except [`input::live`] and
-//!   [`input::uinput`], which touch devices.
-//! - [`character`] holds the motion data the method learns from: skeletons,
-//!   BVH, body-part roles, motion libraries and the authoring of the default
-//!   library. Pure.
-//! - [`control`] turns touches into the character's motion and the view
-//!   (posing, action and tracking control; the camera rig). Pure.
-//! - [`display`] talks to DRM/KMS outputs.
-//! - [`render`] draws the character and the overlays with wgpu, into
-//!   offscreen images (headless) or onto the display.
-//! - [`app`] is the application edge: configuration, exit codes, logging.
+//! - [`screen`]: screen-space types every stage shares.
+//! - [`input`] turns panels (live devices through the hub, or evemu
+//!   recordings) into touch frames in picture pixels. Pure.
+//! - [`character`] holds the data the method learns from: skeletons, BVH,
+//!   body-part roles, motion libraries, the camera's projection. Pure.
+//! - [`physics`] is the ragdoll of physics-based tracking. Pure.
+//! - [`control`] turns touches into the character's motion and the view:
+//!   the paper's posing, action and tracking control. Pure.
+//! - [`render`] draws the character and the overlays with wgpu.
+//! - `display` shows frames on DRM/KMS outputs; `platform` holds the
+//!   device edges (evdev, uinput, DRM, signals, sd_notify, the clock).
+//! - [`tools`]: evaluation, authoring, sheets and metrics, apart from what
+//!   the kiosk runs.
+//! - [`app`] is the application at the top: configuration, the kiosk, the
+//!   commands.
 //!
-//! Conventions, stated once: time is in microseconds from the events' own
-//! clock (never `Instant::now()` in core code); screen pixels have their
-//! origin top left with y down.
+//! ARCHITECTURE.md in the repository says what each module may import.
+//!
+//! Conventions, stated once: time is in seconds (or microseconds) from the
+//! events' own clock or an injected one (never `Instant::now()` in core
+//! code, which clippy refuses); screen pixels have their origin top left
+//! with y down; the world is Y-up, right-handed, in metres and radians.
 
 pub mod app;
 pub mod character;

@@ -1,14 +1,14 @@
 //! The configuration file (TOML), validated as a whole at start.
 //!
 //! The sections belong to the subsystems that read them
-//! ([`InputConfig`], [`DisplayConfig`], [`ActionConfig`],
-//! [`CharacterConfig`], [`TrackingConfig`]); this module composes them with
+//! (`InputConfig`, `DisplayConfig`, `ActionConfig`,
+//! `CharacterConfig`, `TrackingConfig`); this module composes them with
 //! the application's own (`[kiosk]`, `[log]`) and validates the whole.
 //!
 //! Every key is documented in `config/marionette.toml`. An unknown key, a
 //! value of the wrong type or out of range is a [`ConfigError`] that names
 //! the file, the key and what is allowed; the binary exits with
-//! [`exit::CONFIG`](super::exit::CONFIG) (78) on it.
+//! `exit::CONFIG` (78) on it.
 
 use std::path::{Path, PathBuf};
 

@@ -4,15 +4,15 @@
 //!
 //! - [`cli`]: the command line, one file per command group.
 //! - [`config`]: the configuration file, composed and validated.
-//! - [`kiosk`]: `marionette run`, the kiosk loop on KMS.
+//! - `kiosk`: `marionette run`, the kiosk loop on KMS.
 //! - [`headless`]: recordings replayed through the whole pipeline into
 //!   images (the demo, `replay --headless`).
-//! - [`calibrate`]: on-screen calibration of a touchscreen.
-//! - [`frame`]: one frame's picture from the controller's state.
-//! - [`character`]: the configured library loaded into a character;
+//! - `calibrate`: on-screen calibration of a touchscreen.
+//! - `frame`: one frame's picture from the controller's state.
+//! - `character`: the configured library loaded into a character;
 //!   [`cache`]: the posing model's cache on disk.
-//! - [`exit`]: exit codes, and every error's mapping to one.
-//! - [`logging`]: tracing to stderr (the journal under systemd).
+//! - `exit`: exit codes, and every error's mapping to one.
+//! - `logging`: tracing to stderr (the journal under systemd).
 
 #![allow(
     clippy::disallowed_methods,

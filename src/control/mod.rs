@@ -3,12 +3,12 @@
 //!
 //! - [`posing`]: the posing model and posture synthesis from touches.
 //! - [`action`]: action models, recognising a drag, playing the action.
-//! - [`tracking`]: acceleration-based tracking (eq. 2-4).
+//! - `tracking`: acceleration-based tracking (eq. 2-4).
 //! - [`controller`]: routes fingers to body parts or the camera and runs
 //!   posing, action and tracking control with the ragdoll's effects.
 //! - [`marks`]: what is drawn over the picture for the fingers.
-//! - [`rig`]: the camera; [`ticker`]: stepping a controller through
-//!   touch frames at a fixed rate; [`config`]: its configuration sections.
+//! - `rig`: the camera; `ticker`: stepping a controller through
+//!   touch frames at a fixed rate; `config`: its configuration sections.
 
 pub mod action;
 pub mod character;

@@ -82,7 +82,7 @@ pub trait EventDevice {
     fn grab(&mut self) -> io::Result<()>;
 }
 
-/// Finds and opens devices. The real one is [`EvdevOpener`].
+/// Finds and opens devices. The real one is `EvdevOpener`.
 pub trait DeviceOpener {
     /// The candidate device nodes, in a stable order.
     fn scan(&self, dir: &Path) -> io::Result<Vec<PathBuf>>;
@@ -433,7 +433,7 @@ pub(crate) fn scan_error(dir: &Path, source: io::Error) -> LiveError {
     }
 }
 
-/// [`list_devices`] through any opener.
+/// `list_devices` through any opener.
 pub fn list_devices_with(
     opener: &dyn DeviceOpener,
     input: &InputConfig,

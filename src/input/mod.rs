@@ -14,9 +14,9 @@
 //!   [`touch`]: the touch frames it reports.
 //! - [`calibration`]: typed coordinate spaces and the calibration solver.
 //! - [`pipeline`]: recordings through the stack (inspect, replay, demo);
-//!   [`synth`]: authoring recordings.
-//! - [`live`]: real devices (evdev, hotplug, resync ioctls) behind an
-//!   injected opener; [`record`]: devices to evemu files; [`uinput`]:
+//!   `synth`: authoring recordings.
+//! - `live`: real devices (evdev, hotplug, resync ioctls) behind an
+//!   injected opener; `record`: devices to evemu files; `uinput`:
 //!   virtual devices for `play`.
 //!
 //! Everything but `live`, `record` and `uinput` is pure and runs without

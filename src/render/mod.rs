@@ -1,5 +1,5 @@
 //! Rendering with wgpu: the GPU and adapter choice ([`gpu`]), CPU geometry
-//! ([`mesh`]), composing a frame from the character and the overlays
+//! (`mesh`), composing a frame from the character and the overlays
 //! ([`scene`]), the pipelines ([`renderer`], WGSL in `shaders/`) and
 //! offscreen output read back as images ([`headless`]).
 

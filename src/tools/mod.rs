@@ -7,7 +7,7 @@
 //! - [`author`]: the default library's scores compiled into BVH.
 //! - [`synth`]: recordings authored from gestures; [`demo`]: the demo
 //!   recording, authored against the character.
-//! - [`sheet`], [`checks`], [`metrics`]: stick-figure sheets, foot sliding
+//! - `sheet`, [`checks`], `metrics`: stick-figure sheets, foot sliding
 //!   and joint limits of clips, and motion quality of a replay.
 
 #![allow(

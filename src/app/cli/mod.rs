@@ -1,9 +1,9 @@
 //! The `marionette` command line. Output meant for people or scripts goes to
 //! stdout; logs go to stderr (the journal under systemd). Exit codes follow
-//! sysexits.h, see [`exit`](super::exit). One file per command group:
-//! [`input`] (recordings and panels), [`motion`] (BVH and libraries),
-//! [`eval`], [`replay`] (recordings through the whole pipeline) and
-//! [`kiosk`] (the display).
+//! sysexits.h, see `exit`. One file per command group:
+//! `input` (recordings and panels), `motion` (BVH and libraries),
+//! `eval`, `replay` (recordings through the whole pipeline) and
+//! `kiosk` (the display).
 
 #![allow(
     clippy::print_stderr,

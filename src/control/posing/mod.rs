@@ -2,10 +2,10 @@
 //! postures in a 2-D latent space, and posture synthesis from touches.
 //!
 //! - [`sample`]: sample postures, the posture distance, placement.
-//! - [`mds`]: landmark MDS to 2-D.
+//! - `mds`: landmark MDS to 2-D.
 //! - [`model`]: the learned model and its grid.
-//! - [`limbs`]: the limbs a blend can refit on their own.
-//! - [`reach`]: the limbs' reaches in boxes, for the refit's search.
+//! - `limbs`: the limbs a blend can refit on their own.
+//! - `reach`: the limbs' reaches in boxes, for the refit's search.
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 

@@ -145,7 +145,7 @@ pub struct SearchIndex {
     pub samples_of_cell: Vec<u32>,
     /// Every sample, cell by cell.
     pub samples: PartColumns,
-    /// Per limb (in [`super::limbs::LIMBS`] order), every sample's reach
+    /// Per limb (in `super::limbs::LIMBS` order), every sample's reach
     /// in sample order, for the limb refit's search.
     pub reach: [Vec<glam::DVec3>; 5],
     /// The same reaches in boxes, for the limb refit's search through the

@@ -46,7 +46,7 @@ pub struct Sample {
     /// anchor ([`Anchor::ClipStart`], [`Anchor::Root`]), kept inline so
     /// that the search reads one sample's parts from one place.
     pub parts: [[DVec3; Role::ALL.len()]; 2],
-    /// Each limb's reach ([`limbs::reach`], in [`limbs::LIMBS`] order).
+    /// Each limb's reach (`limbs::reach`, in `limbs::LIMBS` order).
     pub reach: [DVec3; 5],
 }
 
