@@ -422,28 +422,38 @@ pub struct ClipRef<'a> {
     pub frames: Option<(usize, usize)>,
 }
 
+/// Why a clip name's frame range cannot be read.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ClipRefError {
+    #[error("`#{range}` is not a frame range; write it as FIRST-LAST, e.g. `{file}#120-185`")]
+    NotARange { file: String, range: String },
+    #[error("the frame range {first}-{last} must end after it begins")]
+    Backwards { first: usize, last: usize },
+    #[error("names no file before `#`")]
+    NoFile,
+}
+
 impl<'a> ClipRef<'a> {
     /// Split a clip name into its file and frame range.
-    pub fn parse(name: &'a str) -> Result<Self, String> {
+    pub fn parse(name: &'a str) -> Result<Self, ClipRefError> {
         let Some((file, range)) = name.rsplit_once('#') else {
             return Ok(Self {
                 file: name,
                 frames: None,
             });
         };
-        let bad = || {
-            format!(
-                "`#{range}` is not a frame range; write it as FIRST-LAST, e.g. `{file}#120-185`"
-            )
+        let bad = || ClipRefError::NotARange {
+            file: file.to_owned(),
+            range: range.to_owned(),
         };
         let (a, b) = range.split_once('-').ok_or_else(bad)?;
         let a: usize = a.trim().parse().map_err(|_| bad())?;
         let b: usize = b.trim().parse().map_err(|_| bad())?;
         if b <= a {
-            return Err(format!("the frame range {a}-{b} must end after it begins"));
+            return Err(ClipRefError::Backwards { first: a, last: b });
         }
         if file.is_empty() {
-            return Err("names no file before `#`".to_owned());
+            return Err(ClipRefError::NoFile);
         }
         Ok(Self {
             file,

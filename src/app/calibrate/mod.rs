@@ -7,20 +7,25 @@
 //! written into the configuration file atomically (temporary file and
 //! rename, the old file kept as `.bak`). Touches that do not agree are
 //! refused, with the reason on screen and in the exit code; nothing is
-//! written then.
+//! written then. The procedure itself (which panel, which touches count)
+//! is the state machine in [`procedure`]; this file drives it with the
+//! display and the input thread.
+
+mod procedure;
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use thiserror::Error;
 
+use self::procedure::{Collecting, FindDevice, Finding, TARGETS, Touches};
 use super::config::Config;
 use super::kiosk::InputThread;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::calibration::{CalibrationError, RawPoint, Solution, SolveOptions, solve};
-use crate::input::hub::{HubEvent, LiveError};
-use crate::input::touch::Phase;
+use crate::input::hub::LiveError;
+use crate::platform::clock::{Clock, Monotonic};
 use crate::render::contact::draw_text;
 use crate::render::headless::Image;
 use crate::screen::{Rotation, ScreenPoint};
@@ -77,46 +82,26 @@ pub struct Calibrated {
     pub backup: Option<PathBuf>,
 }
 
-/// Targets as fractions of the picture: four near the corners, then the
-/// check point in the middle.
-pub const TARGETS: [(f64, f64); 5] = [(0.1, 0.1), (0.9, 0.1), (0.9, 0.9), (0.1, 0.9), (0.5, 0.5)];
-
-/// A touch is taken from the samples of its last `STEADY_S` seconds before
-/// the finger lifts, when they all lie within `STEADY_SPREAD` of the
-/// panel's range of their median.
-const STEADY_S: f64 = 0.25;
-const STEADY_SPREAD: f64 = 0.01;
-
-/// The steady position of one touch: its samples (time in seconds, raw
-/// point) from going down to lifting, the last at the lift (a finger that
-/// holds still sends no events: each sample stands until the next);
-/// `None` if the finger did not hold still for the last `STEADY_S`.
-#[must_use]
-pub fn steady_touch(samples: &[(f64, RawPoint)], range: (f64, f64)) -> Option<RawPoint> {
-    let (end, _) = *samples.last()?;
-    // The sample in force when the window opens, and those after it.
-    let from = samples.iter().rposition(|(t, _)| *t <= end - STEADY_S)?;
-    let tail: Vec<RawPoint> = samples[from..].iter().map(|(_, p)| *p).collect();
-    let median = |mut v: Vec<i32>| {
-        v.sort_unstable();
-        v[v.len() / 2]
-    };
-    let m = RawPoint {
-        x: median(tail.iter().map(|p| p.x).collect()),
-        y: median(tail.iter().map(|p| p.y).collect()),
-    };
-    let steady = tail.iter().all(|p| {
-        f64::from((p.x - m.x).abs()) <= range.0 * STEADY_SPREAD
-            && f64::from((p.y - m.y).abs()) <= range.1 * STEADY_SPREAD
-    });
-    steady.then_some(m)
+/// Why the configuration text cannot take a calibration.
+#[derive(Debug, Error)]
+pub enum ConfigEditError {
+    #[error(transparent)]
+    Toml(#[from] toml_edit::TomlError),
+    #[error("`input` is not a table")]
+    InputNotATable,
+    #[error("`input.device` is not a list of [[input.device]] tables")]
+    DevicesNotTables,
 }
 
 /// The configuration text with `device`'s calibration set: its
 /// `[[input.device]]` entry (by `match_name`) updated, else a new entry
 /// appended. Comments and layout are kept.
-pub fn with_calibration(text: &str, device: &str, matrix: [f64; 6]) -> Result<String, String> {
-    let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e| format!("{e}"))?;
+pub fn with_calibration(
+    text: &str,
+    device: &str,
+    matrix: [f64; 6],
+) -> Result<String, ConfigEditError> {
+    let mut doc: toml_edit::DocumentMut = text.parse()?;
     let round = |v: f64| (v * 1e6).round() / 1e6;
     let mut values = toml_edit::Array::new();
     for v in matrix {
@@ -126,12 +111,12 @@ pub fn with_calibration(text: &str, device: &str, matrix: [f64; 6]) -> Result<St
         .entry("input")
         .or_insert_with(|| toml_edit::Item::Table(toml_edit::Table::new()))
         .as_table_mut()
-        .ok_or("`input` is not a table")?;
+        .ok_or(ConfigEditError::InputNotATable)?;
     let devices = input
         .entry("device")
         .or_insert_with(|| toml_edit::Item::ArrayOfTables(toml_edit::ArrayOfTables::new()))
         .as_array_of_tables_mut()
-        .ok_or("`input.device` is not a list of [[input.device]] tables")?;
+        .ok_or(ConfigEditError::DevicesNotTables)?;
     let existing = devices
         .iter_mut()
         .find(|t| t.get("match_name").and_then(|v| v.as_str()) == Some(device));
@@ -279,60 +264,34 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         [200, 200, 200, 255],
     ))?;
     let input = InputThread::start(config.clone())?;
-    // The touchscreen: named, or the only one.
-    let mut devices: Vec<(u32, PathBuf, String)> = Vec::new();
+    let clock = Monotonic;
+    let start_us = clock.now_us();
+    let now = || (clock.now_us() - start_us) as f64 / 1e6;
     let mut events = Vec::new();
-    let started = Instant::now();
-    let wanted = loop {
+    // The touchscreen: named, or the only one.
+    let mut find = FindDevice::new(opts.device.clone(), now());
+    let found = loop {
         input.drain(&mut events);
-        for e in events.drain(..) {
-            if let HubEvent::Added { device, path, name } = e {
-                devices.push((device, path, name));
+        match find.step(now(), events.drain(..)) {
+            Finding::Found(d) => break d,
+            Finding::Failed(why) => {
+                input.stop();
+                return Err(CalibrateError::Device(why));
             }
-        }
-        let found = match &opts.device {
-            Some(n) => devices.iter().find(|d| d.2 == *n).cloned(),
-            None if devices.len() == 1 && started.elapsed() > Duration::from_secs(2) => {
-                devices.first().cloned()
-            }
-            None => None,
-        };
-        if let Some(d) = found {
-            break d;
+            Finding::Waiting => {}
         }
         if crate::platform::signals::stop_requested() {
             input.stop();
             return Err(CalibrateError::Stopped);
         }
-        if started.elapsed() > Duration::from_secs(10) {
-            input.stop();
-            let names: Vec<&str> = devices.iter().map(|d| d.2.as_str()).collect();
-            return Err(CalibrateError::Device(match (&opts.device, names.len()) {
-                (Some(n), _) => format!(
-                    "no touchscreen named \"{n}\" (found: {}); see `marionette list-devices`",
-                    if names.is_empty() {
-                        "none".to_owned()
-                    } else {
-                        names.join(", ")
-                    }
-                ),
-                (None, 0) => {
-                    "no touchscreen found: plug one in (see `marionette list-devices`)".to_owned()
-                }
-                (None, _) => format!(
-                    "several touchscreens: choose one with --device NAME ({})",
-                    names.join(", ")
-                ),
-            }));
-        }
         std::thread::sleep(Duration::from_millis(50));
     };
-    let (dev_id, dev_path, dev_name) = wanted;
-    tracing::info!(device = %dev_name, path = %dev_path.display(), "calibrating");
-    let desc = crate::platform::evdev::EvdevDevice::open(&dev_path)
+    let dev_name = found.name;
+    tracing::info!(device = %dev_name, path = %found.path.display(), "calibrating");
+    let desc = crate::platform::evdev::EvdevDevice::open(&found.path)
         .map(|d| crate::input::hub::EventDevice::description(&d).clone())
         .map_err(|source| LiveError::Io {
-            path: dev_path.clone(),
+            path: found.path.clone(),
             source,
         })?;
     let base =
@@ -349,76 +308,47 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         .iter()
         .map(|(fx, fy)| ScreenPoint::new(fx * f64::from(size.0), fy * f64::from(size.1)))
         .collect();
-    let mut taken: Vec<RawPoint> = Vec::new();
-    let mut hint = "";
-    while taken.len() < targets.len() {
-        let k = taken.len();
-        let title = format!(
-            "touch the centre of the target and hold still ({}/{})",
-            k + 1,
-            targets.len()
-        );
-        show(&screen(
-            size,
-            Some(targets[k]),
-            &[&dev_name, &title, hint],
-            [230, 230, 230, 255],
-        ))?;
-        let mut samples: Vec<(f64, RawPoint)> = Vec::new();
-        let waited = Instant::now();
-        let lifted = loop {
-            if crate::platform::signals::stop_requested() {
-                input.stop();
-                return Err(CalibrateError::Stopped);
+    let mut touches = Touches::new(
+        found.device,
+        range,
+        targets.len(),
+        opts.touch_timeout.as_secs_f64(),
+        now(),
+    );
+    let mut next = touches.first();
+    let taken = loop {
+        match next {
+            Collecting::Show { target, hint } => {
+                let title = format!(
+                    "touch the centre of the target and hold still ({}/{})",
+                    target + 1,
+                    targets.len()
+                );
+                show(&screen(
+                    size,
+                    Some(targets[target]),
+                    &[&dev_name, &title, hint.unwrap_or("")],
+                    [230, 230, 230, 255],
+                ))?;
             }
-            if samples.is_empty() && waited.elapsed() > opts.touch_timeout {
+            Collecting::TimedOut { target } => {
                 input.stop();
                 return Err(CalibrateError::NoTouch {
-                    target: k + 1,
+                    target: target + 1,
                     seconds: opts.touch_timeout.as_secs(),
                 });
             }
-            input.drain(&mut events);
-            let mut up = false;
-            for e in events.drain(..) {
-                if let HubEvent::Touch {
-                    device,
-                    time_us,
-                    contacts,
-                } = e
-                {
-                    if device != dev_id {
-                        continue;
-                    }
-                    // The first finger only.
-                    if let Some(c) = contacts.first() {
-                        if c.phase.is_down() {
-                            samples.push((time_us as f64 / 1e6, c.raw));
-                        } else if !samples.is_empty() {
-                            up = c.phase == Phase::Up;
-                            if up {
-                                let last = samples[samples.len() - 1].1;
-                                samples.push((time_us as f64 / 1e6, last));
-                            } else {
-                                samples.clear();
-                            }
-                        }
-                    }
-                }
-            }
-            if up {
-                break std::mem::take(&mut samples);
-            }
-            std::thread::sleep(Duration::from_millis(10));
-        };
-        match steady_touch(&lifted, range) {
-            Some(p) => {
-                taken.push(p);
-                hint = "";
-            }
-            None => hint = "hold the finger still on the target a moment, then lift it",
+            Collecting::Done(taken) => break taken,
+            Collecting::Waiting => {}
         }
-    }
+        if crate::platform::signals::stop_requested() {
+            input.stop();
+            return Err(CalibrateError::Stopped);
+        }
+        std::thread::sleep(Duration::from_millis(10));
+        input.drain(&mut events);
+        next = touches.step(now(), events.drain(..));
+    };
     input.stop();
     let pairs: Vec<(ScreenPoint, RawPoint)> = targets[..4]
         .iter()
@@ -466,7 +396,8 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         path: opts.config_path.clone(),
         message,
     };
-    let new_text = with_calibration(&text, &dev_name, solution.matrix.0).map_err(cerr)?;
+    let new_text =
+        with_calibration(&text, &dev_name, solution.matrix.0).map_err(|e| cerr(e.to_string()))?;
     // Never write a file the kiosk would refuse.
     Config::parse(&new_text, &opts.config_path).map_err(|e| cerr(e.to_string()))?;
     let backup = write_config(&opts.config_path, &new_text)?;
@@ -501,36 +432,6 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn at(t: f64, x: i32, y: i32) -> (f64, RawPoint) {
-        (t, RawPoint { x, y })
-    }
-
-    #[test]
-    fn only_steady_touches_count() {
-        let range = (4095.0, 4095.0);
-        // Slides onto the target, then holds still with a little jitter.
-        let mut s: Vec<_> = (0..10)
-            .map(|k| at(f64::from(k) * 0.01, 100 + k * 40, 200))
-            .collect();
-        s.extend((0..30).map(|k| at(0.1 + f64::from(k) * 0.01, 500 + (k % 3) - 1, 300 + (k % 2))));
-        let p = steady_touch(&s, range).unwrap();
-        assert!((p.x - 500).abs() <= 1 && (p.y - 300).abs() <= 1, "{p:?}");
-        // A tap: too short.
-        let tap: Vec<_> = (0..5).map(|k| at(f64::from(k) * 0.01, 500, 300)).collect();
-        assert_eq!(steady_touch(&tap, range), None);
-        // A finger that holds perfectly still sends nothing until it lifts.
-        let still = [at(0.0, 700, 800), at(0.6, 700, 800)];
-        assert_eq!(
-            steady_touch(&still, range),
-            Some(RawPoint { x: 700, y: 800 })
-        );
-        // Still sliding when lifted.
-        let slide: Vec<_> = (0..40)
-            .map(|k| at(f64::from(k) * 0.01, 100 + k * 20, 300))
-            .collect();
-        assert_eq!(steady_touch(&slide, range), None);
-    }
 
     #[test]
     fn the_calibration_goes_into_the_config_keeping_comments() {
