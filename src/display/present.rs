@@ -215,6 +215,7 @@ pub(crate) fn find_output(dir: &Path, choice: &OutputChoice) -> Result<Found, Pr
 
 /// Become DRM master of `card` (the first client of a card is master
 /// already; an explicit request fails only if another program holds it).
+#[tracing::instrument(level = "debug", skip(card), err(level = "debug"))]
 pub(crate) fn become_master(card: &Card, path: &Path) -> Result<(), PresentError> {
     if let Err(source) = drm::Device::acquire_master_lock(card) {
         if source.raw_os_error() != Some(libc::EINVAL) {
@@ -230,6 +231,12 @@ pub(crate) fn become_master(card: &Card, path: &Path) -> Result<(), PresentError
 impl CopyPresenter {
     /// Find the output on the cards in `dir` (normally `/dev/dri`), become
     /// DRM master and show a black frame on it.
+    #[tracing::instrument(
+        level = "debug",
+        name = "drm_device",
+        skip(choice),
+        err(level = "debug")
+    )]
     pub fn open(dir: &Path, choice: &OutputChoice) -> Result<Self, PresentError> {
         let f = find_output(dir, choice)?;
         Self::start(f.card, f.path, f.name, f.connector, f.crtc, f.mode)

@@ -214,6 +214,7 @@ impl<O: DeviceOpener> InputHub<O> {
         }
     }
 
+    #[tracing::instrument(level = "debug", skip(self, out), fields(path = %path.display()))]
     fn try_open(&mut self, path: &Path, out: &mut Vec<HubEvent>) {
         let mut dev = match self.opener.open(path) {
             Ok(d) => d,
@@ -294,6 +295,7 @@ impl<O: DeviceOpener> InputHub<O> {
         let mut i = 0;
         while i < self.open.len() {
             let d = &mut self.open[i];
+            let _span = tracing::debug_span!("input_device", device = %d.label).entered();
             self.events.clear();
             let result = d.dev.read(&mut self.events);
             for e in &self.events {

@@ -57,6 +57,7 @@ nix::ioctl_write_ptr!(eviocsclockid, b'E', 0xa0, libc::c_int);
 
 impl EvdevDevice {
     /// Open a device node non-blocking and read its description.
+    #[tracing::instrument(level = "debug", name = "evdev_device", err(level = "debug"))]
     pub fn open(path: &Path) -> io::Result<Self> {
         let file = OpenOptions::new()
             .read(true)

@@ -44,6 +44,7 @@ impl drm::control::Device for Card {}
 
 impl Card {
     /// Open a card node read-write.
+    #[tracing::instrument(level = "debug", err(level = "debug"))]
     pub fn open(path: &Path) -> Result<Self, KmsError> {
         std::fs::OpenOptions::new()
             .read(true)

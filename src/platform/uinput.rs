@@ -32,6 +32,7 @@ pub enum PlayError {
 }
 
 /// Create a uinput device that looks like `d`.
+#[tracing::instrument(level = "debug", skip(d), fields(name = %d.name), err(level = "debug"))]
 pub fn create_device(d: &DeviceDescription) -> Result<evdev::uinput::VirtualDevice, PlayError> {
     use evdev::{
         AbsInfo, AbsoluteAxisCode, AttributeSet, BusType, InputId, KeyCode, MiscCode, PropType,
