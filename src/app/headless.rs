@@ -11,6 +11,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use super::config::Config;
+use super::frame::{Backend, Flow, Steps};
 use crate::control::action::timeline::ActionEvent;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode};
@@ -207,66 +208,44 @@ fn key_steps(ctl: &Controller, ticker: &Ticker, end: f64, max: usize) -> Vec<usi
     keys
 }
 
-/// Replay `frames` (touch frames in picture pixels, times in seconds).
-pub fn run(
-    ch: Arc<Character>,
-    config: &Config,
-    frames: Vec<ScreenFrame>,
-    opts: &Options,
-) -> Result<Summary, HeadlessError> {
-    let mut settings = config.control_settings();
-    if !opts.tracking {
-        settings.settle_s = 0.0;
+/// The headless backend: touches from a recording, every stepped posture
+/// digested and summarised, every `every`-th step (and each key step)
+/// rendered into a PNG.
+struct Replay<'a> {
+    config: &'a Config,
+    opts: &'a Options,
+    touches: Ticker,
+    end: f64,
+    every: usize,
+    key: Vec<usize>,
+    home: crate::control::rig::Orbit,
+    headless: Option<Headless>,
+    summary: Summary,
+    hash: u64,
+    held_ever: BTreeSet<String>,
+    thumbs: Vec<(Image, String, f64)>,
+    times: Vec<f64>,
+}
+
+impl Backend for Replay<'_> {
+    type Error = HeadlessError;
+
+    fn feed(&mut self, ctl: &mut Controller, t: f64) {
+        self.touches.feed(ctl, t);
     }
-    let (pw, ph) = config.display.size();
-    let (ow, oh) = config.display.output_size();
-    let mut ctl = Controller::new(ch, settings, f64::from(pw), f64::from(ph), 0.0);
-    let touch_frames = frames.len();
-    let mut ticker = Ticker::new(frames, opts.tick_hz);
-    let end = (ticker.end() + opts.tail_s).max(opts.until.unwrap_or(0.0));
-    let mut headless = match &opts.out {
-        Some(dir) => {
-            std::fs::create_dir_all(dir.join("frames")).map_err(|source| HeadlessError::Write {
-                path: dir.join("frames"),
-                source,
-            })?;
-            let gpu = Gpu::new(opts.adapter)?;
-            let h = Headless::new(gpu, ow, oh, config.display.samples);
-            tracing::info!(
-                width = ow,
-                height = oh,
-                samples = h.renderer.samples(),
-                "rendering headless"
-            );
-            Some(h)
-        }
-        None => None,
-    };
-    let every = (opts.tick_hz / opts.fps.max(1e-3)).round().max(1.0) as usize;
-    let mut summary = Summary {
-        touch_frames,
-        ..Summary::default()
-    };
-    let mut hash = 0xcbf2_9ce4_8422_2325u64;
-    let mut held_ever = BTreeSet::new();
-    let mut thumbs: Vec<(Image, String, f64)> = Vec::new();
-    let mut times = Vec::new();
-    let key = if opts.out.is_some() {
-        key_steps(&ctl, &ticker, end, opts.sheet_frames)
-    } else {
-        Vec::new()
-    };
-    let home = ctl.rig.orbit;
-    loop {
-        let t = ticker.step(&mut ctl);
+
+    fn frame(&mut self, ctl: &mut Controller, t: f64) -> Result<Flow, HeadlessError> {
+        let summary = &mut self.summary;
         summary.steps += 1;
-        digest(&mut hash, &ctl);
-        if opts.keep_poses {
+        digest(&mut self.hash, ctl);
+        if self.opts.keep_poses {
             summary.poses.push(ctl.pose().clone());
         }
         let held = ctl.held();
         summary.most_held_at_once = summary.most_held_at_once.max(held.len());
-        held_ever.extend(held.iter().map(|r| r.name().to_owned()));
+        self.held_ever
+            .extend(held.iter().map(|r| r.name().to_owned()));
+        let home = self.home;
         if ctl.rig.orbit != home && !matches!(ctl.mode(), Mode::Action(_)) {
             summary.camera_moved |= (ctl.rig.orbit.yaw - home.yaw).abs() > 0.05
                 || (ctl.rig.orbit.distance - home.distance).abs() > 0.05;
@@ -292,30 +271,101 @@ pub fn run(
                 _ => {}
             }
         }
-        if let (Some(h), Some(dir)) = (headless.as_mut(), opts.out.as_ref()) {
-            let is_key = key.binary_search(&summary.steps).is_ok();
-            if summary.steps % every == 0 || is_key {
-                let mut marks = ctl.marks(config.display.trajectories);
-                if config.display.status_line {
-                    marks.status = Some(status(&ctl, t));
+        if let (Some(h), Some(dir)) = (self.headless.as_mut(), self.opts.out.as_ref()) {
+            let is_key = self.key.binary_search(&summary.steps).is_ok();
+            if summary.steps % self.every == 0 || is_key {
+                let display = &self.config.display;
+                let mut marks = ctl.marks(display.trajectories);
+                if display.status_line {
+                    marks.status = Some(status(ctl, t));
                 }
-                let list = super::frame::compose(&ctl, config.display.rotation(), &marks);
+                let list = super::frame::compose(ctl, display.rotation(), &marks);
                 let started = std::time::Instant::now();
                 let img = h.render(&list)?;
-                times.push(started.elapsed().as_secs_f64() * 1e3);
+                self.times.push(started.elapsed().as_secs_f64() * 1e3);
                 let n = summary.frames_written;
                 write(&dir.join(format!("frames/frame-{n:05}.png")), &img)?;
                 if is_key {
-                    thumbs.push((img, label(&ctl, t), t));
+                    self.thumbs.push((img, label(ctl, t), t));
                 }
                 summary.frames_written += 1;
             }
         }
-        if t >= end {
+        if t >= self.end {
             summary.duration_s = t;
-            break;
+            return Ok(Flow::Stop);
         }
+        Ok(Flow::Continue)
     }
+}
+
+/// Replay `frames` (touch frames in picture pixels, times in seconds).
+pub fn run(
+    ch: Arc<Character>,
+    config: &Config,
+    frames: Vec<ScreenFrame>,
+    opts: &Options,
+) -> Result<Summary, HeadlessError> {
+    let mut settings = config.control_settings();
+    if !opts.tracking {
+        settings.settle_s = 0.0;
+    }
+    let (pw, ph) = config.display.size();
+    let (ow, oh) = config.display.output_size();
+    let mut ctl = Controller::new(ch, settings, f64::from(pw), f64::from(ph), 0.0);
+    let touch_frames = frames.len();
+    let ticker = Ticker::new(frames, opts.tick_hz);
+    let end = (ticker.end() + opts.tail_s).max(opts.until.unwrap_or(0.0));
+    let headless = match &opts.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir.join("frames")).map_err(|source| HeadlessError::Write {
+                path: dir.join("frames"),
+                source,
+            })?;
+            let gpu = Gpu::new(opts.adapter)?;
+            let h = Headless::new(gpu, ow, oh, config.display.samples);
+            tracing::info!(
+                width = ow,
+                height = oh,
+                samples = h.renderer.samples(),
+                "rendering headless"
+            );
+            Some(h)
+        }
+        None => None,
+    };
+    let key = if opts.out.is_some() {
+        key_steps(&ctl, &ticker, end, opts.sheet_frames)
+    } else {
+        Vec::new()
+    };
+    let mut replay = Replay {
+        config,
+        opts,
+        touches: ticker,
+        end,
+        every: (opts.tick_hz / opts.fps.max(1e-3)).round().max(1.0) as usize,
+        key,
+        home: ctl.rig.orbit,
+        headless,
+        summary: Summary {
+            touch_frames,
+            ..Summary::default()
+        },
+        hash: 0xcbf2_9ce4_8422_2325u64,
+        held_ever: BTreeSet::new(),
+        thumbs: Vec::new(),
+        times: Vec::new(),
+    };
+    super::frame::run(&mut ctl, &mut Steps::new(opts.tick_hz), &mut replay)?;
+    let Replay {
+        mut summary,
+        hash,
+        held_ever,
+        thumbs,
+        times,
+        ..
+    } = replay;
     summary.parts_held = held_ever.into_iter().collect();
     summary.pose_digest = format!("{hash:016x}");
     if !times.is_empty() {

@@ -49,6 +49,14 @@ impl Ticker {
     pub fn step(&mut self, ctl: &mut Controller) -> f64 {
         self.tick += 1;
         let t = self.time();
+        self.feed(ctl, t);
+        ctl.advance(t);
+        t
+    }
+
+    /// Feed the controller the frames due by `t` (not yet fed), without
+    /// advancing it or the ticker's own time.
+    pub fn feed(&mut self, ctl: &mut Controller, t: f64) {
         while let Some(f) = self.frames.get(self.next) {
             if f.t > t + 1e-9 {
                 break;
@@ -56,7 +64,5 @@ impl Ticker {
             ctl.touch(f);
             self.next += 1;
         }
-        ctl.advance(t);
-        t
     }
 }

@@ -34,7 +34,7 @@ use crate::render::gpu::{AdapterChoice, GpuError};
 use self::attract::Attract;
 pub(crate) use self::input_thread::InputThread;
 use self::timers::{ATTRACT_DELAY_S, Timers};
-use super::frame;
+use super::frame::{self, Backend, Flow, Since};
 
 /// Why the kiosk stopped.
 #[derive(Debug, Error)]
@@ -132,7 +132,7 @@ pub fn run_with_clock(
     let notifier = Notifier::from_env();
     let choice = OutputChoice::from_config(&config.display);
     let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
-    let mut screen = Screen::open(
+    let screen = Screen::open(
         &opts.dri_dir,
         &choice,
         kind,
@@ -151,8 +151,7 @@ pub fn run_with_clock(
         return Err(LiveError::NoDeviceDir(dev_dir.clone()).into());
     }
     let input = InputThread::start(config.clone())?;
-    let start_us = clock.now_us();
-    let seconds = |us: i64| (us - start_us) as f64 / 1e6;
+    let mut frames = Since::new(clock);
     let mut ctl = Controller::new(
         ch,
         config.control_settings(),
@@ -160,44 +159,110 @@ pub fn run_with_clock(
         f64::from(ph),
         0.0,
     );
-    let mut stats = RunStats::default();
-    let mut events = Vec::new();
-    let mut attract: Option<Attract> = None;
-    let mut ready = false;
-    let mut timers = Timers::new(
+    let timers = Timers::new(
         config.kiosk.idle_after_s,
         opts.seconds,
         notifier.watchdog_interval().map(|d| d.as_secs_f64()),
     );
-    let mut last_shown: Option<(crate::character::skeleton::Pose, f64, f64, f64, usize)> = None;
     let frame_s = 1.0 / f64::from(screen.refresh_hz());
-    loop {
-        let t = seconds(clock.now_us());
-        if crate::platform::signals::stop_requested() || timers.stop_due(t) {
-            notifier.notify("STOPPING=1");
+    let mut kiosk = Kiosk {
+        start: frames,
+        screen,
+        input,
+        notifier,
+        config,
+        attract_frames,
+        attract: None,
+        timers,
+        stats: RunStats::default(),
+        events: Vec::new(),
+        last_shown: None,
+        ready: false,
+        frame_s,
+    };
+    frame::run(&mut ctl, &mut frames, &mut kiosk)?;
+    let Kiosk {
+        input,
+        screen,
+        mut stats,
+        ..
+    } = kiosk;
+    input.stop();
+    stats.seconds = frames.now();
+    stats.flips = screen.flips();
+    if stats.frames > 0 {
+        stats.render_ms_mean /= stats.frames as f64;
+    }
+    tracing::info!(
+        seconds = stats.seconds,
+        frames = stats.frames,
+        flips = stats.flips,
+        touch_frames = stats.touch_frames,
+        gpu_rebuilds = stats.gpu_rebuilds,
+        display_losses = stats.display_losses,
+        render_ms_mean = stats.render_ms_mean,
+        render_ms_max = stats.render_ms_max,
+        "stopped"
+    );
+    Ok(stats)
+}
+
+/// What was last shown: the posture, the camera's yaw, pitch and
+/// distance, and how many fingers had marks.
+type Shown = (crate::character::skeleton::Pose, f64, f64, f64, usize);
+
+/// The kiosk's backend of the frame loop: touches from the panels (and
+/// the attract loop when idle), frames to the KMS output.
+struct Kiosk<'a> {
+    /// The frames' time 0, for the events' stamps.
+    start: Since<'a>,
+    screen: Screen,
+    input: InputThread,
+    notifier: Notifier,
+    config: Config,
+    attract_frames: Option<Vec<ScreenFrame>>,
+    attract: Option<Attract>,
+    timers: Timers,
+    stats: RunStats,
+    events: Vec<HubEvent>,
+    last_shown: Option<Shown>,
+    ready: bool,
+    frame_s: f64,
+}
+
+impl Backend for Kiosk<'_> {
+    type Error = RunError;
+
+    fn stop(&mut self, t: f64) -> bool {
+        let stop = crate::platform::signals::stop_requested() || self.timers.stop_due(t);
+        if stop {
+            self.notifier.notify("STOPPING=1");
             tracing::info!("stopping");
-            break;
         }
+        stop
+    }
+
+    fn feed(&mut self, ctl: &mut Controller, t: f64) {
         // Touches: real ones first end the attract loop.
-        input.drain(&mut events);
-        for e in events.drain(..) {
+        self.input.drain(&mut self.events);
+        for e in self.events.drain(..) {
             match e {
                 HubEvent::Touch {
                     device,
                     time_us,
                     mut contacts,
                 } => {
-                    if let Some(mut a) = attract.take() {
+                    if let Some(mut a) = self.attract.take() {
                         tracing::info!("touched: attract loop ends");
                         if let Some(f) = a.lift(t) {
                             ctl.touch(&f);
                         }
                     }
-                    stats.touch_frames += 1;
+                    self.stats.touch_frames += 1;
                     for c in &mut contacts {
                         c.id += u64::from(device) << 32;
                     }
-                    let ft = timers.touch(seconds(time_us), t);
+                    let ft = self.timers.touch(self.start.seconds(time_us), t);
                     ctl.touch(&ScreenFrame { t: ft, contacts });
                 }
                 HubEvent::Added { path, name, .. } => {
@@ -209,33 +274,37 @@ pub fn run_with_clock(
             }
         }
         // Idle: rest, then the attract loop.
-        if timers.rest_due(ctl.idle_s()) {
+        if self.timers.rest_due(ctl.idle_s()) {
             tracing::info!(idle_s = ctl.idle_s(), "nobody touched: back to rest");
             ctl.go_to_rest();
-            attract = attract_frames
+            self.attract = self
+                .attract_frames
                 .as_ref()
                 .map(|frames| Attract::new(frames.clone(), t + ATTRACT_DELAY_S));
         }
-        if let Some(a) = attract.as_mut() {
+        if let Some(a) = self.attract.as_mut() {
             let mut due = Vec::new();
             a.due(t, &mut due);
             for f in &due {
                 ctl.touch(f);
             }
         }
-        ctl.advance(t);
+    }
+
+    fn frame(&mut self, ctl: &mut Controller, t: f64) -> Result<Flow, RunError> {
+        let (screen, timers, stats) = (&mut self.screen, &mut self.timers, &mut self.stats);
         // Show it, unless the display is another program's for now.
         if timers.display_retry_due(t) && screen.reacquire() {
             tracing::info!("display back: showing again");
             timers.display_back();
-            last_shown = None;
+            self.last_shown = None;
         }
         if timers.gpu_retry_due(t) {
             match screen.rebuild() {
                 Ok(()) => {
                     stats.gpu_rebuilds += 1;
                     timers.gpu_back();
-                    last_shown = None;
+                    self.last_shown = None;
                     tracing::info!("GPU device rebuilt");
                 }
                 Err(e) => {
@@ -243,8 +312,9 @@ pub fn run_with_clock(
                 }
             }
         }
+        let display = &self.config.display;
         let orbit = ctl.rig.orbit;
-        let marks = ctl.marks(config.display.trajectories);
+        let marks = ctl.marks(display.trajectories);
         let key = (
             ctl.pose().clone(),
             orbit.yaw,
@@ -252,7 +322,7 @@ pub fn run_with_clock(
             orbit.distance,
             marks.fingers.len(),
         );
-        let changed = last_shown.as_ref().is_none_or(|s| {
+        let changed = self.last_shown.as_ref().is_none_or(|s| {
             !same_pose(&s.0, &key.0)
                 || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
                 || !marks.fingers.is_empty()
@@ -260,10 +330,10 @@ pub fn run_with_clock(
         });
         if timers.can_draw() && !screen.flip_pending() && changed {
             let mut marks = marks;
-            if config.display.status_line {
-                marks.status = status_line(&ctl);
+            if display.status_line {
+                marks.status = status_line(ctl);
             }
-            let list = frame::compose(&ctl, config.display.rotation(), &marks);
+            let list = frame::compose(ctl, display.rotation(), &marks);
             let started = std::time::Instant::now();
             match screen.draw(&list) {
                 Ok(shown) => {
@@ -272,11 +342,12 @@ pub fn run_with_clock(
                         stats.render_ms_mean += ms;
                         stats.render_ms_max = stats.render_ms_max.max(ms);
                         stats.frames += 1;
-                        last_shown = Some(key);
-                        if !ready && screen.fd().is_none() {
+                        self.last_shown = Some(key);
+                        if !self.ready && screen.fd().is_none() {
                             // The swapchain shows it at the next vblank.
-                            ready = true;
-                            notifier.notify("READY=1\nSTATUS=showing the character");
+                            self.ready = true;
+                            self.notifier
+                                .notify("READY=1\nSTATUS=showing the character");
                             tracing::info!(
                                 output = screen.name(),
                                 "first frame queued to the display: ready"
@@ -296,41 +367,25 @@ pub fn run_with_clock(
                 Err(e) => return Err(e.into()),
             }
         }
-        if !ready && screen.flip_pending() {
+        if !self.ready && screen.flip_pending() {
             // The first frame reaches the screen at this flip.
             if screen.wait_flip(Duration::from_millis(500))? {
-                ready = true;
-                notifier.notify("READY=1\nSTATUS=showing the character");
+                self.ready = true;
+                self.notifier
+                    .notify("READY=1\nSTATUS=showing the character");
                 tracing::info!(output = screen.name(), "first frame on screen: ready");
             }
         }
         if timers.watchdog_due(t) {
-            notifier.notify("WATCHDOG=1");
+            self.notifier.notify("WATCHDOG=1");
         }
         // Wait for a flip, a touch, or the next frame's time; longer when
         // nothing moves (no busy-wait when idle).
-        let moving = changed || attract.is_some();
-        let wait_s = timers::wait_s(moving, screen.fd().is_none(), frame_s);
-        wait(&input, &mut screen, Duration::from_secs_f64(wait_s))?;
+        let moving = changed || self.attract.is_some();
+        let wait_s = timers::wait_s(moving, screen.fd().is_none(), self.frame_s);
+        wait(&self.input, screen, Duration::from_secs_f64(wait_s))?;
+        Ok(Flow::Continue)
     }
-    input.stop();
-    stats.seconds = seconds(clock.now_us());
-    stats.flips = screen.flips();
-    if stats.frames > 0 {
-        stats.render_ms_mean /= stats.frames as f64;
-    }
-    tracing::info!(
-        seconds = stats.seconds,
-        frames = stats.frames,
-        flips = stats.flips,
-        touch_frames = stats.touch_frames,
-        gpu_rebuilds = stats.gpu_rebuilds,
-        display_losses = stats.display_losses,
-        render_ms_mean = stats.render_ms_mean,
-        render_ms_max = stats.render_ms_max,
-        "stopped"
-    );
-    Ok(stats)
 }
 
 /// The kiosk's status line: the action and its progress, or the held
