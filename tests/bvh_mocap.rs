@@ -153,3 +153,17 @@ fn export_then_import_keeps_joint_positions_within_a_tenth_of_a_millimetre() {
     }
     assert!(checked >= 60);
 }
+
+#[test]
+fn clips_that_differ_by_a_top_bone_import_to_one_skeleton() {
+    // CMU 002_01 carries `RL_BoneRoot` above `CC_Base_Hip`; 005_01 does
+    // not. Folded into the bone below it, both have the same hierarchy, so
+    // they can share a library.
+    let dir = common::shared_dir().join("mocap/cmu-cc");
+    let with = import(&dir.join("002_01.bvh"));
+    let without = import(&dir.join("005_01.bvh"));
+    let names =
+        |c: &Clip| -> Vec<String> { c.skeleton.joints.iter().map(|j| j.name.clone()).collect() };
+    assert_eq!(names(&with), names(&without));
+    assert_eq!(with.skeleton.joints[0].name, "CC_Base_Hip");
+}

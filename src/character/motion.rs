@@ -213,7 +213,24 @@ impl Clip {
         if frames.is_empty() {
             return Err(ClipError::NoFrames);
         }
-        let roles = roles::fill(&skeleton, &settings.roles)?;
+        let mut channels = channels;
+        let mut roles = roles::fill(&skeleton, &settings.roles)?;
+        // Bones above the pelvis (a static `joint_Root`, `RL_BoneRoot`, an
+        // armature's turned root) are folded into it: the pelvis carries
+        // the character's placement and facing, whichever bone moved.
+        let mut folded = Vec::new();
+        while let Some(name) = fold_top_bone(
+            &mut skeleton,
+            &mut channels,
+            &mut frames,
+            roles.get(Role::Pelvis),
+        ) {
+            folded.push(name);
+            roles = roles::fill(&skeleton, &settings.roles)?;
+        }
+        if !folded.is_empty() {
+            tracing::debug!(bones = ?folded, "top bones above the pelvis folded into it");
+        }
         let dropped_tpose = first_frame_is_tpose(&skeleton, &roles, &frames);
         if dropped_tpose {
             frames.remove(0);
@@ -252,5 +269,158 @@ impl Clip {
             roles,
             height_m: height_units * scale,
         })
+    }
+}
+
+/// Fold the root into its only child when the pelvis hangs below it: every
+/// frame's child gets the root's motion composed into its own, so every
+/// remaining joint keeps its world position and rotation, and the root's
+/// name is returned. Nothing changes (and `None` is returned) when the
+/// root is the pelvis or has several children.
+fn fold_top_bone(
+    skeleton: &mut Skeleton,
+    channels: &mut Vec<Vec<super::bvh::Channel>>,
+    frames: &mut [Pose],
+    pelvis: usize,
+) -> Option<String> {
+    if pelvis == 0 || skeleton.len() < 2 {
+        return None;
+    }
+    let children: Vec<usize> = (1..skeleton.len())
+        .filter(|&j| skeleton.joints[j].parent == Some(0))
+        .collect();
+    let &[child] = children.as_slice() else {
+        return None;
+    };
+    // The child is the root's first descendant; every other joint hangs
+    // below it.
+    if child != 1 {
+        return None;
+    }
+    for f in frames.iter_mut() {
+        let (p, r) = (f.translations[0], f.rotations[0]);
+        let (t, q) = (f.translations[1], f.rotations[1]);
+        f.translations[1] = p + r * t;
+        f.rotations[1] = (r * q).normalize();
+        f.translations.remove(0);
+        f.rotations.remove(0);
+    }
+    let root = skeleton.joints.remove(0);
+    for j in &mut skeleton.joints {
+        j.parent = j.parent.and_then(|p| p.checked_sub(1));
+    }
+    skeleton.joints[0].offset += root.offset;
+    channels.remove(0);
+    // The new root carries the placement: it translates.
+    if let Some(c) = channels.first_mut() {
+        use super::bvh::Channel::{Xposition, Yposition, Zposition};
+        if !c
+            .iter()
+            .any(|ch| matches!(ch, Xposition | Yposition | Zposition))
+        {
+            c.splice(0..0, [Xposition, Yposition, Zposition]);
+        }
+    }
+    Some(root.name)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DQuat;
+
+    use super::*;
+    use crate::character::bvh::Channel;
+    use crate::character::skeleton::Joint;
+
+    fn joint(name: &str, parent: Option<usize>, offset: DVec3) -> Joint {
+        Joint {
+            name: name.to_owned(),
+            parent,
+            offset,
+            end_site: None,
+        }
+    }
+
+    #[test]
+    fn a_top_bone_folds_into_the_pelvis_keeping_every_joint_where_it_was() {
+        let mut skeleton = Skeleton {
+            joints: vec![
+                joint("joint_Root", None, DVec3::ZERO),
+                joint("Hips", Some(0), DVec3::new(0.1, 0.9, -4.5)),
+                joint("Spine", Some(1), DVec3::new(0.0, 0.2, 0.0)),
+                joint("LeftUpLeg", Some(1), DVec3::new(0.1, -0.1, 0.0)),
+            ],
+        };
+        // The top bone turned (an armature's Z-up to Y-up) and moving.
+        let frames: Vec<Pose> = (0..3)
+            .map(|i| {
+                let i = f64::from(i);
+                Pose {
+                    translations: vec![
+                        DVec3::new(i, 0.0, 0.0),
+                        DVec3::new(0.1, 0.9 + 0.1 * i, -4.5),
+                        DVec3::new(0.0, 0.2, 0.0),
+                        DVec3::new(0.1, -0.1, 0.0),
+                    ],
+                    rotations: vec![
+                        DQuat::from_rotation_x(-std::f64::consts::FRAC_PI_2),
+                        DQuat::from_rotation_y(0.3 * i),
+                        DQuat::from_rotation_z(0.1 * i),
+                        DQuat::IDENTITY,
+                    ],
+                }
+            })
+            .collect();
+        let before: Vec<_> = frames
+            .iter()
+            .map(|f| forward_kinematics(&skeleton, f))
+            .collect();
+        let mut channels = vec![
+            vec![Channel::Zrotation, Channel::Xrotation, Channel::Yrotation],
+            vec![Channel::Zrotation, Channel::Xrotation, Channel::Yrotation],
+            vec![Channel::Zrotation],
+            vec![Channel::Zrotation],
+        ];
+        let mut after = frames.clone();
+        let name = fold_top_bone(&mut skeleton, &mut channels, &mut after, 1);
+        assert_eq!(name.as_deref(), Some("joint_Root"));
+        assert_eq!(skeleton.len(), 3);
+        assert_eq!(skeleton.joints[0].name, "Hips");
+        assert_eq!(skeleton.joints[0].parent, None);
+        assert_eq!(skeleton.joints[2].parent, Some(0));
+        assert!(matches!(channels[0][0], Channel::Xposition), "{channels:?}");
+        for (b, f) in before.iter().zip(&after) {
+            let w = forward_kinematics(&skeleton, f);
+            for j in 0..3 {
+                assert!(w.positions[j].abs_diff_eq(b.positions[j + 1], 1e-12));
+                assert!(w.rotations[j].abs_diff_eq(b.rotations[j + 1], 1e-12));
+            }
+        }
+        // The pelvis is the root now: nothing more to fold.
+        assert_eq!(
+            fold_top_bone(&mut skeleton, &mut channels, &mut after, 0),
+            None
+        );
+    }
+
+    #[test]
+    fn a_root_with_several_children_stays() {
+        let mut skeleton = Skeleton {
+            joints: vec![
+                joint("root", None, DVec3::ZERO),
+                joint("Hips", Some(0), DVec3::Y),
+                joint("prop", Some(0), DVec3::X),
+            ],
+        };
+        let mut frames = vec![Pose {
+            translations: vec![DVec3::ZERO, DVec3::Y, DVec3::X],
+            rotations: vec![DQuat::IDENTITY; 3],
+        }];
+        let mut channels = vec![Vec::new(); 3];
+        assert_eq!(
+            fold_top_bone(&mut skeleton, &mut channels, &mut frames, 1),
+            None
+        );
+        assert_eq!(skeleton.len(), 3);
     }
 }
