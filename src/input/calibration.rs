@@ -164,12 +164,18 @@ impl Calibration {
         self.size
     }
 
-    /// Raw → 0..1 over the absinfo range (before the matrix).
+    /// Raw → 0..1 over the absinfo range (before the matrix). Computed in
+    /// `f64`, where every `i32` and every difference of two is exact, so an
+    /// axis declared over the whole `i32` range cannot wrap.
     #[must_use]
     pub fn normalise(&self, p: RawPoint) -> NormPoint {
-        let nx = f64::from(p.x - self.x_range.0) / f64::from(self.x_range.1 - self.x_range.0);
-        let ny = f64::from(p.y - self.y_range.0) / f64::from(self.y_range.1 - self.y_range.0);
-        NormPoint { x: nx, y: ny }
+        let along = |v: i32, (min, max): (i32, i32)| {
+            (f64::from(v) - f64::from(min)) / (f64::from(max) - f64::from(min))
+        };
+        NormPoint {
+            x: along(p.x, self.x_range),
+            y: along(p.y, self.y_range),
+        }
     }
 
     /// Raw device units → screen pixels, clamped to the screen.
@@ -409,6 +415,26 @@ mod tests {
             _ => (1080, 1920),
         };
         Calibration::new(&axis(4095), &axis(4095), Matrix::IDENTITY, rotation, size).unwrap()
+    }
+
+    #[test]
+    fn an_axis_over_the_whole_i32_range_does_not_wrap() {
+        let full = AbsInfo {
+            minimum: i32::MIN,
+            maximum: i32::MAX,
+            ..AbsInfo::default()
+        };
+        let c =
+            Calibration::new(&full, &full, Matrix::IDENTITY, Rotation::R0, (1000, 1000)).unwrap();
+        let mid = c.to_screen(RawPoint::new(0, 0));
+        assert!(
+            (mid.x - 500.0).abs() < 1e-6 && (mid.y - 500.0).abs() < 1e-6,
+            "{mid:?}"
+        );
+        assert_eq!(
+            c.to_screen(RawPoint::new(i32::MIN, i32::MAX)),
+            ScreenPoint::new(0.0, 1000.0)
+        );
     }
 
     #[test]

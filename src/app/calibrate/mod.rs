@@ -301,8 +301,8 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         .position_axes()
         .ok_or_else(|| CalibrateError::Device(format!("{dev_name} has no position axes")))?;
     let range = (
-        f64::from(xa.maximum - xa.minimum),
-        f64::from(ya.maximum - ya.minimum),
+        f64::from(xa.maximum) - f64::from(xa.minimum),
+        f64::from(ya.maximum) - f64::from(ya.minimum),
     );
     let targets: Vec<ScreenPoint> = TARGETS
         .iter()
