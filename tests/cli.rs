@@ -257,3 +257,56 @@ fn list_outputs_without_drm_devices_exits_69_and_says_why() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("card0"), "{err}");
 }
+
+#[test]
+fn demo_refuses_a_frame_rate_it_cannot_honour_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for fps in ["0", "1000", "-3"] {
+        let flag = format!("--fps={fps}");
+        let out = marionette(&["demo", "--out", dir.path().to_str().unwrap(), &flag]);
+        assert_eq!(out.status.code(), Some(2), "--fps {fps}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("--fps must be above 0 and at most 30"),
+            "{stderr}"
+        );
+        assert!(
+            out.stdout.is_empty(),
+            "--fps {fps} printed {:?}",
+            out.stdout
+        );
+    }
+    assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none());
+}
+
+#[test]
+fn replay_into_a_used_folder_keeps_only_its_own_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    std::fs::write(frames.join("frame-99999.png"), b"old").unwrap();
+    std::fs::write(frames.join("notes.txt"), b"the operator's").unwrap();
+    let out = marionette(&[
+        "replay",
+        &recording("atmel-maxtouch.1-finger-drag-up-down.evemu"),
+        "--headless",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--fps",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        !frames.join("frame-99999.png").exists(),
+        "an old frame stayed"
+    );
+    assert!(
+        frames.join("notes.txt").exists(),
+        "another file was removed"
+    );
+    assert!(frames.join("frame-00000.png").exists());
+}

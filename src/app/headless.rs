@@ -299,6 +299,37 @@ impl Backend for Replay<'_> {
     }
 }
 
+/// Remove the frames an earlier run left in `frames` (`frame-NNNNN.png`
+/// only: nothing else in the folder is touched), so that the folder holds
+/// this run's frames alone.
+fn clear_old_frames(frames: &Path) -> Result<(), HeadlessError> {
+    let err = |source| HeadlessError::Write {
+        path: frames.to_owned(),
+        source,
+    };
+    let mut removed = 0usize;
+    for entry in std::fs::read_dir(frames).map_err(err)? {
+        let path = entry.map_err(err)?.path();
+        let ours = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| n.strip_prefix("frame-"))
+            .and_then(|n| n.strip_suffix(".png"))
+            .is_some_and(|n| n.len() == 5 && n.bytes().all(|b| b.is_ascii_digit()));
+        if ours {
+            std::fs::remove_file(&path).map_err(|source| HeadlessError::Write {
+                path: path.clone(),
+                source,
+            })?;
+            removed += 1;
+        }
+    }
+    if removed > 0 {
+        tracing::info!(removed, folder = %frames.display(), "frames of an earlier run removed");
+    }
+    Ok(())
+}
+
 /// Replay `frames` (touch frames in picture pixels, times in seconds).
 pub fn run(
     ch: Arc<Character>,
@@ -322,6 +353,7 @@ pub fn run(
                 path: dir.join("frames"),
                 source,
             })?;
+            clear_old_frames(&dir.join("frames"))?;
             let gpu = Gpu::new(opts.adapter)?;
             let h = Headless::new(gpu, ow, oh, config.display.samples);
             tracing::info!(

@@ -20,6 +20,7 @@ pub(super) fn character(
 /// A recording through the whole pipeline into images.
 pub(super) fn show(config: &Config, rec: &Recording, out: &Path, fps: f64) -> Result<(), Failure> {
     use crate::app::headless;
+    check_fps(fps)?;
     let ch = character(config)?;
     let frames = pipeline::replay(rec, &config.input, config.display.picture())
         .map_err(|e| Failure::new(exit::DATAERR, e))?;
@@ -33,7 +34,22 @@ pub(super) fn show(config: &Config, rec: &Recording, out: &Path, fps: f64) -> Re
     writeln!(std::io::stdout(), "{summary}").map_err(stdout_error)
 }
 
+/// Frames are written at most once per controller step.
+fn check_fps(fps: f64) -> Result<(), Failure> {
+    let tick_hz = crate::app::headless::Options::default().tick_hz;
+    if fps > 0.0 && fps <= tick_hz {
+        return Ok(());
+    }
+    Err(Failure::new(
+        exit::USAGE,
+        format!(
+            "--fps must be above 0 and at most {tick_hz} (the controller's steps per second of recording), found {fps}"
+        ),
+    ))
+}
+
 pub(super) fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Failure> {
+    check_fps(fps)?;
     // The recording is built into the binary: the demo works from anywhere.
     let rec = Recording::parse(DEMO_RECORDING, Path::new("assets/recordings/demo.evemu"))?;
     let (summary, _) = pipeline::summarize(&rec);
