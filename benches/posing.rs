@@ -18,9 +18,10 @@ use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
+use marionette::control::posing::constraint::{Constraint, SynthOptions, Target};
 use marionette::control::posing::model::{LearnedModel, posing_samples};
 use marionette::control::posing::sample::Placement;
-use marionette::control::posing::synth::{Constraint, SynthOptions, Target, select, synthesize};
+use marionette::control::posing::synth::{select, synthesize};
 
 fn posing(c: &mut Criterion) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/libraries/cmu-cc");

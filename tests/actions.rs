@@ -230,7 +230,7 @@ fn a_punch_follows_the_finger_then_finishes_by_itself() {
     use marionette::character::skeleton::forward_kinematics;
     use marionette::control::action::player::ActionPlayer;
     use marionette::control::action::timeline::{ActionEvent, Status};
-    use marionette::control::posing::synth::{Constraint, Target};
+    use marionette::control::posing::constraint::{Constraint, Target};
     let (lib, actions) = setup();
     let punch = actions
         .iter()

@@ -16,14 +16,13 @@ use marionette::character::library::Library;
 use marionette::character::motion::Clip;
 use marionette::character::roles::{Role, RoleMap};
 use marionette::character::skeleton::{Skeleton, forward_kinematics};
+use marionette::control::posing::constraint::{Constraint, SynthOptions, Target};
 use marionette::control::posing::fit::refit_limbs;
 use marionette::control::posing::ik::two_bone;
 use marionette::control::posing::model::{LearnedModel, posing_samples};
 use marionette::control::posing::pick::pick;
 use marionette::control::posing::sample::{Anchor, Placement};
-use marionette::control::posing::synth::{
-    Constraint, SynthOptions, Target, blend, choose, select, synthesize,
-};
+use marionette::control::posing::synth::{blend, choose, select, synthesize};
 use marionette::tools::eval::posing as eval;
 use marionette::tools::eval::posing::{Method, Mode};
 

@@ -122,7 +122,7 @@ fn rest_pose() {
 
 /// A posture from the library with two held parts, finger marks, both
 /// kinds of trajectories and a status line.
-fn held_scene(view: &View) -> marionette::render::renderer::DrawList {
+fn held_scene(view: &View) -> marionette::render::mesh::DrawList {
     let lib = library();
     let clip = &lib.clips["pose_reach_front_right.bvh"];
     let pose = &clip.frames[clip.frames.len() / 2];

@@ -11,7 +11,7 @@
 use crate::control::controller::Controller;
 use crate::control::marks::Marks;
 use crate::platform::clock::Clock;
-use crate::render::renderer::DrawList;
+use crate::render::mesh::DrawList;
 use crate::render::scene::{self, View};
 use crate::screen::Rotation;
 

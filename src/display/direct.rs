@@ -13,7 +13,8 @@ use super::present::{Found, OutputChoice, PresentError, become_master, find_outp
 use crate::platform::kms::Card;
 use crate::render::gpu::Gpu;
 use crate::render::headless::Image;
-use crate::render::renderer::{DrawList, Renderer};
+use crate::render::mesh::DrawList;
+use crate::render::renderer::Renderer;
 
 /// The Vulkan display plane the picture goes on (the primary plane).
 const PLANE: u32 = 0;

@@ -11,7 +11,7 @@ use super::direct::DirectPresenter;
 use super::present::{CopyPresenter, OutputChoice, PresentError, PresenterKind};
 use crate::render::gpu::{AdapterChoice, Gpu};
 use crate::render::headless::{Headless, Image};
-use crate::render::renderer::DrawList;
+use crate::render::mesh::DrawList;
 
 /// What drives the output.
 pub enum Presenter {

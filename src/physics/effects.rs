@@ -16,9 +16,10 @@
 
 use glam::{DQuat, DVec3};
 
-use super::ragdoll::{Region, Segment, SimState};
+use super::ragdoll::{Segment, SimState};
 use crate::character::skeleton::rotation_difference;
 use crate::character::skeleton::{Pose, Skeleton, WorldPose};
+use crate::physics::body::Region;
 
 /// The paper's reference frame time for s1 and s2 (s).
 pub const REFERENCE_FRAME_S: f64 = 1.0 / 30.0;

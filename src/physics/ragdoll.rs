@@ -15,47 +15,9 @@
 use glam::{DQuat, DVec3, Quat, Vec3};
 use rapier3d::prelude::*;
 
-use super::body::{Hinge, SegmentDef, segment_defs};
-use crate::character::roles::{Role, RoleMap};
+use super::body::{Hinge, Region, SegmentDef, segment_defs};
+use crate::character::roles::RoleMap;
 use crate::character::skeleton::{Skeleton, WorldPose};
-
-/// The five regions of the paper: physical effects apply per region.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Region {
-    Torso,
-    LeftArm,
-    RightArm,
-    LeftLeg,
-    RightLeg,
-}
-
-impl Region {
-    pub const ALL: [Region; 5] = [
-        Region::Torso,
-        Region::LeftArm,
-        Region::RightArm,
-        Region::LeftLeg,
-        Region::RightLeg,
-    ];
-
-    /// Index into [`Region::ALL`].
-    #[must_use]
-    pub fn index(self) -> usize {
-        self as usize
-    }
-
-    /// The region a role's part belongs to (the pelvis: the torso).
-    #[must_use]
-    pub fn of(role: Role) -> Self {
-        match role {
-            Role::LeftShoulder | Role::LeftElbow | Role::LeftHand => Region::LeftArm,
-            Role::RightShoulder | Role::RightElbow | Role::RightHand => Region::RightArm,
-            Role::LeftHip | Role::LeftKnee | Role::LeftFoot => Region::LeftLeg,
-            Role::RightHip | Role::RightKnee | Role::RightFoot => Region::RightLeg,
-            Role::Pelvis | Role::Chest | Role::Neck | Role::Head => Region::Torso,
-        }
-    }
-}
 
 /// How the ragdoll follows the target.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use super::renderer::DrawList;
+use crate::render::mesh::DrawList;
 
 /// A pixel rectangle, `x1`/`y1` exclusive.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

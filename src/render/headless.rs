@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use super::gpu::{Gpu, GpuError};
-use super::renderer::{DrawList, Renderer};
+use super::renderer::Renderer;
+use crate::render::mesh::DrawList;
 
 /// An 8-bit RGBA image, sRGB encoded, rows top to bottom.
 #[derive(Clone, Debug, PartialEq, Eq)]

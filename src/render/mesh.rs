@@ -4,7 +4,7 @@
 //! uploads them.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 
 /// A lit 3-D vertex. `color.a` is how strongly the surface glows (0 for a
 /// plain surface, 1 for a highlighted body part).
@@ -346,4 +346,28 @@ mod tests {
             .sum();
         assert!((area - lit as f32).abs() < 1e-4);
     }
+}
+
+/// Everything one frame draws, in world and picture coordinates.
+#[derive(Clone, Debug, Default)]
+pub struct DrawList {
+    /// World → clip, the output rotation folded in.
+    pub view_proj: Mat4,
+    /// Picture pixels → clip, the output rotation folded in.
+    pub screen: Mat4,
+    pub eye: Vec3,
+    /// Unit vector towards the light.
+    pub light: Vec3,
+    /// Linear RGB of the background.
+    pub background: [f32; 3],
+    /// Distance (m) from the eye at which the floor starts fading.
+    pub fog_start: f32,
+    /// Draw the tiled floor and the character's shadow on it.
+    pub floor: bool,
+    /// Lit meshes: the character, or boxes.
+    pub body: Mesh,
+    /// What casts the shadow on the floor (a coarse body).
+    pub shadow: Mesh,
+    /// Marks, trajectories and text over the picture.
+    pub overlay: Overlay,
 }

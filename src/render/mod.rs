@@ -7,6 +7,6 @@ pub(crate) mod contact;
 pub(crate) mod damage;
 pub mod gpu;
 pub mod headless;
-pub(crate) mod mesh;
+pub mod mesh;
 pub mod renderer;
 pub mod scene;

@@ -8,31 +8,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::damage::{Rect, damage};
 use super::gpu::{Gpu, GrowBuffer};
-use super::mesh::{Mesh, Overlay, Vertex2, Vertex3};
-
-/// Everything one frame draws, in world and picture coordinates.
-#[derive(Clone, Debug, Default)]
-pub struct DrawList {
-    /// World → clip, the output rotation folded in.
-    pub view_proj: Mat4,
-    /// Picture pixels → clip, the output rotation folded in.
-    pub screen: Mat4,
-    pub eye: Vec3,
-    /// Unit vector towards the light.
-    pub light: Vec3,
-    /// Linear RGB of the background.
-    pub background: [f32; 3],
-    /// Distance (m) from the eye at which the floor starts fading.
-    pub fog_start: f32,
-    /// Draw the tiled floor and the character's shadow on it.
-    pub floor: bool,
-    /// Lit meshes: the character, or boxes.
-    pub body: Mesh,
-    /// What casts the shadow on the floor (a coarse body).
-    pub shadow: Mesh,
-    /// Marks, trajectories and text over the picture.
-    pub overlay: Overlay,
-}
+use super::mesh::{DrawList, Mesh, Vertex2, Vertex3};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]

@@ -7,11 +7,11 @@
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use super::mesh::{Mesh, Overlay, text_width};
-use super::renderer::DrawList;
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
 use crate::control::marks::{FingerUse, Marks};
+use crate::render::mesh::DrawList;
 use crate::screen::Rotation;
 
 /// Linear RGB of the background the floor fades into.

@@ -12,10 +12,11 @@ use super::model::ActionModel;
 use super::timeline::{ActionEvent, ActionTimeline, Drive, Status};
 use crate::character::library::Library;
 use crate::character::skeleton::Pose;
+use crate::control::posing::constraint::{Constraint, SynthOptions};
 use crate::control::posing::ik::apply_ik;
 use crate::control::posing::model::LearnedModel;
 use crate::control::posing::sample::{Placement, samples_of};
-use crate::control::posing::synth::{Constraint, SynthOptions, blend, choose};
+use crate::control::posing::synth::{blend, choose};
 
 /// An action being played.
 #[derive(Clone, Debug)]

@@ -7,8 +7,8 @@ use glam::DVec3;
 use super::{Controller, FOOT_CREEP_M_S, GROUND_CONTACT_M};
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
+use crate::physics::body::Region;
 use crate::physics::effects::free_regions;
-use crate::physics::ragdoll::Region;
 
 impl Controller {
     /// Physics-based tracking: step the ragdoll towards the target and add

@@ -5,10 +5,11 @@
 
 use glam::{DQuat, DVec3};
 
+use super::constraint::{Constraint, SynthOptions, Target, localize};
 use super::limbs::{self, limb_index};
 use super::model::LearnedModel;
+use super::rank::smallest;
 use super::sample::Placement;
-use super::synth::{Constraint, SynthOptions, Target, localize, smallest};
 use crate::character::camera::HalfLine;
 use crate::character::roles::RoleMap;
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};

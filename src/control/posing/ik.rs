@@ -4,7 +4,7 @@
 
 use glam::{DQuat, DVec3};
 
-use super::synth::Constraint;
+use super::constraint::Constraint;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 

@@ -9,12 +9,14 @@
 //! - [`synth`]: synthesis from half-line or point constraints, CCD IK.
 //! - [`pick`]: the body part under a screen point.
 
+pub mod constraint;
 pub mod fit;
 pub mod ik;
 pub(crate) mod limbs;
 pub(crate) mod mds;
 pub mod model;
 pub mod pick;
+pub(crate) mod rank;
 pub(crate) mod reach;
 pub mod sample;
 pub mod synth;

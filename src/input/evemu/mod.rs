@@ -20,8 +20,6 @@ use thiserror::Error;
 
 mod parse;
 
-use self::parse::Parser;
-
 use super::device::{AbsInfo, DeviceDescription, InputId};
 use super::event::{
     ABS_CNT, EV_ABS, EV_CNT, EV_SYN, INPUT_PROP_CNT, RawEvent, SYN_MT_REPORT, code_count,
@@ -88,25 +86,6 @@ impl Recording {
             (Some(a), Some(b)) => (b.time_us - a.time_us) as f64 / 1e6,
             _ => 0.0,
         }
-    }
-
-    /// Read a recording from a file.
-    pub fn read_file(path: &Path) -> Result<Self, EvemuError> {
-        let bytes = std::fs::read(path).map_err(|source| EvemuError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        let text = String::from_utf8_lossy(&bytes);
-        Self::parse(&text, path)
-    }
-
-    /// Parse recording text; `path` is used only in messages.
-    pub fn parse(text: &str, path: &Path) -> Result<Self, EvemuError> {
-        let mut p = Parser::new(path);
-        for (i, raw_line) in text.lines().enumerate() {
-            p.line(i + 1, raw_line)?;
-        }
-        p.finish()
     }
 
     /// Write this recording in evemu 1.3 format.

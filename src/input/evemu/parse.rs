@@ -1,10 +1,10 @@
-//! The reader: a recording's lines, one at a time, into a device
-//! description and events, every malformed line an [`EvemuError`] that
-//! names it.
+//! The reader: [`Recording::read_file`] and [`Recording::parse`] take a
+//! recording's lines one at a time into a device description and events,
+//! every malformed line an [`EvemuError`] that names it.
 
 use super::*;
 
-pub(super) struct Parser<'a> {
+struct Parser<'a> {
     path: &'a Path,
     rec: Recording,
     prop_bytes: usize,
@@ -14,7 +14,7 @@ pub(super) struct Parser<'a> {
 
 impl<'a> Parser<'a> {
     /// A parser at the start of a file; `path` is for messages.
-    pub(super) fn new(path: &'a Path) -> Self {
+    fn new(path: &'a Path) -> Self {
         Self {
             path,
             rec: Recording {
@@ -35,7 +35,7 @@ impl<'a> Parser<'a> {
         }
     }
 
-    pub(super) fn line(&mut self, n: usize, raw: &str) -> Result<(), EvemuError> {
+    fn line(&mut self, n: usize, raw: &str) -> Result<(), EvemuError> {
         let line = raw.trim_end_matches(['\r', '\n']);
         let trimmed = line.trim_start();
         if trimmed.is_empty() {
@@ -292,7 +292,7 @@ impl<'a> Parser<'a> {
         Ok(())
     }
 
-    pub(super) fn finish(mut self) -> Result<Recording, EvemuError> {
+    fn finish(mut self) -> Result<Recording, EvemuError> {
         if !self.seen_description {
             return Err(EvemuError::NoDescription {
                 path: self.path.to_owned(),
@@ -367,6 +367,27 @@ pub(super) fn parse_time(s: &str) -> Option<i64> {
     let sec: i64 = sec.parse().ok()?;
     let usec: i64 = usec.parse().ok()?;
     sec.checked_mul(1_000_000)?.checked_add(usec)
+}
+
+impl Recording {
+    /// Read a recording from a file.
+    pub fn read_file(path: &Path) -> Result<Self, EvemuError> {
+        let bytes = std::fs::read(path).map_err(|source| EvemuError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let text = String::from_utf8_lossy(&bytes);
+        Self::parse(&text, path)
+    }
+
+    /// Parse recording text; `path` is used only in messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, EvemuError> {
+        let mut p = Parser::new(path);
+        for (i, raw_line) in text.lines().enumerate() {
+            p.line(i + 1, raw_line)?;
+        }
+        p.finish()
+    }
 }
 
 #[cfg(test)]

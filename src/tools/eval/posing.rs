@@ -17,10 +17,11 @@ use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::character::skeleton::{Skeleton, forward_kinematics};
+use crate::control::posing::constraint::{Constraint, SynthOptions, Target};
 use crate::control::posing::ik::apply_ik;
 use crate::control::posing::model::LearnedModel;
 use crate::control::posing::sample::{Placement, pose_of};
-use crate::control::posing::synth::{Constraint, SynthOptions, Target, synthesize};
+use crate::control::posing::synth::synthesize;
 
 /// The order in which parts are constrained.
 pub const PARTS: [Role; 5] = [
