@@ -107,10 +107,14 @@ sleep 3; echo "MARK rest"; sleep 2
 $m play /drag.evemu --settle-ms 800 2> /tmp/play1.log &
 sleep 2; echo "MARK posed1"; sleep 1; echo "MARK posed2"; sleep 1; echo "MARK posed3"
 wait $!; echo "play1 rc=$?" >> /tmp/rc
+# The finger has lifted and the pose holds: a last look, for a CPU renderer
+# whose first frame with overlays came after the grabs above.
+sleep 1; echo "MARK posed4"
 sleep 3; echo "MARK before-replug"; sleep 2
 $m play /drag.evemu --settle-ms 800 2> /tmp/play2.log &
 sleep 2; echo "MARK replugged1"; sleep 1; echo "MARK replugged2"; sleep 1; echo "MARK replugged3"
 wait $!; echo "play2 rc=$?" >> /tmp/rc
+sleep 1; echo "MARK replugged4"
 sleep 1
 read up0 rest < /proc/uptime
 kill -TERM $pid

@@ -93,10 +93,14 @@ sleep 4; say "MARK sd-ready"; sleep 2
 marionette play /root/drag.evemu --settle-ms 800 2> /tmp/play1.log &
 sleep 2; say "MARK sd-posed1"; sleep 1; say "MARK sd-posed2"; sleep 1; say "MARK sd-posed3"
 wait $!; echo "play1 rc=$?" >> /tmp/rc
+# The finger has lifted and the pose holds: a last look, for a CPU renderer
+# whose first frame with overlays came after the grabs above.
+sleep 1; say "MARK sd-posed4"
 sleep 3; say "MARK sd-before-replug"; sleep 2
 marionette play /root/drag.evemu --settle-ms 800 2> /tmp/play2.log &
 sleep 2; say "MARK sd-replugged1"; sleep 1; say "MARK sd-replugged2"; sleep 1; say "MARK sd-replugged3"
 wait $!; echo "play2 rc=$?" >> /tmp/rc
+sleep 1; say "MARK sd-replugged4"
 old=$(state MainPID)
 echo "killing $old at $(up) s" >> /tmp/rc
 kill -KILL "$old"

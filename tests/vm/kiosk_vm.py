@@ -47,8 +47,8 @@ for name, text in [("forced direct", direct), ("kiosk", log)]:
 if log.count("touchscreen added") < 2:
     failures.append("the replugged panel was not picked up again")
 screens = {}
-for name in ["rest", "posed1", "posed2", "posed3", "before-replug",
-             "replugged1", "replugged2", "replugged3"]:
+for name in ["rest", "posed1", "posed2", "posed3", "posed4", "before-replug",
+             "replugged1", "replugged2", "replugged3", "replugged4"]:
     path = os.path.join(out, f"{name}.ppm")
     if not os.path.exists(path):
         failures.append(f"no screen grabbed at '{name}'")

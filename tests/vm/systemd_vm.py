@@ -41,8 +41,9 @@ for want in ['presenter="copy"', "first frame on screen", "touchscreen added",
     if want not in journal:
         failures.append(f"expected '{want}' in the journal")
 screens = {}
-for name in ["sd-ready", "sd-posed1", "sd-posed2", "sd-posed3", "sd-before-replug",
-             "sd-replugged1", "sd-replugged2", "sd-replugged3", "sd-restarted"]:
+for name in ["sd-ready", "sd-posed1", "sd-posed2", "sd-posed3", "sd-posed4",
+             "sd-before-replug", "sd-replugged1", "sd-replugged2", "sd-replugged3",
+             "sd-replugged4", "sd-restarted"]:
     path = os.path.join(out, f"{name}.ppm")
     if os.path.exists(path):
         screens[name] = ppm(path)[2]
