@@ -235,23 +235,39 @@ fn planted_feet_stay_where_they_are() {
     }
 }
 
+/// Posing from 5 constrained parts on held-out clips, `frames` of them,
+/// the library's first posing clip as the rest posture.
+fn five_parts(
+    lib: &Library,
+    model: &LearnedModel,
+    held_out: &[Clip],
+    mode: Mode,
+    method: Method,
+    frames: usize,
+) -> eval::EvalResult {
+    let tests: Vec<_> = held_out.iter().collect();
+    let setup = eval::EvalSetup {
+        parts: 5,
+        mode,
+        method,
+        frames,
+        blocks: None,
+        cells: None,
+    };
+    eval::eval_pose(
+        &lib.skeleton,
+        model,
+        &lib.clips[&lib.posing[0]],
+        &tests,
+        setup,
+    )
+}
+
 #[test]
 fn the_model_beats_its_baselines_on_held_out_mocap() {
     let dir = tempfile::tempdir().unwrap();
     let (lib, model, held_out) = cmu_library(dir.path());
-    let tests: Vec<_> = held_out.iter().collect();
-    let rest = &lib.clips[&lib.posing[0]];
-    let run = |mode, method| {
-        let setup = eval::EvalSetup {
-            parts: 5,
-            mode,
-            method,
-            frames: 40,
-            blocks: None,
-            cells: None,
-        };
-        eval::eval_pose(&lib.skeleton, &model, rest, &tests, setup)
-    };
+    let run = |mode, method| five_parts(&lib, &model, &held_out, mode, method, 40);
     let model_targets = run(Mode::Targets, Method::Model);
     let rest_targets = run(Mode::Targets, Method::CcdRest);
     let nearest_targets = run(Mode::Targets, Method::Nearest);
@@ -802,19 +818,7 @@ fn a_static_top_bone_above_the_pelvis_no_longer_misplaces_the_character() {
     let (lib, held_out) = bandai_library(dir.path());
     assert_eq!(lib.skeleton.joints[0].name, "Hips");
     let model = LearnedModel::build(posing_samples(&lib).1);
-    let tests: Vec<_> = held_out.iter().collect();
-    let rest = &lib.clips[&lib.posing[0]];
-    let run = |mode, method| {
-        let setup = eval::EvalSetup {
-            parts: 5,
-            mode,
-            method,
-            frames: 60,
-            blocks: None,
-            cells: None,
-        };
-        eval::eval_pose(&lib.skeleton, &model, rest, &tests, setup)
-    };
+    let run = |mode, method| five_parts(&lib, &model, &held_out, mode, method, 60);
     let touch = run(Mode::Touch, Method::Model);
     let targets = run(Mode::Targets, Method::Model);
     let rest_touch = run(Mode::Touch, Method::CcdRest);
