@@ -310,3 +310,25 @@ fn replay_into_a_used_folder_keeps_only_its_own_frames() {
     );
     assert!(frames.join("frame-00000.png").exists());
 }
+
+#[test]
+fn a_configured_library_folder_that_is_missing_is_a_configuration_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("marionette.toml");
+    std::fs::write(&path, "[character]\nlibrary = \"/nonexistent/library\"\n").unwrap();
+    let out_dir = dir.path().join("out");
+    let out = marionette(&[
+        "--config",
+        path.to_str().unwrap(),
+        "demo",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(78));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("/nonexistent/library") && err.contains("character.library"),
+        "{err}"
+    );
+    assert!(!out_dir.exists(), "nothing is written");
+}

@@ -14,7 +14,19 @@ use crate::input::pipeline;
 pub(super) fn character(
     config: &Config,
 ) -> Result<std::sync::Arc<crate::control::character::Character>, Failure> {
-    Ok(crate::app::character::load(&config.library_dir())?)
+    let dir = config.library_dir();
+    if !dir.is_dir() {
+        // A folder the configuration names that is not there is the
+        // configuration's fault: fix the file, restarting will not help.
+        return Err(Failure::new(
+            exit::CONFIG,
+            format!(
+                "the motion library folder {} does not exist: fix `character.library` in the configuration (empty for the shipped library)",
+                dir.display()
+            ),
+        ));
+    }
+    Ok(crate::app::character::load(&dir)?)
 }
 
 /// A recording through the whole pipeline into images.
