@@ -332,3 +332,27 @@ fn a_configured_library_folder_that_is_missing_is_a_configuration_error() {
     );
     assert!(!out_dir.exists(), "nothing is written");
 }
+
+#[test]
+fn bake_with_an_unwritable_cache_warns_and_succeeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocked = dir.path().join("file");
+    std::fs::write(&blocked, b"not a folder").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args([
+            "bake",
+            "--library",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/assets/library"),
+        ])
+        .env_remove("RUST_LOG")
+        .env("CACHE_DIRECTORY", blocked.join("cache"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("baked in memory") && err.contains("cannot write"),
+        "{err}"
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("posing model of"));
+}

@@ -563,9 +563,9 @@ fn the_cache_is_used_when_it_matches_and_rebuilt_when_stale_or_corrupt() {
     use marionette::app::cache::{Source, posing_model};
     let lib = default_library();
     let dir = tempfile::tempdir().unwrap();
-    let (first, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    let (first, source) = posing_model(&lib, dir.path(), false, &mut |_| {});
     assert!(matches!(source, Source::Baked { .. }), "{source:?}");
-    let (again, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    let (again, source) = posing_model(&lib, dir.path(), false, &mut |_| {});
     assert!(matches!(source, Source::Cache(_)), "{source:?}");
     assert_eq!(
         first.coords, again.coords,
@@ -582,7 +582,7 @@ fn the_cache_is_used_when_it_matches_and_rebuilt_when_stale_or_corrupt() {
     let mid = bytes.len() / 2;
     bytes[mid] ^= 0xff;
     std::fs::write(&file, &bytes).unwrap();
-    let (rebuilt, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    let (rebuilt, source) = posing_model(&lib, dir.path(), false, &mut |_| {});
     match source {
         Source::Baked { reason } => assert!(reason.contains("corrupt"), "{reason}"),
         other => panic!("a corrupt cache was trusted: {other:?}"),
@@ -590,8 +590,25 @@ fn the_cache_is_used_when_it_matches_and_rebuilt_when_stale_or_corrupt() {
     assert_eq!(rebuilt.coords, first.coords);
     // Truncated: rebuilt too.
     std::fs::write(&file, &bytes[..10]).unwrap();
-    let (_, source) = posing_model(&lib, dir.path(), false, &mut |_| {}).unwrap();
+    let (_, source) = posing_model(&lib, dir.path(), false, &mut |_| {});
     assert!(matches!(source, Source::Baked { .. }));
+}
+
+#[test]
+fn a_cache_that_cannot_be_written_costs_a_bake_not_the_model() {
+    use marionette::app::cache::{Source, posing_model};
+    let lib = default_library();
+    let dir = tempfile::tempdir().unwrap();
+    // The cache folder would be below a file: it cannot be made.
+    let blocked = dir.path().join("file");
+    std::fs::write(&blocked, b"not a folder").unwrap();
+    let (model, source) = posing_model(&lib, &blocked.join("cache"), false, &mut |_| {});
+    match source {
+        Source::Uncached { error, .. } => assert!(error.contains("cannot write"), "{error}"),
+        other => panic!("expected an uncached model, got {other:?}"),
+    }
+    let (baked, _) = posing_model(&lib, dir.path(), false, &mut |_| {});
+    assert_eq!(model.coords, baked.coords, "the same model, from memory");
 }
 
 #[test]

@@ -97,18 +97,27 @@ fn decode(bytes: &[u8], key: u64, n: usize) -> Result<Vec<[f64; 2]>, String> {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Source {
     Cache(PathBuf),
-    Baked { reason: String },
+    Baked {
+        reason: String,
+    },
+    /// Baked, but the cache could not be written (a read-only or full
+    /// disk): the model is used from memory and baked again next time.
+    Uncached {
+        reason: String,
+        error: String,
+    },
 }
 
 /// The library's posing model: from the cache in `dir` when it matches the
-/// library, else baked (and the cache rewritten, atomically). `progress`
-/// hears 0..1 while baking.
+/// library, else baked (and the cache rewritten, atomically; a cache that
+/// cannot be written costs a bake at the next start, never the model).
+/// `progress` hears 0..1 while baking.
 pub fn posing_model(
     lib: &Library,
     dir: &Path,
     force: bool,
     progress: &mut dyn FnMut(f64),
-) -> std::io::Result<(LearnedModel, Source)> {
+) -> (LearnedModel, Source) {
     let key = library_key(lib);
     let (_, samples) = posing_samples(lib);
     let path = dir.join(format!("posing-{key:016x}.bin"));
@@ -118,10 +127,10 @@ pub fn posing_model(
         match std::fs::read(&path) {
             Ok(bytes) => match decode(&bytes, key, samples.len()) {
                 Ok(coords) => {
-                    return Ok((
+                    return (
                         LearnedModel::with_coords(samples, coords),
                         Source::Cache(path),
-                    ));
+                    );
                 }
                 Err(why) => format!("cache {} unusable: {why}", path.display()),
             },
@@ -137,14 +146,21 @@ pub fn posing_model(
         &|a, b| distance(&samples[a], &samples[b]),
         progress,
     );
-    std::fs::create_dir_all(dir)?;
     let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, encode(key, &coords))?;
-    std::fs::rename(&tmp, &path)?;
-    Ok((
-        LearnedModel::with_coords(samples, coords),
-        Source::Baked { reason },
-    ))
+    let written = std::fs::create_dir_all(dir)
+        .and_then(|()| std::fs::write(&tmp, encode(key, &coords)))
+        .and_then(|()| std::fs::rename(&tmp, &path));
+    let source = match written {
+        Ok(()) => Source::Baked { reason },
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Source::Uncached {
+                reason,
+                error: format!("cannot write {}: {e}", path.display()),
+            }
+        }
+    };
+    (LearnedModel::with_coords(samples, coords), source)
 }
 
 #[cfg(test)]

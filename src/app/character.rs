@@ -4,7 +4,7 @@
 //! needs a character loads it here.
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use thiserror::Error;
@@ -20,14 +20,6 @@ pub enum LoadError {
     /// The library folder, its `library.toml` or a clip is wrong.
     #[error(transparent)]
     Library(#[from] LibraryError),
-    /// The posing model could neither be read from nor written to the
-    /// cache.
-    #[error("cannot bake or cache {library}: {source}")]
-    Cache {
-        library: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
 }
 
 /// A library and its posing model (from the cache when it matches; baked
@@ -48,11 +40,7 @@ pub fn load_models(dir: &Path, force_bake: bool) -> Result<(Library, LearnedMode
         }
         last = pct;
     };
-    let (model, source) = cache::posing_model(&lib, &cache_dir, force_bake, &mut progress)
-        .map_err(|source| LoadError::Cache {
-            library: dir.to_owned(),
-            source,
-        })?;
+    let (model, source) = cache::posing_model(&lib, &cache_dir, force_bake, &mut progress);
     if tty && last >= 0 {
         eprintln!();
     }
@@ -62,6 +50,9 @@ pub fn load_models(dir: &Path, force_bake: bool) -> Result<(Library, LearnedMode
         }
         Source::Baked { reason } => {
             tracing::info!(%reason, samples = model.samples.len(), cells = model.cells.len(), cache = %cache_dir.display(), "posing model baked");
+        }
+        Source::Uncached { reason, error } => {
+            tracing::warn!(%reason, %error, samples = model.samples.len(), "posing model baked in memory; the cache cannot be written, so the next start bakes again (set CACHE_DIRECTORY, or give the user a writable cache folder)");
         }
     }
     Ok((lib, model))

@@ -163,7 +163,6 @@ impl ExitStatus for LoadError {
     fn exit_code(&self) -> u8 {
         match self {
             Self::Library(_) => DATAERR,
-            Self::Cache { .. } => IOERR,
         }
     }
 }
