@@ -1,7 +1,7 @@
 //! `marionette record`: a live device's events into an evemu file.
 
 use std::io::{self, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::evdev::{EvdevDevice, EvdevOpener};
@@ -24,18 +24,7 @@ pub fn record(
     let opener = EvdevOpener;
     let path = match device {
         Some(p) => p.to_owned(),
-        None => {
-            let dir = &input.dev_dir;
-            let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
-            paths
-                .into_iter()
-                .find(|p| {
-                    opener
-                        .open(p)
-                        .is_ok_and(|d| d.description().kind() == DeviceKind::Touchscreen)
-                })
-                .ok_or_else(|| LiveError::NoTouchscreen(dir.clone()))?
-        }
+        None => find_touchscreen(&opener, &input.dev_dir)?,
     };
     let mut dev = EvdevDevice::open(&path).map_err(|source| LiveError::Io {
         path: path.clone(),
@@ -100,4 +89,74 @@ pub fn record(
     w.flush().map_err(werr)?;
     tracing::info!(events = n_events, frames = n_frames, out = %out.display(), "recording written");
     Ok(())
+}
+
+/// The first touchscreen in `dir`. When none is found and some node could
+/// not be opened for want of permission, that is the error (exit 77: join
+/// the `input` group), not "no touchscreen" (69).
+fn find_touchscreen(opener: &dyn DeviceOpener, dir: &Path) -> Result<PathBuf, LiveError> {
+    let paths = opener.scan(dir).map_err(|source| scan_error(dir, source))?;
+    let mut denied = None;
+    let found = paths.into_iter().find(|p| match opener.open(p) {
+        Ok(d) => d.description().kind() == DeviceKind::Touchscreen,
+        Err(source) => {
+            if source.kind() == io::ErrorKind::PermissionDenied && denied.is_none() {
+                denied = Some(LiveError::Io {
+                    path: p.clone(),
+                    source,
+                });
+            }
+            false
+        }
+    });
+    match (found, denied) {
+        (Some(p), _) => Ok(p),
+        (None, Some(e)) => Err(e),
+        (None, None) => Err(LiveError::NoTouchscreen(dir.to_owned())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::hub::EventDevice;
+
+    /// Every node is there, none may be opened.
+    struct Locked;
+
+    impl DeviceOpener for Locked {
+        fn scan(&self, _dir: &Path) -> io::Result<Vec<PathBuf>> {
+            Ok(vec![
+                PathBuf::from("/dev/input/event0"),
+                PathBuf::from("/dev/input/event1"),
+            ])
+        }
+        fn open(&self, _path: &Path) -> io::Result<Box<dyn EventDevice>> {
+            Err(io::Error::from(io::ErrorKind::PermissionDenied))
+        }
+    }
+
+    /// No nodes at all.
+    struct Empty;
+
+    impl DeviceOpener for Empty {
+        fn scan(&self, _dir: &Path) -> io::Result<Vec<PathBuf>> {
+            Ok(Vec::new())
+        }
+        fn open(&self, _path: &Path) -> io::Result<Box<dyn EventDevice>> {
+            Err(io::Error::from(io::ErrorKind::NotFound))
+        }
+    }
+
+    #[test]
+    fn unreadable_nodes_are_a_permission_problem_not_a_missing_panel() {
+        let e = find_touchscreen(&Locked, Path::new("/dev/input")).unwrap_err();
+        assert!(
+            matches!(&e, LiveError::Io { source, path } if source.kind() == io::ErrorKind::PermissionDenied && path.ends_with("event0")),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("`input` group"), "{e}");
+        let e = find_touchscreen(&Empty, Path::new("/dev/input")).unwrap_err();
+        assert!(matches!(e, LiveError::NoTouchscreen(_)), "{e:?}");
+    }
 }
