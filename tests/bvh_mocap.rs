@@ -40,16 +40,10 @@ fn every_mocap_file_imports_with_a_plausible_height() {
     for (path, set) in &files {
         let clip = import(path);
         assert_eq!(clip.roles.0.len(), Role::ALL.len(), "{}", path.display());
-        // Standing height in the first frame; two clips start seated or
-        // perched (74_12 "thinker", 83_11 "static pose").
-        let name = path.file_name().unwrap().to_string_lossy();
-        let range = if name.starts_with("74_12") || name.starts_with("83_11") {
-            0.8..2.1
-        } else {
-            1.2..2.1
-        };
+        // Stature from the bones, whatever the first frame: 74_12
+        // ("thinker") starts seated, 83_11 perched, 143_30 stretching.
         assert!(
-            range.contains(&clip.height_m),
+            (1.2..2.1).contains(&clip.height_m),
             "{}: height {:.3} m",
             path.display(),
             clip.height_m
@@ -166,4 +160,25 @@ fn clips_that_differ_by_a_top_bone_import_to_one_skeleton() {
         |c: &Clip| -> Vec<String> { c.skeleton.joints.iter().map(|j| j.name.clone()).collect() };
     assert_eq!(names(&with), names(&without));
     assert_eq!(with.skeleton.joints[0].name, "CC_Base_Hip");
+}
+
+#[test]
+fn stature_comes_from_the_bones_not_the_first_posture() {
+    // Subject 74 starts 74_10 standing ("peeping") and 74_12 seated
+    // ("thinker"): one skeleton, one stature; the first frames differ by
+    // about 40 cm.
+    let idle = common::shared_dir().join("mocap/cmu-mixed/idle");
+    let standing = import(&idle.join("74_10.bvh"));
+    let seated = import(&idle.join("74_12.bvh"));
+    assert_eq!(standing.skeleton, seated.skeleton);
+    assert_eq!(standing.height_m, seated.height_m);
+    assert!(
+        standing.first_frame_height_m - seated.first_frame_height_m > 0.3,
+        "{} {}",
+        standing.first_frame_height_m,
+        seated.first_frame_height_m
+    );
+    // Standing upright, a person is about as tall as their bones say.
+    let ratio = standing.first_frame_height_m / standing.height_m;
+    assert!((0.95..1.05).contains(&ratio), "{ratio}");
 }

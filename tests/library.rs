@@ -6,7 +6,9 @@ mod common;
 use std::path::Path;
 
 use marionette::character::library::{Library, Release};
+use marionette::character::motion::{Clip, ImportSettings, leg_length};
 use marionette::character::roles::Role;
+use marionette::character::skeleton::forward_kinematics;
 
 fn write_library(dir: &Path, clips_dir: &Path, body: &str) {
     let text = format!(
@@ -211,4 +213,83 @@ fn the_content_key_follows_the_files_and_not_where_they_are() {
         marionette::app::cache::library_key(&changed),
         marionette::app::cache::library_key(&copy)
     );
+}
+
+#[test]
+fn an_extra_root_bone_joins_the_library_standing_like_the_others() {
+    // 002_01 carries `RL_BoneRoot` above the hips (Z up, turned a quarter
+    // about X, and it carries the placement); 002_04 does not. Folded at
+    // import, both are one hierarchy and stand upright.
+    let dir = tempfile::tempdir().unwrap();
+    write_library(
+        dir.path(),
+        &common::shared_dir().join("mocap/cmu-cc"),
+        "[posing]\nclips = [\"002_01.bvh\", \"002_04.bvh\"]\n",
+    );
+    let lib = Library::load(dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(lib.skeleton.joints[0].name, "CC_Base_Hip");
+    for (name, clip) in &lib.clips {
+        assert_eq!(clip.skeleton.len(), lib.skeleton.len(), "{name}");
+        let w = forward_kinematics(&clip.skeleton, &clip.frames[0]);
+        let at = |r: Role| w.positions[clip.roles.get(r)];
+        let pelvis = at(Role::Pelvis);
+        assert!((0.8..1.2).contains(&pelvis.y), "{name}: pelvis at {pelvis}");
+        assert!(at(Role::Head).y > pelvis.y + 0.4, "{name}: upright");
+        let foot = at(Role::LeftFoot).y.min(at(Role::RightFoot).y);
+        assert!(foot < 0.2, "{name}: feet near the floor, {foot}");
+    }
+}
+
+#[test]
+fn another_performers_proportions_are_carried_onto_the_library_skeleton() {
+    // Three CMU subjects (74, 132, 143) in one conversion: one hierarchy,
+    // three builds.
+    let dir = tempfile::tempdir().unwrap();
+    write_library(
+        dir.path(),
+        &common::shared_dir().join("mocap/cmu-mixed/idle"),
+        "[posing]\nclips = [\"132_38.bvh\", \"143_30.bvh\", \"74_10.bvh\"]\n",
+    );
+    let own = |name: &str| {
+        let path = common::shared_dir().join("mocap/cmu-mixed/idle").join(name);
+        let file = marionette::character::bvh::read_file(&path).unwrap();
+        Clip::from_bvh(file, &ImportSettings::default()).unwrap()
+    };
+    let lib = Library::load(dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    let first = own("132_38.bvh");
+    assert_eq!(lib.skeleton, first.skeleton);
+    for name in ["143_30.bvh", "74_10.bvh"] {
+        let before = own(name);
+        assert_ne!(before.skeleton, first.skeleton, "{name}: another build");
+        let after = &lib.clips[name];
+        assert_eq!(after.skeleton, lib.skeleton, "{name}");
+        let ratio =
+            leg_length(&lib.skeleton, &after.roles) / leg_length(&before.skeleton, &before.roles);
+        for (a, b) in after.frames.iter().zip(&before.frames) {
+            // Every joint turns as the performer's did; the pelvis moves
+            // by as much more as the legs are longer.
+            for (qa, qb) in a.rotations.iter().zip(&b.rotations) {
+                assert!(qa.abs_diff_eq(*qb, 1e-12), "{name}");
+            }
+            assert!(a.translations[0].abs_diff_eq(b.translations[0] * ratio, 1e-9));
+        }
+        // Feet stay on the floor: the lowest foot over the clip is as near
+        // the floor as the performer's own.
+        let lowest = |c: &Clip| {
+            c.frames
+                .iter()
+                .map(|f| {
+                    let w = forward_kinematics(&c.skeleton, f);
+                    w.positions[c.roles.get(Role::LeftFoot)]
+                        .y
+                        .min(w.positions[c.roles.get(Role::RightFoot)].y)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (was, is) = (lowest(&before), lowest(after));
+        assert!(
+            (was - is).abs() < 0.02,
+            "{name}: lowest foot {was:.3} m, now {is:.3} m"
+        );
+    }
 }

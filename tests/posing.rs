@@ -318,7 +318,10 @@ fn cmu_library(
         .map(|n| {
             let f =
                 marionette::character::bvh::read_file(&clips_dir.join(format!("{n}.bvh"))).unwrap();
-            marionette::character::motion::Clip::from_bvh(f, &Default::default()).unwrap()
+            let mut clip =
+                marionette::character::motion::Clip::from_bvh(f, &Default::default()).unwrap();
+            clip.retarget(&lib.skeleton);
+            clip
         })
         .collect();
     (lib, model, held_out)
@@ -815,11 +818,13 @@ fn bandai_library(dir: &std::path::Path) -> (Library, Vec<Clip>) {
         .map(|a| {
             let path = clips.join(format!("d1_{a}_normal_001.bvh"));
             let file = marionette::character::bvh::read_file(&path).unwrap();
-            Clip::from_bvh(
+            let mut clip = Clip::from_bvh(
                 file,
                 &marionette::character::motion::ImportSettings::default(),
             )
-            .unwrap()
+            .unwrap();
+            clip.retarget(&lib.skeleton);
+            clip
         })
         .collect();
     (lib, held_out)

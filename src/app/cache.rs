@@ -11,8 +11,10 @@ use crate::control::posing::model::{LearnedModel, posing_samples};
 use crate::control::posing::sample::distance;
 
 const MAGIC: &[u8; 8] = b"MRNTPOSE";
-/// Bumped whenever samples, the distance or the embedding change.
-const FORMAT: u32 = 1;
+/// Bumped whenever samples, the distance or the embedding change (2: the
+/// import reads Character Creator position channels as displacements and
+/// retargets other performers onto the library's skeleton).
+const FORMAT: u32 = 2;
 
 /// The content key of a library: the cache format and the library's own
 /// content key (computed as its files were read: nothing is read again).

@@ -284,12 +284,69 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
         }
         frames.push(pose);
     }
+    let relative = positions_relative_to_offsets(&skeleton, &channels, &mut frames);
+    if !relative.is_empty() {
+        let joints: Vec<&str> = relative
+            .iter()
+            .map(|&j| skeleton.joints[j].name.as_str())
+            .collect();
+        tracing::debug!(path = %path.display(), ?joints, "position channels read as added to the joints' offsets");
+    }
     Ok(BvhFile {
         skeleton,
         channels,
         frame_time,
         frames,
     })
+}
+
+/// Exporters disagree on what a joint's position channels hold: the
+/// joint's place (most files: the root's channels say where it is, a
+/// stretching joint's repeat its offset) or a displacement added to its
+/// OFFSET (iClone's Character Creator rig: a hip offset of 105 cm and
+/// channels near 5 cm). Frames are read the first way; a joint with a
+/// non-zero offset whose channels stay nearer zero than that offset, on
+/// average over the clip, is read the second way. Returns those joints.
+fn positions_relative_to_offsets(
+    skeleton: &Skeleton,
+    channels: &[Vec<Channel>],
+    frames: &mut [Pose],
+) -> Vec<usize> {
+    let mut relative = Vec::new();
+    if frames.is_empty() {
+        return relative;
+    }
+    for (j, chans) in channels.iter().enumerate() {
+        let axes = [
+            (Channel::Xposition, DVec3::X),
+            (Channel::Yposition, DVec3::Y),
+            (Channel::Zposition, DVec3::Z),
+        ]
+        .map(|(c, axis)| {
+            if chans.contains(&c) {
+                axis
+            } else {
+                DVec3::ZERO
+            }
+        });
+        let mask = axes[0] + axes[1] + axes[2];
+        let offset = skeleton.joints[j].offset * mask;
+        if offset.length() < 1e-9 {
+            continue;
+        }
+        let mean = frames
+            .iter()
+            .map(|f| f.translations[j] * mask)
+            .sum::<DVec3>()
+            / frames.len() as f64;
+        if mean.length() < (mean - offset).length() {
+            for f in frames.iter_mut() {
+                f.translations[j] += offset;
+            }
+            relative.push(j);
+        }
+    }
+    relative
 }
 
 fn parse_joint(
@@ -477,6 +534,26 @@ mod tests {
             * DQuat::from_rotation_z(50f64.to_radians())
             * DQuat::from_rotation_y(60f64.to_radians());
         assert!(f.frames[0].rotations[1].angle_between(want) < 1e-12);
+    }
+
+    #[test]
+    fn position_channels_are_places_or_displacements_as_the_file_says() {
+        // A hip offset of 1 m: channels near 1 m say where the hip is;
+        // channels near zero are added to the offset (Character Creator).
+        let file = |ys: [f64; 2]| {
+            SMALL
+                .replace("\tOFFSET 0 0 0", "\tOFFSET 0 1 0")
+                .replace("1 2 3 10", &format!("1 {} 3 10", ys[0]))
+                .replace("0 0 0 0 0 0 0 0 0", &format!("0 {} 0 0 0 0 0 0 0", ys[1]))
+        };
+        let f = parse(&file([0.98, 0.96]), Path::new("places.bvh")).unwrap();
+        assert_eq!(f.frames[0].translations[0], DVec3::new(1.0, 0.98, 3.0));
+        assert_eq!(f.frames[1].translations[0], DVec3::new(0.0, 0.96, 0.0));
+        let f = parse(&file([0.05, -0.02]), Path::new("moves.bvh")).unwrap();
+        assert_eq!(f.frames[0].translations[0], DVec3::new(1.0, 1.05, 3.0));
+        assert_eq!(f.frames[1].translations[0], DVec3::new(0.0, 0.98, 0.0));
+        // The leg has no position channels: its offset stays.
+        assert_eq!(f.frames[0].translations[1], DVec3::new(0.1, -0.4, 0.05));
     }
 
     #[test]

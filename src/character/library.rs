@@ -288,21 +288,31 @@ impl Library {
                     continue;
                 }
             };
+            let mut clip = match Clip::from_bvh(parsed, &settings) {
+                Ok(c) => c,
+                Err(e) => {
+                    problems.push(format!("{name}: {e}"));
+                    continue;
+                }
+            };
+            // Hierarchies are compared once top bones are folded away: a
+            // file with an extra `RL_BoneRoot` joins the others. Other
+            // proportions (another performer) are carried onto the first
+            // clip's skeleton.
             match &skeleton {
-                None => skeleton = Some((name.clone(), parsed.skeleton.clone())),
+                None => skeleton = Some((name.clone(), clip.skeleton.clone())),
                 Some((first, s)) => {
-                    if let Some(why) = hierarchy_difference(s, &parsed.skeleton) {
+                    if let Some(why) = hierarchy_difference(s, &clip.skeleton) {
                         problems.push(format!("{name}: its hierarchy differs from {first}'s ({why}); a library's clips share one skeleton"));
                         continue;
                     }
+                    let ratio = clip.retarget(s);
+                    if ratio != 1.0 {
+                        tracing::debug!(clip = %name, onto = %first, leg_ratio = ratio, "clip retargeted onto the library's skeleton");
+                    }
                 }
             }
-            match Clip::from_bvh(parsed, &settings) {
-                Ok(c) => {
-                    clips.insert(name.clone(), c);
-                }
-                Err(e) => problems.push(format!("{name}: {e}")),
-            }
+            clips.insert(name.clone(), clip);
         }
         let mut actions = Vec::new();
         let mut seen = BTreeMap::new();
@@ -346,11 +356,7 @@ impl Library {
         if !problems.is_empty() {
             return Err(fail(problems));
         }
-        let skeleton = clips
-            .values()
-            .next()
-            .map(|c| c.skeleton.clone())
-            .unwrap_or_default();
+        let skeleton = skeleton.map(|(_, s)| s).unwrap_or_default();
         // The content key: library.toml, then every clip's name and its
         // file's digest, in name order.
         let mut key = Fnv::new();

@@ -32,8 +32,11 @@ pub struct Clip {
     /// Whether the source's first frame was a T-pose that was set aside.
     pub dropped_tpose: bool,
     pub roles: RoleMap,
-    /// Standing height in the first frame, floor to top of head (m).
+    /// Stature from the bone lengths (m): how tall the skeleton stands,
+    /// whatever posture the clip starts in (seated, crouched, stretching).
     pub height_m: f64,
+    /// Floor to top of head in the first frame (m), as the clip begins.
+    pub first_frame_height_m: f64,
 }
 
 /// Typical human height the unit detection aims for.
@@ -235,11 +238,12 @@ impl Clip {
         if dropped_tpose {
             frames.remove(0);
         }
-        let height_units = standing_height(&skeleton, &roles, &frames[0]);
+        let first_frame_units = standing_height(&skeleton, &roles, &frames[0]);
+        let stature_units = chain_stature(&skeleton, &roles);
         let scale = match settings.scale_to_m {
             Some(s) if s.is_finite() && s > 0.0 => s,
             Some(s) => return Err(ClipError::BadScale(s)),
-            None => detect_scale(chain_stature(&skeleton, &roles)),
+            None => detect_scale(stature_units),
         };
         skeleton.scale(scale);
         for f in &mut frames {
@@ -267,9 +271,64 @@ impl Clip {
             scale_to_m: scale,
             dropped_tpose,
             roles,
-            height_m: height_units * scale,
+            height_m: stature_units * scale,
+            first_frame_height_m: first_frame_units * scale,
         })
     }
+
+    /// Carry the clip onto `onto`, a skeleton of the same hierarchy with
+    /// other proportions (another performer): every joint keeps its
+    /// rotations, bones take `onto`'s offsets, and translated joints (the
+    /// pelvis's placement and height, strides) scale with the ratio of the
+    /// leg lengths, so that feet plant and strides fit the new legs (a
+    /// joint whose translation channels only repeat its bone keeps the
+    /// new bone).
+    /// Returns that ratio (1 when the proportions already match, and then
+    /// nothing changes).
+    pub fn retarget(&mut self, onto: &Skeleton) -> f64 {
+        debug_assert_eq!(onto.len(), self.skeleton.len());
+        let same = onto
+            .joints
+            .iter()
+            .zip(&self.skeleton.joints)
+            .all(|(a, b)| a.offset == b.offset && a.end_site == b.end_site);
+        if same {
+            return 1.0;
+        }
+        let from = leg_length(&self.skeleton, &self.roles);
+        let to = leg_length(onto, &self.roles);
+        let ratio = if from > 0.0 && to > 0.0 {
+            to / from
+        } else {
+            1.0
+        };
+        for f in &mut self.frames {
+            for (j, t) in f.translations.iter_mut().enumerate() {
+                let own = self.skeleton.joints[j].offset;
+                *t = match (j, self.translates.get(j).copied().unwrap_or(false)) {
+                    // The placement and height.
+                    (0, true) => *t * ratio,
+                    // A bone that stretches: its stretch scales.
+                    (_, true) => onto.joints[j].offset + (*t - own) * ratio,
+                    (_, false) => onto.joints[j].offset,
+                };
+            }
+        }
+        self.skeleton = onto.clone();
+        self.first_frame_height_m = standing_height(&self.skeleton, &self.roles, &self.frames[0]);
+        self.height_m = chain_stature(&self.skeleton, &self.roles);
+        ratio
+    }
+}
+
+/// Thigh plus shin, the mean of both legs, in the skeleton's units.
+#[must_use]
+pub fn leg_length(skeleton: &Skeleton, roles: &RoleMap) -> f64 {
+    let leg = |knee: Role, foot: Role| {
+        skeleton.joints[roles.get(knee)].offset.length()
+            + skeleton.joints[roles.get(foot)].offset.length()
+    };
+    0.5 * (leg(Role::LeftKnee, Role::LeftFoot) + leg(Role::RightKnee, Role::RightFoot))
 }
 
 /// Fold the root into its only child when the pelvis hangs below it: every

@@ -107,7 +107,7 @@ pub(super) fn eval_pose(
     let (lib, learned) = crate::app::character::load_models(library, false)?;
     let mut clips = Vec::new();
     for t in tests {
-        let (_, clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;
+        let (_, mut clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;
         if let Some(why) =
             crate::character::library::hierarchy_difference(&lib.skeleton, &clip.skeleton)
         {
@@ -116,6 +116,9 @@ pub(super) fn eval_pose(
                 format!("{}: not the library's skeleton ({why})", t.display()),
             ));
         }
+        // Another performer's proportions are carried onto the library's
+        // skeleton: the touches are on the character the library drives.
+        clip.retarget(&lib.skeleton);
         clips.push(clip);
     }
     if learned.samples.is_empty() {

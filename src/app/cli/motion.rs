@@ -13,7 +13,10 @@ pub(super) struct BvhSummary {
     joints: usize,
     frames: usize,
     frame_time: f64,
+    /// Stature from the bone lengths.
     height_m: f64,
+    /// Floor to top of head as the clip begins.
+    first_frame_height_m: f64,
     scale_to_m: f64,
     roles: std::collections::BTreeMap<String, String>,
 }
@@ -104,6 +107,7 @@ pub(super) fn inspect_bvh(file: &Path) -> Result<(), Failure> {
         frames,
         frame_time: clip.frame_time,
         height_m: (clip.height_m * 1e4).round() / 1e4,
+        first_frame_height_m: (clip.first_frame_height_m * 1e4).round() / 1e4,
         scale_to_m: clip.scale_to_m,
         roles: clip.roles.names(&clip.skeleton),
     };
