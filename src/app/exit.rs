@@ -28,6 +28,8 @@ pub const DATAERR: u8 = 65;
 pub const NOINPUT: u8 = 66;
 /// A required service or device is unavailable (no touchscreen, no uinput).
 pub const UNAVAILABLE: u8 = 69;
+/// An internal error: the program contradicted itself.
+pub const SOFTWARE: u8 = 70;
 /// Cannot create an output file.
 pub const CANTCREAT: u8 = 73;
 /// An I/O error on a device or file.

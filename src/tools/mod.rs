@@ -4,7 +4,8 @@
 //! quality metrics. The kiosk's path (`app::run`) uses none of it.
 //!
 //! - [`eval`]: posing and action control measured on held-out clips.
-//! - [`author`]: the default library's scores compiled into BVH.
+//! - [`author`]: the default library's scores compiled into BVH;
+//!   [`init`]: a library planned from a folder of an exhibit's takes.
 //! - [`synth`]: recordings authored from gestures; [`demo`]: the demo
 //!   recording, authored against the character.
 //! - `sheet`, [`checks`], `metrics`: stick-figure sheets, foot sliding
@@ -19,6 +20,7 @@ pub mod author;
 pub mod checks;
 pub mod demo;
 pub mod eval;
+pub mod init;
 pub(crate) mod metrics;
 pub(crate) mod sheet;
 pub mod synth;

@@ -114,6 +114,11 @@ pub(super) enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Motion libraries of an exhibit's own capture
+    Library {
+        #[command(subcommand)]
+        what: LibraryCommand,
+    },
     /// Measure the character controllers on held-out motion capture
     Eval {
         #[command(subcommand)]
@@ -253,4 +258,24 @@ pub(super) enum EvalMethod {
     Scan,
     Nearest,
     CcdRest,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum LibraryCommand {
+    /// Build a library from a folder of takes: `<action>_<anything>.bvh`
+    /// gives action `<action>`, `pose_*.bvh` is posing only, every clip
+    /// feeds posing. Units, roles, each action's primary part, cuts of long
+    /// takes and condition segments are measured from the motion and
+    /// written, commented, to DIR/library.toml (the clips stay where they
+    /// are)
+    Init {
+        /// Folder of BVH takes
+        src: PathBuf,
+        /// Library folder to write library.toml in (made if missing)
+        #[arg(long)]
+        out: PathBuf,
+        /// Replace an existing library.toml there
+        #[arg(long)]
+        force: bool,
+    },
 }

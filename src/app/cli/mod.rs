@@ -23,7 +23,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use self::args::{Cli, Command, EvalCommand, EvalMethod};
+use self::args::{Cli, Command, EvalCommand, EvalMethod, LibraryCommand};
 use self::eval::{eval_actions, eval_pose, eval_pose_leave_one_out, pose_setup};
 use self::input::{inspect, list_devices, replay};
 use self::kiosk::{calibrate, list_outputs, run_kiosk};
@@ -149,6 +149,9 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             scale_to_m,
         } => convert_bvh(&file, &out, scale_to_m),
         Command::Bake { library, force } => bake(&library, force),
+        Command::Library {
+            what: LibraryCommand::Init { src, out, force },
+        } => motion::library_init(&src, &out, force),
         Command::Eval {
             what:
                 EvalCommand::Actions {

@@ -157,3 +157,59 @@ pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Resul
     }
     writeln!(stdout, "sheets written to {}", out.display()).map_err(stdout_error)
 }
+
+pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Failure> {
+    use crate::character::library::Library;
+    use crate::tools::init::{self, InitError};
+    let target = out.join("library.toml");
+    if target.exists() && !force {
+        return Err(Failure::new(
+            exit::CANTCREAT,
+            format!(
+                "{} exists: pass --force to replace it, or choose another --out",
+                target.display()
+            ),
+        ));
+    }
+    let plan = init::plan(src).map_err(|e| {
+        let code = match &e {
+            InitError::List { .. } | InitError::NoFiles { .. } => exit::NOINPUT,
+            InitError::NothingUsable { .. } => exit::DATAERR,
+        };
+        Failure::new(code, e)
+    })?;
+    let cant = |e: std::io::Error| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", target.display()),
+        )
+    };
+    std::fs::create_dir_all(out).map_err(cant)?;
+    // Written beside and renamed: an existing library is replaced whole or
+    // not at all.
+    let tmp = out.join(".library.toml.new");
+    std::fs::write(&tmp, plan.to_toml(out)).map_err(cant)?;
+    std::fs::rename(&tmp, &target).map_err(cant)?;
+    let mut stdout = std::io::stdout();
+    for line in plan.report() {
+        writeln!(stdout, "{line}").map_err(stdout_error)?;
+    }
+    let lib = Library::load(out).map_err(|e| {
+        Failure::new(
+            exit::SOFTWARE,
+            format!(
+                "the library written to {} does not load (kept for a look): {e}",
+                target.display()
+            ),
+        )
+    })?;
+    tracing::info!(library = %target.display(), clips = lib.clips.len(), actions = lib.actions.len(), "library written");
+    writeln!(
+        stdout,
+        "wrote {}: {} clips, {} actions; it loads",
+        target.display(),
+        lib.clips.len(),
+        lib.actions.len()
+    )
+    .map_err(stdout_error)
+}

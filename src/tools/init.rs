@@ -1,0 +1,688 @@
+//! `marionette library init`: a motion library from a folder of takes as
+//! an exhibit builder has them. Files named `<action>_<anything>.bvh` give
+//! action `<action>` (the text before the first `_`), `pose_*.bvh` are
+//! posing only, and every clip also feeds posing. What the motion says is
+//! measured, not assumed: the units and roles of the rig, each action's
+//! primary part (the one that moves most), long takes of a repeated action
+//! cut into single actions at the primary part's pauses, and the condition
+//! segments from the primary part's speed. The result is a commented
+//! `library.toml` that references the clips where they are.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use glam::{DQuat, DVec3};
+
+use crate::character::bvh;
+use crate::character::library::{Release, Segment, hierarchy_difference};
+use crate::character::motion::{Clip, ImportSettings, KNOWN_UNITS};
+use crate::character::roles::Role;
+use crate::character::skeleton::forward_kinematics;
+use crate::control::posing::sample::facing_yaw;
+
+/// The parts an action can be led by, in the order ties are broken.
+const CANDIDATES: [Role; 6] = [
+    Role::RightHand,
+    Role::LeftHand,
+    Role::RightFoot,
+    Role::LeftFoot,
+    Role::Head,
+    Role::Pelvis,
+];
+
+/// A part moving faster than this share of its peak speed is in motion.
+const ACTIVE_SHARE: f64 = 0.25;
+/// Speeds are averaged over this long (s) before they are judged.
+const SMOOTHING_S: f64 = 0.2;
+/// Bursts of motion closer than this (s) are one movement.
+const MERGE_GAP_S: f64 = 0.25;
+/// A burst shorter than this (s) is a twitch, not an action.
+const MIN_BURST_S: f64 = 0.15;
+/// A take is cut only where its part is back this near (a share of its
+/// range) to where it started.
+const RETURNED: f64 = 0.3;
+/// A second part moving at least this share of the primary's range is
+/// named beside it.
+const ALSO_MOVES: f64 = 0.8;
+
+/// Errors that stop `library init`.
+#[derive(Debug, thiserror::Error)]
+pub enum InitError {
+    #[error("cannot list {path}: {source}")]
+    List {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: no BVH files (named <action>_<anything>.bvh or pose_<anything>.bvh)")]
+    NoFiles { path: PathBuf },
+    #[error("{path}: no file could be used:\n  {}", reasons.join("\n  "))]
+    NothingUsable { path: PathBuf, reasons: Vec<String> },
+}
+
+/// One part's movement over a clip.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartMotion {
+    pub role: Role,
+    /// The diagonal of the box its path fills (m): hands, feet and head
+    /// relative to the pelvis and the body's facing, the pelvis in the
+    /// room.
+    pub range_m: f64,
+    /// Its speed at each frame (m/s), smoothed.
+    pub speed: Vec<f64>,
+    /// Its path (m), as `range_m` measures it.
+    pub path: Vec<DVec3>,
+}
+
+/// How each candidate part moves in `clip`.
+#[must_use]
+pub fn part_motion(clip: &Clip) -> Vec<PartMotion> {
+    let worlds: Vec<_> = clip
+        .frames
+        .iter()
+        .map(|f| forward_kinematics(&clip.skeleton, f))
+        .collect();
+    let pelvis = clip.roles.get(Role::Pelvis);
+    let dt = clip.frame_time.max(1e-6);
+    CANDIDATES
+        .iter()
+        .map(|&role| {
+            let j = clip.roles.get(role);
+            let path: Vec<DVec3> = worlds
+                .iter()
+                .map(|w| {
+                    if role == Role::Pelvis {
+                        w.positions[pelvis] - worlds[0].positions[pelvis]
+                    } else {
+                        let unyaw = DQuat::from_rotation_y(-facing_yaw(w, &clip.roles));
+                        unyaw * (w.positions[j] - w.positions[pelvis])
+                    }
+                })
+                .collect();
+            let (lo, hi) = path.iter().fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            );
+            let raw: Vec<f64> = (0..path.len())
+                .map(|k| {
+                    let (a, b) = (k.saturating_sub(1), (k + 1).min(path.len() - 1));
+                    if b > a {
+                        (path[b] - path[a]).length() / ((b - a) as f64 * dt)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            PartMotion {
+                role,
+                range_m: (hi - lo).length(),
+                speed: smooth(&raw, ((SMOOTHING_S / dt / 2.0).round() as usize).max(1)),
+                path,
+            }
+        })
+        .collect()
+}
+
+/// A centred moving average `half` frames either side.
+fn smooth(v: &[f64], half: usize) -> Vec<f64> {
+    (0..v.len())
+        .map(|k| {
+            let (a, b) = (k.saturating_sub(half), (k + half).min(v.len() - 1));
+            v[a..=b].iter().sum::<f64>() / (b - a + 1) as f64
+        })
+        .collect()
+}
+
+/// The runs of frames (first, last) where `speed` is over `ACTIVE_SHARE` of
+/// its peak, runs closer than `MERGE_GAP_S` merged, twitches dropped.
+#[must_use]
+pub fn bursts(speed: &[f64], frame_time: f64) -> Vec<(usize, usize)> {
+    let peak = speed.iter().copied().fold(0.0, f64::max);
+    if peak <= 0.0 {
+        return Vec::new();
+    }
+    let frames = |s: f64| (s / frame_time.max(1e-6)).round() as usize;
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for (k, s) in speed.iter().enumerate() {
+        if *s <= ACTIVE_SHARE * peak {
+            continue;
+        }
+        match runs.last_mut() {
+            Some((_, last)) if k - *last <= frames(MERGE_GAP_S) => *last = k,
+            _ => runs.push((k, k)),
+        }
+    }
+    runs.retain(|(a, b)| b - a >= frames(MIN_BURST_S));
+    runs
+}
+
+/// Where a take of several movements is cut: at the slowest frame between
+/// two bursts, where the part is back near where the take started (within
+/// `RETURNED` of its range): five punches from a guard are cut, a bow's
+/// pause with the head down is not. Empty when it holds one movement.
+#[must_use]
+pub fn cuts(motion: &PartMotion, bursts: &[(usize, usize)]) -> Vec<usize> {
+    let speed = &motion.speed;
+    bursts
+        .windows(2)
+        .map(|w| {
+            let (from, to) = (w[0].1, w[1].0);
+            (from..=to)
+                .min_by(|a, b| speed[*a].total_cmp(&speed[*b]))
+                .unwrap_or(from)
+        })
+        .filter(|&c| (motion.path[c] - motion.path[0]).length() <= RETURNED * motion.range_m)
+        .collect()
+}
+
+/// One file of the source folder, imported.
+struct Take {
+    file: String,
+    clip: Clip,
+    /// Frames of the file before the clip's first (a converter's T-pose).
+    skipped: usize,
+}
+
+/// An action as `init` decided it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlannedAction {
+    pub name: String,
+    pub primary: Role,
+    /// Every candidate part's range summed over the clips (m), largest
+    /// first.
+    pub ranges: Vec<(Role, f64)>,
+    /// Clip names: files, or `file#first-last` pieces of a long take.
+    pub clips: Vec<String>,
+    pub segments: Vec<Segment>,
+    /// What was decided and why, a line each.
+    pub notes: Vec<String>,
+}
+
+/// What `library init` decided.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub src: PathBuf,
+    /// The files, every one feeding posing.
+    pub posing: Vec<String>,
+    pub actions: Vec<PlannedAction>,
+    /// Role → joint name, as found.
+    pub roles: BTreeMap<String, String>,
+    /// Units, as found.
+    pub unit: String,
+    /// Files left out, with the reason.
+    pub skipped: Vec<(String, String)>,
+}
+
+/// Read the takes in `src` and decide the library.
+pub fn plan(src: &Path) -> Result<Plan, InitError> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(src)
+        .map_err(|source| InitError::List {
+            path: src.to_owned(),
+            source,
+        })?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(InitError::NoFiles {
+            path: src.to_owned(),
+        });
+    }
+    let mut takes: Vec<Take> = Vec::new();
+    let mut skipped = Vec::new();
+    for path in &files {
+        let file = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let read = bvh::read_file(path)
+            .map_err(|e| e.to_string())
+            .and_then(|f| {
+                let n = f.frames.len();
+                Clip::from_bvh(f, &ImportSettings::default())
+                    .map(|c| (n, c))
+                    .map_err(|e| format!("{}: {e}", path.display()))
+            });
+        let (n, clip) = match read {
+            Ok(r) => r,
+            Err(why) => {
+                skipped.push((file, why));
+                continue;
+            }
+        };
+        if let Some(first) = takes.first() {
+            if let Some(why) = hierarchy_difference(&first.clip.skeleton, &clip.skeleton) {
+                skipped.push((
+                    file,
+                    format!("another skeleton than {}'s ({why})", first.file),
+                ));
+                continue;
+            }
+        }
+        takes.push(Take {
+            file,
+            skipped: n - clip.frames.len(),
+            clip,
+        });
+    }
+    let Some(first) = takes.first() else {
+        return Err(InitError::NothingUsable {
+            path: src.to_owned(),
+            reasons: skipped.iter().map(|(f, w)| format!("{f}: {w}")).collect(),
+        });
+    };
+    let unit = KNOWN_UNITS
+        .iter()
+        .find(|(s, _)| (s - first.clip.scale_to_m).abs() < 1e-12)
+        .map_or_else(
+            || format!("{} m per unit", first.clip.scale_to_m),
+            |(_, name)| (*name).to_owned(),
+        );
+    let roles = first.clip.roles.names(&first.clip.skeleton);
+    let mut by_action: BTreeMap<String, Vec<&Take>> = BTreeMap::new();
+    for t in &takes {
+        let stem = t.file.rsplit_once('.').map_or(t.file.as_str(), |(s, _)| s);
+        match stem.split_once('_') {
+            Some(("pose", _)) => {}
+            Some((action, _)) if !action.is_empty() => {
+                by_action.entry(action.to_owned()).or_default().push(t);
+            }
+            _ => {}
+        }
+    }
+    let actions = by_action
+        .into_iter()
+        .map(|(name, takes)| plan_action(name, &takes))
+        .collect();
+    Ok(Plan {
+        src: src.to_owned(),
+        posing: takes.iter().map(|t| t.file.clone()).collect(),
+        actions,
+        roles,
+        unit,
+        skipped,
+    })
+}
+
+fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
+    let motions: Vec<Vec<PartMotion>> = takes.iter().map(|t| part_motion(&t.clip)).collect();
+    let mut ranges: Vec<(Role, f64)> = CANDIDATES
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (*r, motions.iter().map(|m| m[i].range_m).sum::<f64>()))
+        .collect();
+    // Largest first; ties keep the candidates' order.
+    ranges.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let (primary, best) = ranges[0];
+    let index = CANDIDATES.iter().position(|r| *r == primary).unwrap_or(0);
+    let mut notes = vec![format!(
+        "primary {}: it moves most ({:.2} m over {} clip{}; then {})",
+        primary.name(),
+        best / takes.len() as f64,
+        takes.len(),
+        if takes.len() == 1 {
+            ""
+        } else {
+            "s, on average"
+        },
+        ranges[1..]
+            .iter()
+            .map(|(r, m)| format!("{} {:.2}", r.name(), m / takes.len() as f64))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )];
+    if let Some((other, m)) = ranges[1..].iter().find(|(_, m)| *m >= ALSO_MOVES * best) {
+        notes.push(format!(
+            "{} moves about as much ({:.0}% of {}): the action may need both; the primary is one part",
+            other.name(),
+            100.0 * m / best,
+            primary.name()
+        ));
+    }
+    let mut clips = Vec::new();
+    let mut starts = Vec::new();
+    let mut ends = Vec::new();
+    for (take, motion) in takes.iter().zip(&motions) {
+        let part = &motion[index];
+        let speed = &part.speed;
+        let found = bursts(speed, take.clip.frame_time);
+        let cut_at = cuts(part, &found);
+        let mut edges = vec![0];
+        edges.extend(&cut_at);
+        edges.push(speed.len() - 1);
+        if cut_at.is_empty() {
+            clips.push(take.file.clone());
+        } else {
+            notes.push(format!(
+                "{}: {} movements of the {}, cut where it is back and slowest between them (frames {})",
+                take.file,
+                cut_at.len() + 1,
+                primary.name(),
+                cut_at
+                    .iter()
+                    .map(|c| (c + take.skipped).to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+            for w in edges.windows(2) {
+                clips.push(format!(
+                    "{}#{}-{}",
+                    take.file,
+                    w[0] + take.skipped,
+                    w[1] + take.skipped
+                ));
+            }
+        }
+        for w in edges.windows(2) {
+            let piece = &speed[w[0]..=w[1]];
+            if let Some((a, b)) = active_span(piece) {
+                let last = (piece.len() - 1).max(1) as f64;
+                starts.push(a as f64 / last);
+                ends.push(b as f64 / last);
+            }
+        }
+    }
+    let segments = segments(median(&mut starts), median(&mut ends));
+    notes.push(format!(
+        "segments: still and cancelled until {:.2} (the {} starts moving), then moving to {:.2}, then still",
+        segments.first().map_or(0.0, |s| s.until),
+        primary.name(),
+        segments.get(1).map_or(1.0, |s| s.until)
+    ));
+    PlannedAction {
+        name,
+        primary,
+        ranges,
+        clips,
+        segments,
+        notes,
+    }
+}
+
+/// The first and last frames where a piece's speed is over
+/// `ACTIVE_SHARE` of its own peak.
+fn active_span(speed: &[f64]) -> Option<(usize, usize)> {
+    let peak = speed.iter().copied().fold(0.0, f64::max);
+    if peak <= 0.0 {
+        return None;
+    }
+    let active = |s: &f64| *s > ACTIVE_SHARE * peak;
+    Some((
+        speed.iter().position(active)?,
+        speed.iter().rposition(active)?,
+    ))
+}
+
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// Condition segments from when the primary part starts and stops moving
+/// (generalized time): still and cancelled while it prepares, moving and
+/// finished once it goes, still and finished as it recovers.
+fn segments(start: Option<f64>, end: Option<f64>) -> Vec<Segment> {
+    let round = |t: f64| (t * 100.0).round() / 100.0;
+    let start = round(start.unwrap_or(0.3).clamp(0.05, 0.6));
+    let end = round(end.unwrap_or(0.7).clamp(start + 0.1, 0.95));
+    vec![
+        Segment {
+            until: start,
+            still: true,
+            release: Release::Backward,
+        },
+        Segment {
+            until: end,
+            still: false,
+            release: Release::Forward,
+        },
+        Segment {
+            until: 1.0,
+            still: true,
+            release: Release::Forward,
+        },
+    ]
+}
+
+impl Plan {
+    /// The library file, commented, for a library in `out` (clips are
+    /// referenced in the source folder, relative to `out` when they can
+    /// be).
+    #[must_use]
+    pub fn to_toml(&self, out: &Path) -> String {
+        let dir = relative_to(&self.src, out);
+        let mut t = String::new();
+        let _ = writeln!(
+            t,
+            "# A motion library made by `marionette library init` from the takes in\n# {}.\n# Every decision below is measured from the motion and can be edited;\n# `marionette bake --library DIR` loads it and says what is wrong, if\n# anything.",
+            self.src.display()
+        );
+        let _ = writeln!(
+            t,
+            "\n[settings]\n# The clips stay where they are.\nclips_dir = {}\n# Units: {} (from the skeleton's bone lengths); set scale_to_m\n# (metres per file unit) if that is wrong.",
+            toml_string(&dir.display().to_string()),
+            self.unit
+        );
+        let _ = writeln!(
+            t,
+            "\n# Roles found from the joint names; a [roles] table overrides them,\n# e.g. left_hand = \"LeftWrist\".\n#"
+        );
+        for (role, joint) in &self.roles {
+            let _ = writeln!(t, "#   {role} = {joint}");
+        }
+        if !self.skipped.is_empty() {
+            let _ = writeln!(t, "\n# Files left out:");
+            for (file, why) in &self.skipped {
+                let _ = writeln!(t, "#   {file}: {}", why.replace('\n', " "));
+            }
+        }
+        let _ = writeln!(t, "\n[posing]\n# Every clip feeds posing.\nclips = [");
+        for c in &self.posing {
+            let _ = writeln!(t, "  {},", toml_string(c));
+        }
+        let _ = writeln!(t, "]");
+        for a in &self.actions {
+            let _ = writeln!(t, "\n[[action]]");
+            for n in &a.notes {
+                let _ = writeln!(t, "# {n}");
+            }
+            let _ = writeln!(t, "name = {}", toml_string(&a.name));
+            let _ = writeln!(t, "primary = {}", toml_string(a.primary.name()));
+            let _ = writeln!(t, "clips = [");
+            for c in &a.clips {
+                let _ = writeln!(t, "  {},", toml_string(c));
+            }
+            let _ = writeln!(t, "]\nsegments = [");
+            for s in &a.segments {
+                let _ = writeln!(
+                    t,
+                    "  {{ until = {}, still = {}, release = \"{}\" }},",
+                    s.until,
+                    s.still,
+                    match s.release {
+                        Release::Forward => "forward",
+                        Release::Backward => "backward",
+                    }
+                );
+            }
+            let _ = writeln!(t, "]");
+        }
+        t
+    }
+
+    /// What was decided, for a person: a line each.
+    #[must_use]
+    pub fn report(&self) -> Vec<String> {
+        let mut lines = vec![format!(
+            "{} clips, units {}, every clip feeds posing",
+            self.posing.len(),
+            self.unit
+        )];
+        for (file, why) in &self.skipped {
+            lines.push(format!("left out {file}: {why}"));
+        }
+        for a in &self.actions {
+            lines.push(format!("action {}: {} clips", a.name, a.clips.len()));
+            lines.extend(a.notes.iter().map(|n| format!("  {n}")));
+        }
+        lines
+    }
+}
+
+/// A TOML basic string.
+fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_owned()).to_string()
+}
+
+/// `path` as seen from `from` when both are absolute or both relative
+/// (`..` steps up), else `path` itself.
+fn relative_to(path: &Path, from: &Path) -> PathBuf {
+    let (Ok(path), Ok(from)) = (
+        std::path::absolute(path).map(|p| normalise(&p)),
+        std::path::absolute(from).map(|p| normalise(&p)),
+    ) else {
+        return path.to_owned();
+    };
+    let common = path
+        .components()
+        .zip(from.components())
+        .take_while(|(a, b)| a == b)
+        .count();
+    let mut out = PathBuf::new();
+    for _ in from.components().skip(common) {
+        out.push("..");
+    }
+    for c in path.components().skip(common) {
+        out.push(c);
+    }
+    if out.as_os_str().is_empty() {
+        out.push(".");
+    }
+    out
+}
+
+/// `.` and `..` folded away without touching the file system.
+fn normalise(p: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A part's motion along one axis: `speed` per frame, the path the
+    /// running sum of it.
+    fn along(speed: &[f64], dt: f64) -> PartMotion {
+        let mut x = 0.0;
+        let path: Vec<DVec3> = speed
+            .iter()
+            .map(|s| {
+                x += s * dt;
+                DVec3::new(x, 0.0, 0.0)
+            })
+            .collect();
+        PartMotion {
+            role: Role::RightHand,
+            range_m: x,
+            speed: speed.to_vec(),
+            path,
+        }
+    }
+
+    #[test]
+    fn bursts_are_merged_across_short_gaps() {
+        // 30 fps: two movements 0.5 s long, 0.5 s apart, with a 0.1 s dip
+        // inside the first (a wave's turn-round, not a pause).
+        let mut speed = vec![0.0; 30];
+        speed.extend(vec![2.0; 7]);
+        speed.extend(vec![0.2; 3]);
+        speed.extend(vec![2.0; 5]);
+        speed.extend(vec![0.1; 7]);
+        speed.push(0.05);
+        speed.extend(vec![0.1; 7]);
+        speed.extend(vec![2.0; 15]);
+        speed.extend(vec![0.0; 30]);
+        assert_eq!(bursts(&speed, 1.0 / 30.0), vec![(30, 44), (60, 74)]);
+    }
+
+    #[test]
+    fn a_take_is_cut_where_the_part_is_back_not_where_it_pauses_away() {
+        let dt = 1.0 / 30.0;
+        // Out and back, a pause at the start, out and back again: two
+        // punches, cut in the pause (frame 52).
+        let mut v = vec![0.0; 30];
+        v.extend(vec![2.0; 7]);
+        v.extend(vec![-2.0; 7]);
+        v.extend(vec![0.0; 8]);
+        v.push(0.0);
+        v.extend(vec![0.0; 7]);
+        v.extend(vec![2.0; 7]);
+        v.extend(vec![-2.0; 7]);
+        v.extend(vec![0.0; 30]);
+        let mut punches = along(&v, dt);
+        punches.range_m = 7.0 * 2.0 * dt;
+        // Still in the pause but for a tremor, least at frame 52.
+        punches.speed = v.iter().map(|s: &f64| s.abs().max(0.1)).collect();
+        punches.speed[52] = 0.05;
+        let found = bursts(&punches.speed, dt);
+        assert_eq!(found.len(), 2);
+        assert_eq!(cuts(&punches, &found), vec![52]);
+        // Down, a pause down there, up: one bow.
+        let mut v = vec![0.0; 30];
+        v.extend(vec![2.0; 7]);
+        v.extend(vec![0.0; 16]);
+        v.extend(vec![-2.0; 7]);
+        v.extend(vec![0.0; 30]);
+        let mut bow = along(&v, dt);
+        bow.range_m = 7.0 * 2.0 * dt;
+        bow.speed = v.iter().map(|s: &f64| s.abs()).collect();
+        let found = bursts(&bow.speed, dt);
+        assert_eq!(found.len(), 2);
+        assert!(cuts(&bow, &found).is_empty());
+    }
+
+    #[test]
+    fn a_still_take_has_no_bursts() {
+        assert!(bursts(&[0.0; 40], 1.0 / 30.0).is_empty());
+    }
+
+    #[test]
+    fn segments_stay_in_order_whatever_the_timing() {
+        for (a, b) in [(None, None), (Some(0.0), Some(1.0)), (Some(0.9), Some(0.2))] {
+            let s = segments(a, b);
+            assert_eq!(s.len(), 3);
+            assert!(
+                s[0].until > 0.0 && s[0].until < s[1].until && s[1].until < 1.0,
+                "{s:?}"
+            );
+            assert_eq!(s[2].until, 1.0);
+        }
+    }
+
+    #[test]
+    fn a_folder_is_referenced_from_the_library_beside_it() {
+        assert_eq!(
+            relative_to(Path::new("/data/takes"), Path::new("/data/libs/mine")),
+            PathBuf::from("../../takes")
+        );
+        assert_eq!(
+            relative_to(Path::new("/a/b"), Path::new("/a/b")),
+            PathBuf::from(".")
+        );
+    }
+}
