@@ -205,6 +205,12 @@ pub(super) enum EvalCommand {
         /// others (instead of --test; --frames per clip)
         #[arg(long, conflicts_with = "test")]
         leave_one_out: bool,
+        /// Follow each test clip frame by frame from its first frame
+        /// (--frames of each), the character continuing from its own last
+        /// posture as in use; prints the frame-by-frame and single-frame
+        /// results
+        #[arg(long, conflicts_with = "leave_one_out")]
+        sequence: bool,
         /// Constrained parts, first N of right_hand, left_hand, right_foot, left_foot, head
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u8).range(1..=5))]
         parts: u8,

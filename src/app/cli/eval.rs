@@ -102,6 +102,7 @@ pub(super) fn eval_pose(
     library: &Path,
     tests: &[PathBuf],
     setup: crate::tools::eval::posing::EvalSetup,
+    sequence_settle_s: Option<f64>,
 ) -> Result<(), Failure> {
     use crate::tools::eval::posing as eval;
     let (lib, learned) = crate::app::character::load_models(library, false)?;
@@ -133,13 +134,23 @@ pub(super) fn eval_pose(
         .or_else(|| lib.clips.values().next())
         .expect("library has clips");
     let refs: Vec<&crate::character::motion::Clip> = clips.iter().collect();
-    print_json(&eval::eval_pose(
-        &lib.skeleton,
-        &learned,
-        rest,
-        &refs,
-        setup,
-    ))
+    match sequence_settle_s {
+        Some(settle_s) => print_json(&eval::eval_sequence(
+            &lib.skeleton,
+            &learned,
+            rest,
+            &refs,
+            setup,
+            settle_s,
+        )),
+        None => print_json(&eval::eval_pose(
+            &lib.skeleton,
+            &learned,
+            rest,
+            &refs,
+            setup,
+        )),
+    }
 }
 
 pub(super) fn eval_pose_leave_one_out(

@@ -167,6 +167,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     library,
                     test,
                     leave_one_out,
+                    sequence,
                     parts,
                     mode,
                     method,
@@ -188,7 +189,12 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             if leave_one_out {
                 eval_pose_leave_one_out(&library, setup)
             } else {
-                eval_pose(&library, &test, setup)
+                eval_pose(
+                    &library,
+                    &test,
+                    setup,
+                    sequence.then_some(config.control_settings().settle_s),
+                )
             }
         }
         Command::AuthorLibrary { src, out } => {

@@ -147,7 +147,7 @@ const FOOT_CREEP_M_S: f64 = 0.09;
 const GROUND_CONTACT_M: f64 = 0.03;
 
 /// Longest tracking sub-step (s): explicit integration stays stable.
-const MAX_SUBSTEP: f64 = 0.004;
+pub const MAX_SUBSTEP: f64 = 0.004;
 
 impl Controller {
     /// A character at rest at the origin facing +Z, seen in a picture of

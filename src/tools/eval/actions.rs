@@ -8,6 +8,8 @@
 //! starts. Slow posing drags (paths of each primary part at under a third
 //! of the action's speed, in random directions) must start nothing.
 
+use std::collections::BTreeMap;
+
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 
@@ -32,6 +34,61 @@ pub struct ActionEval {
     /// (by time: the last point the recogniser had, over the drag's
     /// duration).
     pub decided_at: f64,
+    /// The same figures for each action tested, in name order.
+    pub actions: Vec<ActionRow>,
+    /// For each action tested, how many of its drags started each action
+    /// (`"none"`: nothing started).
+    pub confusion: BTreeMap<String, BTreeMap<String, usize>>,
+}
+
+/// One action's row of [`ActionEval`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ActionRow {
+    pub action: String,
+    pub trials: usize,
+    pub correct: f64,
+    pub wrong_action: f64,
+    pub missed: f64,
+    pub false_trigger_slow: f64,
+    pub decided_at: f64,
+}
+
+/// Counts behind a row.
+#[derive(Default)]
+struct Tally {
+    trials: usize,
+    correct: usize,
+    wrong: usize,
+    missed: usize,
+    slow_trials: usize,
+    slow_triggers: usize,
+    decided: Vec<f64>,
+}
+
+impl Tally {
+    fn row(&self, action: String) -> ActionRow {
+        let frac = |a: usize, b: usize| {
+            if b == 0 {
+                0.0
+            } else {
+                (a as f64 / b as f64 * 1000.0).round() / 1000.0
+            }
+        };
+        ActionRow {
+            action,
+            trials: self.trials,
+            correct: frac(self.correct, self.trials),
+            wrong_action: frac(self.wrong, self.trials),
+            missed: frac(self.missed, self.trials),
+            false_trigger_slow: frac(self.slow_triggers, self.slow_trials),
+            decided_at: if self.decided.is_empty() {
+                0.0
+            } else {
+                (self.decided.iter().sum::<f64>() / self.decided.len() as f64 * 1000.0).round()
+                    / 1000.0
+            },
+        }
+    }
 }
 
 /// A small deterministic generator for the noise.
@@ -137,10 +194,12 @@ pub fn eval_with(
     judge: &mut dyn FnMut(&Drag<'_>) -> Option<(String, usize)>,
 ) -> ActionEval {
     let mut rng = Lcg(seed ^ 0x9e37_79b9_7f4a_7c15);
-    let (mut trials, mut correct, mut wrong, mut missed) = (0usize, 0usize, 0usize, 0usize);
-    let mut decided = Vec::new();
-    let (mut slow_trials, mut slow_triggers) = (0usize, 0usize);
+    let mut all = Tally::default();
+    let mut rows: BTreeMap<String, Tally> = BTreeMap::new();
+    let mut confusion: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
     for &(ref name, role, clip) in tests {
+        let row = rows.entry(name.clone()).or_default();
+        let confused = confusion.entry(name.clone()).or_default();
         let at = Placement {
             anchor: Anchor::ClipStart,
             ..Placement::of(&clip.skeleton, &clip.roles, &clip.frames[0])
@@ -173,7 +232,8 @@ pub fn eval_with(
                         })
                     })
                     .collect();
-                trials += 1;
+                all.trials += 1;
+                row.trials += 1;
                 let drag = Drag {
                     role,
                     trail: &trail,
@@ -181,13 +241,23 @@ pub fn eval_with(
                     at: &at,
                     angle_deg: angle,
                 };
-                match judge(&drag) {
-                    Some((a, n)) if a == *name => {
-                        correct += 1;
-                        decided.push(seen_fraction(&trail, n));
+                let started = judge(&drag);
+                *confused
+                    .entry(
+                        started
+                            .as_ref()
+                            .map_or_else(|| "none".to_owned(), |(a, _)| a.clone()),
+                    )
+                    .or_default() += 1;
+                for t in [&mut all, &mut *row] {
+                    match &started {
+                        Some((a, n)) if a == name => {
+                            t.correct += 1;
+                            t.decided.push(seen_fraction(&trail, *n));
+                        }
+                        Some(_) => t.wrong += 1,
+                        None => t.missed += 1,
                     }
-                    Some(_) => wrong += 1,
-                    None => missed += 1,
                 }
                 // A slow posing drag of the same part: as long, in a random
                 // direction, at under a third of the speed.
@@ -214,34 +284,27 @@ pub fn eval_with(
                         }
                     })
                     .collect();
-                slow_trials += 1;
                 let drag = Drag {
                     trail: &slow,
                     ..drag
                 };
-                if judge(&drag).is_some() {
-                    slow_triggers += 1;
+                let triggered = judge(&drag).is_some();
+                for t in [&mut all, &mut *row] {
+                    t.slow_trials += 1;
+                    t.slow_triggers += usize::from(triggered);
                 }
             }
         }
     }
-    let frac = |a: usize, b: usize| {
-        if b == 0 {
-            0.0
-        } else {
-            (a as f64 / b as f64 * 1000.0).round() / 1000.0
-        }
-    };
+    let total = all.row(String::new());
     ActionEval {
-        trials,
-        correct: frac(correct, trials),
-        wrong_action: frac(wrong, trials),
-        missed: frac(missed, trials),
-        false_trigger_slow: frac(slow_triggers, slow_trials),
-        decided_at: if decided.is_empty() {
-            0.0
-        } else {
-            (decided.iter().sum::<f64>() / decided.len() as f64 * 1000.0).round() / 1000.0
-        },
+        trials: total.trials,
+        correct: total.correct,
+        wrong_action: total.wrong_action,
+        missed: total.missed,
+        false_trigger_slow: total.false_trigger_slow,
+        decided_at: total.decided_at,
+        actions: rows.into_iter().map(|(name, t)| t.row(name)).collect(),
+        confusion,
     }
 }
