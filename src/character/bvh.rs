@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use glam::{DQuat, DVec3, EulerRot};
 use thiserror::Error;
 
-use super::skeleton::{Joint, Pose, Skeleton};
+use super::skeleton::{Joint, Pose, Skeleton, forward_kinematics};
 
 /// Most joints a file may declare.
 pub const MAX_JOINTS: usize = 1024;
@@ -305,8 +305,8 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
 /// stretching joint's repeat its offset) or a displacement added to its
 /// OFFSET (iClone's Character Creator rig: a hip offset of 105 cm and
 /// channels near 5 cm). Frames are read the first way; a joint with a
-/// non-zero offset whose channels stay nearer zero than that offset, on
-/// average over the clip, is read the second way. Returns those joints.
+/// non-zero offset is read the second way when that puts the first frame
+/// on the floor where the first way does not. Returns those joints.
 fn positions_relative_to_offsets(
     skeleton: &Skeleton,
     channels: &[Vec<Channel>],
@@ -334,12 +334,14 @@ fn positions_relative_to_offsets(
         if offset.length() < 1e-9 {
             continue;
         }
-        let mean = frames
-            .iter()
-            .map(|f| f.translations[j] * mask)
-            .sum::<DVec3>()
-            / frames.len() as f64;
-        if mean.length() < (mean - offset).length() {
+        // The floor decides: read the second way, the first frame must
+        // stand nearer the floor (y = 0) than read the first way. (Nearness
+        // of the values to the offset misleads: a studio may copy one take's
+        // start, metres away, into every file's offset.)
+        let mut moved = frames[0].clone();
+        moved.translations[j] += offset;
+        let (as_read, added) = (lowest(skeleton, &frames[0]), lowest(skeleton, &moved));
+        if added.abs() + 1e-9 < as_read.abs() {
             for f in frames.iter_mut() {
                 f.translations[j] += offset;
             }
@@ -347,6 +349,16 @@ fn positions_relative_to_offsets(
         }
     }
     relative
+}
+
+/// The lowest point of a posture (joints and End Sites), in y.
+fn lowest(skeleton: &Skeleton, pose: &Pose) -> f64 {
+    let w = forward_kinematics(skeleton, pose);
+    (0..skeleton.len())
+        .flat_map(|i| [Some(w.positions[i]), w.end_site(skeleton, i)])
+        .flatten()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min)
 }
 
 fn parse_joint(
@@ -538,22 +550,32 @@ mod tests {
 
     #[test]
     fn position_channels_are_places_or_displacements_as_the_file_says() {
-        // A hip offset of 1 m: channels near 1 m say where the hip is;
-        // channels near zero are added to the offset (Character Creator).
-        let file = |ys: [f64; 2]| {
-            SMALL
-                .replace("\tOFFSET 0 0 0", "\tOFFSET 0 1 0")
-                .replace("1 2 3 10", &format!("1 {} 3 10", ys[0]))
-                .replace("0 0 0 0 0 0 0 0 0", &format!("0 {} 0 0 0 0 0 0 0", ys[1]))
+        // A hip 1 m up (its offset) over a leg 0.9 m long: channels near
+        // 1 m say where the hip is; channels near zero are added to the
+        // offset (Character Creator). The floor decides.
+        let file = |offset: &str, ys: [f64; 2], z: f64| {
+            format!(
+                "HIERARCHY\nROOT Hips\n{{\nOFFSET {offset}\nCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\nJOINT Leg\n{{\nOFFSET 0.1 -0.5 0\nCHANNELS 3 Zrotation Yrotation Xrotation\nEnd Site\n{{\nOFFSET 0 -0.4 0\n}}\n}}\n}}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n1 {} {z} 0 0 0 0 0 0\n0 {} 0 0 0 0 0 0 0\n",
+                ys[0], ys[1]
+            )
         };
-        let f = parse(&file([0.98, 0.96]), Path::new("places.bvh")).unwrap();
+        let f = parse(&file("0 1 0", [0.98, 0.96], 3.0), Path::new("places.bvh")).unwrap();
         assert_eq!(f.frames[0].translations[0], DVec3::new(1.0, 0.98, 3.0));
         assert_eq!(f.frames[1].translations[0], DVec3::new(0.0, 0.96, 0.0));
-        let f = parse(&file([0.05, -0.02]), Path::new("moves.bvh")).unwrap();
+        let f = parse(&file("0 1 0", [0.05, -0.02], 3.0), Path::new("moves.bvh")).unwrap();
         assert_eq!(f.frames[0].translations[0], DVec3::new(1.0, 1.05, 3.0));
         assert_eq!(f.frames[1].translations[0], DVec3::new(0.0, 0.98, 0.0));
         // The leg has no position channels: its offset stays.
-        assert_eq!(f.frames[0].translations[1], DVec3::new(0.1, -0.4, 0.05));
+        assert_eq!(f.frames[0].translations[1], DVec3::new(0.1, -0.5, 0.0));
+        // An offset copied from another take's start, metres away: the
+        // channels are places all the same.
+        let f = parse(
+            &file("0.8 0.94 -4.5", [0.93, 0.92], -0.1),
+            Path::new("walk.bvh"),
+        )
+        .unwrap();
+        assert_eq!(f.frames[0].translations[0], DVec3::new(1.0, 0.93, -0.1));
+        assert_eq!(f.frames[1].translations[0], DVec3::new(0.0, 0.92, 0.0));
     }
 
     #[test]
