@@ -356,3 +356,125 @@ fn bake_with_an_unwritable_cache_warns_and_succeeds() {
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("posing model of"));
 }
+
+/// A real recording with its event times changed by `f` (seconds since its
+/// first event in, seconds out).
+fn with_times(name: &str, f: impl Fn(f64) -> f64) -> String {
+    let text = std::fs::read_to_string(recording(name)).unwrap();
+    let mut t0 = None;
+    let mut out = String::new();
+    for l in text.lines() {
+        match l.strip_prefix("E: ") {
+            Some(rest) => {
+                let (ts, tail) = rest.split_once(' ').unwrap();
+                let t: f64 = ts.parse().unwrap();
+                let t0 = *t0.get_or_insert(t);
+                out.push_str(&format!("E: {:.6} {tail}\n", t0 + f(t - t0)));
+            }
+            None => {
+                out.push_str(l);
+                out.push('\n');
+            }
+        }
+    }
+    out
+}
+
+fn inspect_json(path: &Path) -> serde_json::Value {
+    let out = marionette(&["inspect", path.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn a_clock_that_jumps_or_goes_back_replays_in_recorded_time() {
+    let dir = tempfile::tempdir().unwrap();
+    // 29 s of ten fingers; after 10 s the clock jumps a day ahead.
+    let jump = dir.path().join("jump.evemu");
+    std::fs::write(
+        &jump,
+        with_times("evemu-data.3m-microtouch-usb.evemu", |t| {
+            if t > 10.0 { t + 1e5 } else { t }
+        }),
+    )
+    .unwrap();
+    let v = inspect_json(&jump);
+    assert_eq!(v["time_gaps"], 1);
+    assert_eq!(v["time_backwards"], 0);
+    let replay_s = v["replay_s"].as_f64().unwrap();
+    // The pause around the jump (1.6 s in the recording) replays as 5 s.
+    assert!((30.0..35.0).contains(&replay_s), "{v}");
+    assert!(v["duration_s"].as_f64().unwrap() > 1e5);
+    let out = dir.path().join("frames");
+    let run = marionette(&[
+        "replay",
+        jump.to_str().unwrap(),
+        "--headless",
+        "--out",
+        out.to_str().unwrap(),
+        "--fps",
+        "2",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let written = std::fs::read_dir(out.join("frames")).unwrap().count();
+    // Every half second of the replay, and up to 16 thumbnails.
+    assert!((60..=85).contains(&written), "{written} frames");
+    let log = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        log.contains("pauses longer than max_s are shortened"),
+        "{log}"
+    );
+
+    // The clock steps back 3 s after 10 s and runs on from there.
+    let back = dir.path().join("back.evemu");
+    std::fs::write(
+        &back,
+        with_times("evemu-data.3m-microtouch-usb.evemu", |t| {
+            if t > 10.0 { t - 3.0 } else { t }
+        }),
+    )
+    .unwrap();
+    let v = inspect_json(&back);
+    assert_eq!(v["time_backwards"], 1, "{v}");
+    assert_eq!(v["time_gaps"], 0, "{v}");
+    // The step back is held at the frame before it: the replay loses the
+    // 1.6 s pause there, not 3 s of touches.
+    let replay_s = v["replay_s"].as_f64().unwrap();
+    assert!((27.0..29.0).contains(&replay_s), "{v}");
+    assert!(v["duration_s"].as_f64().unwrap() < replay_s, "{v}");
+}
+
+#[test]
+fn a_headless_replay_refuses_more_frames_than_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    // The same touches, 150 times slower: 73 minutes, no pause over 5 s.
+    let slow = dir.path().join("slow.evemu");
+    std::fs::write(
+        &slow,
+        with_times("evemu-data.3m-microtouch-usb.evemu", |t| t * 150.0),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let run = marionette(&[
+        "replay",
+        slow.to_str().unwrap(),
+        "--headless",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("--max-frames") && err.contains("more than"),
+        "{err}"
+    );
+    assert!(!out.join("frames").exists());
+}

@@ -50,6 +50,10 @@ pub(super) enum Command {
         /// Frames written per second of recording.
         #[arg(long, default_value_t = 10.0)]
         fps: f64,
+        /// With --headless: refuse to write more frames than this (a long
+        /// recording at a high --fps fills a disk)
+        #[arg(long, default_value_t = 18_000)]
+        max_frames: u64,
         /// Run the whole pipeline without rendering and write motion
         /// quality metrics (JSON) to this file.
         #[arg(long, value_name = "OUT.json", conflicts_with = "headless")]

@@ -113,10 +113,11 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             headless: true,
             out: Some(out),
             fps,
+            max_frames,
             ..
         } => {
             let rec = Recording::read_file(&file)?;
-            show(config, &rec, &out, fps)
+            show(config, &rec, &out, fps, max_frames)
         }
         Command::Replay {
             file,

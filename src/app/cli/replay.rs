@@ -30,16 +30,36 @@ pub(super) fn character(
 }
 
 /// A recording through the whole pipeline into images.
-pub(super) fn show(config: &Config, rec: &Recording, out: &Path, fps: f64) -> Result<(), Failure> {
+pub(super) fn show(
+    config: &Config,
+    rec: &Recording,
+    out: &Path,
+    fps: f64,
+    max_frames: u64,
+) -> Result<(), Failure> {
     use crate::app::headless;
     check_fps(fps)?;
+    let (summary, _) = pipeline::summarize(rec);
+    // Every 1/fps of recording, and the contact sheet's thumbnails.
+    let frames_out = (summary.replay_s * fps).floor() as u64
+        + 1
+        + headless::Options::default().sheet_frames as u64;
+    if frames_out > max_frames {
+        return Err(Failure::new(
+            exit::USAGE,
+            format!(
+                "the replay would write {frames_out} frames ({:.1} s of recording at --fps {fps}), more than --max-frames {max_frames}: pass --max-frames {frames_out} to write them all, or a lower --fps",
+                summary.replay_s
+            ),
+        ));
+    }
     let ch = character(config)?;
     let frames = pipeline::replay(rec, &config.input, config.display.picture())
         .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let opts = headless::Options {
         out: Some(out.to_owned()),
         fps,
-        until: Some(pipeline::summarize(rec).0.duration_s),
+        until: Some(summary.replay_s),
         ..headless::Options::default()
     };
     let summary = headless::run(ch, config, frames, &opts).map_err(Failure::from)?;
@@ -72,7 +92,7 @@ pub(super) fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Fail
         summary.touch_sequences
     )
     .map_err(stdout_error)?;
-    show(config, &rec, out_dir, fps)
+    show(config, &rec, out_dir, fps, u64::MAX)
 }
 
 /// A recording's postures, the controller stepped at `tick_hz` (0: the
@@ -108,7 +128,7 @@ pub(super) fn replay_poses(
     let opts = headless::Options {
         tick_hz,
         keep_poses: true,
-        until: Some(pipeline::summarize(&rec).0.duration_s),
+        until: Some(pipeline::summarize(&rec).0.replay_s),
         tracking,
         ..headless::Options::default()
     };
