@@ -157,6 +157,38 @@ fn touchscreens_are_read_and_other_devices_skipped() {
 }
 
 #[test]
+fn a_pen_on_odd_axes_is_opened_as_a_touchscreen_with_its_overrides() {
+    let with = |config: &str| {
+        let opener = Opener::default();
+        opener.nodes.borrow_mut().insert(
+            "/dev/input/event6".into(),
+            node(Rc::new(common::egalax_like()), 1000),
+        );
+        let config = Config::parse(config, Path::new("test.toml")).unwrap();
+        let mut hub = InputHub::new(opener, config.input.clone(), config.display.picture());
+        let mut out = Vec::new();
+        hub.dispatch(0, &mut out);
+        let fingers = out
+            .iter()
+            .filter_map(|e| match e {
+                HubEvent::Touch { contacts, .. } => Some(contacts),
+                _ => None,
+            })
+            .flatten()
+            .filter(|c| c.tool == marionette::input::touch::Tool::Finger)
+            .count();
+        (hub.device_count(), fingers)
+    };
+    // As it announces itself: a pen without positions, not opened.
+    assert_eq!(with(""), (0, 0));
+    let (devices, fingers) = with(
+        "[[input.device]]\nmatch_usb = \"0eef:0001\"\naxes = { x = \"ABS_Z\", y = \"ABS_RX\" }\ntool = \"finger\"\n",
+    );
+    assert_eq!(devices, 1);
+    assert!(fingers > 20, "{fingers} finger contacts");
+}
+
+#[test]
 fn unplug_cancels_contacts_and_replug_restores_calibration() {
     let opener = Opener::default();
     let rec = real("atmel-maxtouch.1-finger-drag-up-down.evemu");

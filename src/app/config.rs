@@ -224,6 +224,25 @@ impl Config {
                     ));
                 }
             }
+            if let Some(axes) = &dev.axes {
+                for (k, name) in [("x", &axes.x), ("y", &axes.y)] {
+                    if crate::input::remap::axis_code(name).is_none() {
+                        return Err(invalid(
+                            &key(&format!("axes.{k}")),
+                            format!(
+                                "`{name}` is not an axis marionette knows; one of {}",
+                                crate::input::remap::AXIS_NAMES.map(|(n, _)| n).join(", ")
+                            ),
+                        ));
+                    }
+                }
+                if axes.x.eq_ignore_ascii_case(&axes.y) {
+                    return Err(invalid(
+                        &key("axes"),
+                        format!("x and y must be two axes, found {} for both", axes.x),
+                    ));
+                }
+            }
             if !dev.matrix().is_usable() {
                 return Err(invalid(
                     &key("calibration"),

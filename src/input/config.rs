@@ -8,6 +8,7 @@ use serde::Deserialize;
 
 use super::calibration::Matrix;
 use super::device::DeviceDescription;
+use super::remap::{Remap, RemapError, axis_code};
 
 /// `[input]`
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -50,6 +51,29 @@ pub struct DeviceConfig {
     /// Do not read this device at all.
     #[serde(default)]
     pub ignore: bool,
+    /// The axes that carry the position, when not the usual ones:
+    /// `{ x = "ABS_Z", y = "ABS_RX" }` (kernel names).
+    #[serde(default)]
+    pub axes: Option<AxesConfig>,
+    /// What the device's contacts are, whatever it announces: `"finger"`
+    /// makes a panel that says `BTN_TOOL_PEN` for fingers usable.
+    #[serde(default)]
+    pub tool: Option<ToolOverride>,
+}
+
+/// `axes = { x = "...", y = "..." }`
+#[derive(Clone, Debug, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxesConfig {
+    pub x: String,
+    pub y: String,
+}
+
+/// `tool = "finger"`
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToolOverride {
+    Finger,
 }
 
 fn identity() -> [f64; 6] {
@@ -71,6 +95,23 @@ impl DeviceConfig {
     pub fn matrix(&self) -> Matrix {
         Matrix(self.calibration)
     }
+
+    /// The axis codes `axes` names, `None` when unset or a name is unknown
+    /// (the configuration's validation refuses those).
+    #[must_use]
+    pub fn axis_codes(&self) -> Option<(u16, u16)> {
+        let a = self.axes.as_ref()?;
+        Some((axis_code(&a.x)?, axis_code(&a.y)?))
+    }
+
+    /// What this entry changes of a device's reports.
+    pub fn remap(&self, d: &DeviceDescription) -> Result<Option<Remap>, RemapError> {
+        Remap::new(
+            d,
+            self.axis_codes(),
+            self.tool == Some(ToolOverride::Finger),
+        )
+    }
 }
 
 /// `vendor:product` in hex, as `lsusb` prints it.
@@ -88,5 +129,10 @@ impl InputConfig {
     #[must_use]
     pub fn device_for(&self, d: &DeviceDescription) -> Option<&DeviceConfig> {
         self.device.iter().find(|c| c.matches(d))
+    }
+
+    /// What the configuration changes of a device's reports, if anything.
+    pub fn remap_for(&self, d: &DeviceDescription) -> Result<Option<Remap>, RemapError> {
+        self.device_for(d).map_or(Ok(None), |c| c.remap(d))
     }
 }

@@ -84,6 +84,12 @@ impl BitSet {
         self.0[byte] |= 1 << (bit % 8);
     }
 
+    pub fn remove(&mut self, bit: u16) {
+        if let Some(b) = self.0.get_mut(usize::from(bit / 8)) {
+            *b &= !(1 << (bit % 8));
+        }
+    }
+
     /// The set bits, ascending.
     pub fn iter(&self) -> impl Iterator<Item = u16> + '_ {
         self.0.iter().enumerate().flat_map(|(i, b)| {

@@ -22,6 +22,7 @@ use super::config::InputConfig;
 use super::device::{DeviceDescription, DeviceKind};
 use super::event::{ABS_MT_SLOT, RawEvent};
 use super::pipeline::screen_contacts;
+use super::remap::Remap;
 use super::tracker::{ContactTracker, KernelState, ResyncSource, TouchFrame};
 use crate::input::device::device_label;
 use crate::input::touch::ScreenContact;
@@ -120,6 +121,8 @@ struct OpenDevice {
     dev: Box<dyn EventDevice>,
     tracker: ContactTracker,
     calibration: Calibration,
+    /// The configuration's overrides of its axes and tool.
+    remap: Option<Remap>,
 }
 
 /// Every touchscreen marionette reads, kept open across unplug and replug.
@@ -231,6 +234,18 @@ impl<O: DeviceOpener> InputHub<O> {
         let desc = dev.description().clone();
         let label = device_label(&desc.name, desc.id);
         let settings = self.input.device_for(&desc).cloned();
+        let remap = match self.input.remap_for(&desc) {
+            Ok(r) => r,
+            Err(e) => {
+                tracing::error!(path = %path.display(), device = %label, error = %e, "cannot apply the [[input.device]] axes; device not used");
+                self.skipped.insert(path.to_owned());
+                return;
+            }
+        };
+        let desc = match &remap {
+            Some(r) => r.description(&desc),
+            None => desc,
+        };
         let kind = desc.kind();
         if kind != DeviceKind::Touchscreen || settings.as_ref().is_some_and(|s| s.ignore) {
             let why = if kind == DeviceKind::Touchscreen {
@@ -280,6 +295,7 @@ impl<O: DeviceOpener> InputHub<O> {
             dev,
             tracker,
             calibration,
+            remap,
         });
     }
 
@@ -299,6 +315,17 @@ impl<O: DeviceOpener> InputHub<O> {
             self.events.clear();
             let result = d.dev.read(&mut self.events);
             for e in &self.events {
+                let remapped;
+                let e = match &d.remap {
+                    None => e,
+                    Some(r) => match r.event(e) {
+                        Some(m) => {
+                            remapped = m;
+                            &remapped
+                        }
+                        None => continue,
+                    },
+                };
                 d.tracker.push(e, &mut self.frames);
                 if d.tracker.needs_resync() {
                     match d.dev.kernel_state() {
@@ -397,6 +424,13 @@ impl fmt::Display for DeviceListing {
 /// Describe a device for `list-devices`.
 #[must_use]
 pub fn listing(path: &Path, desc: &DeviceDescription, input: &InputConfig) -> DeviceListing {
+    // As the configuration's overrides make it read.
+    let remapped = input
+        .remap_for(desc)
+        .ok()
+        .flatten()
+        .map(|r| r.description(desc));
+    let desc = remapped.as_ref().unwrap_or(desc);
     let kind = desc.kind();
     let settings = input.device_for(desc);
     let verdict = match (kind, settings) {

@@ -13,6 +13,8 @@
 //! - [`tracker`]: protocol A/B/single-touch state machine, SYN_DROPPED;
 //!   [`touch`]: the touch frames it reports.
 //! - [`calibration`]: typed coordinate spaces and the calibration solver.
+//! - [`remap`]: per-device overrides (axes, pen bits as a finger), applied
+//!   before the tracker.
 //! - [`pipeline`]: recordings through the stack (inspect, replay, demo);
 //!   `synth`: authoring recordings.
 //! - `live`: real devices (evdev, hotplug, resync ioctls) behind an
@@ -29,5 +31,6 @@ pub mod evemu;
 pub mod event;
 pub mod hub;
 pub mod pipeline;
+pub mod remap;
 pub mod touch;
 pub mod tracker;

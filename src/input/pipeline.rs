@@ -8,6 +8,7 @@ use super::calibration::{Calibration, CalibrationError, Matrix};
 use super::config::InputConfig;
 use super::device::{DeviceDescription, Protocol};
 use super::evemu::Recording;
+use super::remap::RemapError;
 use super::touch::{ScreenContact, ScreenFrame};
 use super::tracker::{TouchFrame, TrackerError, TrackerStats, track_events};
 use crate::screen::Picture;
@@ -156,6 +157,12 @@ pub fn summarize(rec: &Recording) -> (RecordingSummary, Option<TrackerStats>) {
 pub enum ReplayError {
     #[error(transparent)]
     Tracker(#[from] TrackerError),
+    #[error("device \"{device}\": {source} (see its [[input.device]] axes)")]
+    Remap {
+        device: String,
+        #[source]
+        source: RemapError,
+    },
     #[error("device \"{device}\": {source}")]
     Calibration {
         device: String,
@@ -209,6 +216,23 @@ pub fn to_screen(frame: &TouchFrame, cal: &Calibration, t0_us: i64) -> ScreenFra
     }
 }
 
+/// A recording as the configuration's overrides make it read (`axes`,
+/// `tool` of its `[[input.device]]`): what inspect and every replay read.
+pub fn with_overrides(rec: &Recording, input: &InputConfig) -> Result<Recording, ReplayError> {
+    match input.remap_for(&rec.device) {
+        Ok(None) => Ok(rec.clone()),
+        Ok(Some(r)) => Ok(Recording {
+            device: r.description(&rec.device),
+            events: rec.events.iter().filter_map(|e| r.event(e)).collect(),
+            ..rec.clone()
+        }),
+        Err(source) => Err(ReplayError::Remap {
+            device: rec.device.name.clone(),
+            source,
+        }),
+    }
+}
+
 /// Replay a whole recording into screen-space frames, its time made
 /// replayable ([`retime`]).
 pub fn replay(
@@ -216,6 +240,7 @@ pub fn replay(
     input: &InputConfig,
     picture: Picture,
 ) -> Result<Vec<ScreenFrame>, ReplayError> {
+    let rec = &with_overrides(rec, input)?;
     let cal = calibration_for(input, picture, &rec.device)?;
     let (frames, _) = track_events(&rec.device, &rec.events)?;
     let t0 = rec.events.first().map_or(0, |e| e.time_us);

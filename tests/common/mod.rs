@@ -53,3 +53,57 @@ pub fn contact(
         screen: at,
     }
 }
+
+/// A real touchscreen's single-finger drag (Atmel maXTouch).
+pub const ATMEL_DRAG: &str = "recordings/evemu/atmel-maxtouch.1-finger-drag-up-down.evemu";
+
+/// The Atmel drag as an eGalax 0eef:0001 single-touch panel reports it:
+/// its single-touch position on `ABS_Z`/`ABS_RX`, `BTN_TOOL_PEN` with every
+/// `BTN_TOUCH`, no multitouch axes.
+pub fn egalax_like() -> marionette::input::evemu::Recording {
+    use marionette::input::device::{BitSet, DeviceDescription, InputId};
+    use marionette::input::evemu::Recording;
+    use marionette::input::event::{
+        ABS_X, ABS_Y, BTN_TOOL_PEN, BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, RawEvent,
+    };
+    const ABS_Z: u16 = 0x02;
+    const ABS_RX: u16 = 0x03;
+    let real = Recording::read_file(&shared_dir().join(ATMEL_DRAG)).unwrap();
+    let mut device = DeviceDescription {
+        name: "eGalax Inc. USB TouchController".to_owned(),
+        id: InputId {
+            bustype: 3,
+            vendor: 0x0eef,
+            product: 0x0001,
+            version: 0x0100,
+        },
+        ..DeviceDescription::default()
+    };
+    device.bits = vec![BitSet::default(); usize::from(EV_ABS) + 1];
+    device.bits[usize::from(EV_SYN)].insert(0);
+    for k in [BTN_TOUCH, BTN_TOOL_PEN] {
+        device.bits[usize::from(EV_KEY)].insert(k);
+    }
+    for (from, to) in [(ABS_X, ABS_Z), (ABS_Y, ABS_RX)] {
+        device.bits[usize::from(EV_ABS)].insert(to);
+        device.abs.insert(to, real.device.abs[&from]);
+    }
+    let mut events = Vec::new();
+    for e in &real.events {
+        match (e.kind, e.code) {
+            (EV_ABS, ABS_X) => events.push(RawEvent::new(e.time_us, EV_ABS, ABS_Z, e.value)),
+            (EV_ABS, ABS_Y) => events.push(RawEvent::new(e.time_us, EV_ABS, ABS_RX, e.value)),
+            (EV_ABS, _) => {}
+            (EV_KEY, BTN_TOUCH) => {
+                events.push(RawEvent::new(e.time_us, EV_KEY, BTN_TOOL_PEN, e.value));
+                events.push(*e);
+            }
+            _ => events.push(*e),
+        }
+    }
+    Recording {
+        device,
+        events,
+        ..real
+    }
+}

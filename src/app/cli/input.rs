@@ -12,7 +12,7 @@ use crate::input::evemu::Recording;
 use crate::input::pipeline;
 use crate::platform::evdev as live;
 
-pub(super) fn inspect(file: &Path) -> Result<(), Failure> {
+pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
     if file
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
@@ -20,6 +20,8 @@ pub(super) fn inspect(file: &Path) -> Result<(), Failure> {
         return inspect_bvh(file);
     }
     let rec = Recording::read_file(file)?;
+    let rec = pipeline::with_overrides(&rec, &config.input)
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let (summary, _) = pipeline::summarize(&rec);
     let json = serde_json::to_string(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
@@ -36,6 +38,8 @@ pub(super) fn replay(config: &Config, file: &Path, contacts: bool) -> Result<(),
             writeln!(out, "{line}").map_err(stdout_error)?;
         }
     } else {
+        let rec = pipeline::with_overrides(&rec, &config.input)
+            .map_err(|e| Failure::new(exit::DATAERR, e))?;
         let (summary, _) = pipeline::summarize(&rec);
         writeln!(
             out,

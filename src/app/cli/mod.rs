@@ -107,7 +107,7 @@ fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
 fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
     match command {
         Command::Demo { out, fps } => demo(config, &out, fps),
-        Command::Inspect { file } => inspect(&file),
+        Command::Inspect { file } => inspect(config, &file),
         Command::Replay {
             file,
             headless: true,
