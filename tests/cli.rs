@@ -478,3 +478,79 @@ fn a_headless_replay_refuses_more_frames_than_asked_for() {
     );
     assert!(!out.join("frames").exists());
 }
+
+#[test]
+fn a_recording_cut_mid_line_is_read_like_one_cut_between_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(recording("atmel-maxtouch.1-finger-drag-up-down.evemu")).unwrap();
+    // Cut inside the 200th event line, and at its start.
+    let line_start = text
+        .match_indices("\nE: ")
+        .nth(200)
+        .map(|(i, _)| i + 1)
+        .unwrap();
+    let mid = dir.path().join("mid.evemu");
+    std::fs::write(&mid, &text[..line_start + 12]).unwrap();
+    let between = dir.path().join("between.evemu");
+    std::fs::write(&between, &text[..line_start]).unwrap();
+    let inspect = |p: &Path| {
+        let out = marionette(&["inspect", p.to_str().unwrap()]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (a, log) = inspect(&mid);
+    let (b, _) = inspect(&between);
+    assert!(log.contains("cut short"), "{log}");
+    assert_eq!(a["frames"], b["frames"]);
+    assert!(a["frames"].as_u64().unwrap() > 10);
+    // A broken line inside the file is still an error naming its line.
+    let broken = dir.path().join("broken.evemu");
+    std::fs::write(
+        &broken,
+        format!("{}\n{}", &text[..line_start + 12], &text[line_start..]),
+    )
+    .unwrap();
+    let out = marionette(&["inspect", broken.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65));
+}
+
+#[test]
+fn touchpads_and_pens_report_no_finger_contacts_anywhere() {
+    for (name, tool) in [
+        ("evemu-data.bcm5974-touchpad.evemu", "touchpad"),
+        ("dell-canvas-pen.evemu", "pen"),
+    ] {
+        let v: serde_json::Value =
+            serde_json::from_slice(&marionette(&["inspect", &recording(name)]).stdout).unwrap();
+        assert_eq!(v["touch_sequences"], 0, "{name}: {v}");
+        assert_eq!(v["max_contacts"], 0, "{name}: {v}");
+        let out = marionette(&["replay", &recording(name), "--contacts"]);
+        assert!(out.status.success());
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains(&format!("\"tool\":\"{tool}\"")), "{name}");
+        assert!(!text.contains("\"tool\":\"finger\""), "{name}");
+        // Replayed into the character: nothing is held, nothing starts.
+        let dir = tempfile::tempdir().unwrap();
+        let metrics = dir.path().join("m.json");
+        let out = marionette(&[
+            "replay",
+            &recording(name),
+            "--metrics",
+            metrics.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        assert_eq!(m["actions"].as_array().unwrap().len(), 0, "{name}");
+    }
+}

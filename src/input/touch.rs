@@ -43,6 +43,9 @@ impl Phase {
 pub enum Tool {
     Finger,
     Pen,
+    /// A finger on a touchpad: not on the screen, so not a finger that
+    /// touches the character.
+    Touchpad,
 }
 
 /// One contact in a frame.
@@ -108,6 +111,8 @@ pub struct TrackerStats {
     pub finger_sequences: u64,
     /// Pen contacts that went down.
     pub pen_sequences: u64,
+    /// Touchpad contacts that went down (not fingers on the screen).
+    pub touchpad_sequences: u64,
     /// `SYN_DROPPED` events.
     pub dropped: u64,
     /// Values outside the absinfo range, clamped.

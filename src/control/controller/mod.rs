@@ -296,7 +296,9 @@ impl Controller {
         }
     }
 
-    /// Apply one frame of touches (its time is `frame.t`).
+    /// Apply one frame of touches (its time is `frame.t`). Only fingers
+    /// drive the character: a pen's or a touchpad's contacts (in a replayed
+    /// recording; live, such devices are not read) are passed over.
     pub fn touch(&mut self, frame: &ScreenFrame) {
         let before: BTreeMap<ContactId, ScreenPoint> = self
             .grabs
@@ -307,7 +309,11 @@ impl Controller {
             })
             .collect();
         let t = frame.t;
-        for c in &frame.contacts {
+        for c in frame
+            .contacts
+            .iter()
+            .filter(|c| c.tool == crate::input::touch::Tool::Finger)
+        {
             let p = c.screen;
             if c.phase == crate::input::touch::Phase::Down {
                 let camera = self.rig.camera();

@@ -383,10 +383,24 @@ impl Recording {
     /// Parse recording text; `path` is used only in messages.
     pub fn parse(text: &str, path: &Path) -> Result<Self, EvemuError> {
         let mut p = Parser::new(path);
+        // A file that ends without a newline was cut while being written:
+        // an event line cut short there is dropped with its unfinished
+        // frame, as a cut between lines is, not the whole file.
+        let cut = !text.is_empty() && !text.ends_with('\n');
+        let count = text.lines().count();
+        let mut cut_line = false;
         for (i, raw_line) in text.lines().enumerate() {
-            p.line(i + 1, raw_line)?;
+            match p.line(i + 1, raw_line) {
+                Err(e) if cut && i + 1 == count && raw_line.trim_start().starts_with("E:") => {
+                    tracing::warn!(path = %path.display(), line = i + 1, error = %e, "the last line is cut short; dropping it");
+                    cut_line = true;
+                }
+                r => r?,
+            }
         }
-        p.finish()
+        let mut rec = p.finish()?;
+        rec.dropped_trailing_events += usize::from(cut_line);
+        Ok(rec)
     }
 }
 

@@ -66,11 +66,7 @@ impl ContactTracker {
         let moved_only = std::mem::replace(&mut self.single_changed, false);
         match (self.single, down) {
             (None, true) if !self.single_suspended || moved_only => {
-                let tool = if self.pen_device {
-                    Tool::Pen
-                } else {
-                    Tool::Finger
-                };
+                let tool = self.tool_of(0);
                 let a = self.begin(tool, pos);
                 changed.push((a.id, Phase::Down));
                 self.single = Some(a);

@@ -128,6 +128,8 @@ pub struct ContactTracker {
     device_name: String,
     protocol: Protocol,
     pen_device: bool,
+    /// The device is a touchpad: its fingers are not on the screen.
+    touchpad: bool,
     x_axis: AbsInfo,
     y_axis: AbsInfo,
     resync_source: ResyncSource,
@@ -195,6 +197,7 @@ impl ContactTracker {
             device_name: device.name.clone(),
             protocol,
             pen_device: device.kind() == DeviceKind::Pen,
+            touchpad: device.kind() == DeviceKind::Touchpad,
             x_axis,
             y_axis,
             resync_source,
@@ -258,6 +261,7 @@ impl ContactTracker {
         match tool {
             Tool::Finger => self.stats.finger_sequences += 1,
             Tool::Pen => self.stats.pen_sequences += 1,
+            Tool::Touchpad => self.stats.touchpad_sequences += 1,
         }
         Active {
             id: self.new_id(),
@@ -305,6 +309,8 @@ impl ContactTracker {
     fn tool_of(&self, tool_type: i32) -> Tool {
         if self.pen_device || tool_type == MT_TOOL_PEN {
             Tool::Pen
+        } else if self.touchpad {
+            Tool::Touchpad
         } else {
             Tool::Finger
         }
