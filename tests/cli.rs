@@ -554,3 +554,35 @@ fn touchpads_and_pens_report_no_finger_contacts_anywhere() {
         assert_eq!(m["actions"].as_array().unwrap().len(), 0, "{name}");
     }
 }
+
+#[test]
+fn inspect_refuses_what_a_replay_refuses_with_the_same_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(recording("atmel-maxtouch.1-finger-drag-up-down.evemu")).unwrap();
+    for (what, from, to) in [
+        ("swapped", "A: 35 0 799 0 0 0", "A: 35 799 0 0 0 0"),
+        ("empty", "A: 35 0 799 0 0 0", "A: 35 5 5 0 0 0"),
+    ] {
+        let path = dir.path().join(format!("{what}.evemu"));
+        assert!(text.contains(from));
+        std::fs::write(&path, text.replace(from, to)).unwrap();
+        let inspect = marionette(&["inspect", path.to_str().unwrap()]);
+        let replay = marionette(&["replay", path.to_str().unwrap()]);
+        assert_eq!(inspect.status.code(), Some(65), "{what}");
+        assert_eq!(replay.status.code(), Some(65), "{what}");
+        // inspect still describes the file before it says why.
+        let v: serde_json::Value = serde_json::from_slice(&inspect.stdout).unwrap();
+        assert_eq!(v["frames"], 150);
+        let (a, b) = (
+            String::from_utf8_lossy(&inspect.stderr).into_owned(),
+            String::from_utf8_lossy(&replay.stderr).into_owned(),
+        );
+        let reason = b.lines().last().unwrap().to_owned();
+        let reason = reason.split("Atmel").last().unwrap();
+        assert!(
+            a.contains(reason),
+            "{what}: inspect said {a}\nreplay said {b}"
+        );
+    }
+}

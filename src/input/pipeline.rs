@@ -233,6 +233,15 @@ pub fn with_overrides(rec: &Recording, input: &InputConfig) -> Result<Recording,
     }
 }
 
+/// Whether a recording can be replayed as touches with this
+/// configuration: its overrides apply, it has position axes, and their
+/// ranges calibrate. One check for `inspect` and every replay.
+pub fn check(rec: &Recording, input: &InputConfig, picture: Picture) -> Result<(), ReplayError> {
+    let rec = with_overrides(rec, input)?;
+    calibration_for(input, picture, &rec.device)?;
+    Ok(())
+}
+
 /// Replay a whole recording into screen-space frames, its time made
 /// replayable ([`retime`]).
 pub fn replay(
@@ -240,6 +249,7 @@ pub fn replay(
     input: &InputConfig,
     picture: Picture,
 ) -> Result<Vec<ScreenFrame>, ReplayError> {
+    check(rec, input, picture)?;
     let rec = &with_overrides(rec, input)?;
     let cal = calibration_for(input, picture, &rec.device)?;
     let (frames, _) = track_events(&rec.device, &rec.events)?;

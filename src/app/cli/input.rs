@@ -19,12 +19,19 @@ pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
     {
         return inspect_bvh(file);
     }
-    let rec = Recording::read_file(file)?;
-    let rec = pipeline::with_overrides(&rec, &config.input)
+    let read = Recording::read_file(file)?;
+    let rec = pipeline::with_overrides(&read, &config.input)
         .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let (summary, _) = pipeline::summarize(&rec);
     let json = serde_json::to_string(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
-    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)?;
+    // What a replay would refuse, inspect refuses too (after describing it).
+    pipeline::check(&read, &config.input, config.display.picture()).map_err(|e| {
+        Failure::new(
+            exit::DATAERR,
+            format!("{}: cannot be replayed as touches: {e}", file.display()),
+        )
+    })
 }
 
 pub(super) fn replay(config: &Config, file: &Path, contacts: bool) -> Result<(), Failure> {
