@@ -586,3 +586,35 @@ fn inspect_refuses_what_a_replay_refuses_with_the_same_reason() {
         );
     }
 }
+
+#[test]
+fn watch_says_when_no_touchscreen_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("marionette.toml");
+    let dev = dir.path().join("input");
+    std::fs::create_dir(&dev).unwrap();
+    std::fs::write(
+        &cfg,
+        format!("[input]\ndev_dir = {:?}\n", dev.display().to_string()),
+    )
+    .unwrap();
+    let out = marionette(&[
+        "--config",
+        cfg.to_str().unwrap(),
+        "watch",
+        "--seconds",
+        "0.3",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert_eq!(lines[0]["event"], "no_touchscreen");
+    assert!(lines[0]["hint"].as_str().unwrap().contains("list-devices"));
+}

@@ -286,6 +286,9 @@ pub fn watch(
         path: PathBuf::from("stdout"),
         source,
     };
+    // Whether the last line said no touchscreen is read: said once, and
+    // again after the last one goes.
+    let mut said_none = false;
     while !crate::platform::signals::stop_requested()
         && deadline.is_none_or(|d| started.elapsed() < d)
     {
@@ -294,6 +297,18 @@ pub fn watch(
         for e in events.drain(..) {
             let line = serde_json::to_string(&e).map_err(|e| stdout_err(e.into()))?;
             writeln!(out, "{line}").map_err(stdout_err)?;
+        }
+        if hub.device_count() == 0 && !said_none {
+            let status = serde_json::json!({
+                "event": "no_touchscreen",
+                "dir": dir.display().to_string(),
+                "hint": "waiting for one to be plugged in; `marionette list-devices` says what each node is and why it is not used",
+            });
+            writeln!(out, "{status}").map_err(stdout_err)?;
+            tracing::warn!(dir = %dir.display(), "no touchscreen is read; waiting for one (see `marionette list-devices`)");
+            said_none = true;
+        } else if hub.device_count() > 0 {
+            said_none = false;
         }
         out.flush().map_err(stdout_err)?;
         let wait = Duration::from_millis(100.min(input.rescan_interval_ms));
