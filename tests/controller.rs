@@ -163,6 +163,73 @@ fn fingers_on_empty_space_turn_and_zoom_the_camera_within_limits() {
 }
 
 #[test]
+fn many_fingers_on_empty_space_never_put_the_camera_overhead_or_far() {
+    // Up to ten fingers on empty space, going down, wandering and lifting
+    // at random for a minute: the view stays below 40° and near enough
+    // that the character fills at least a quarter of the picture's height.
+    let mut ctl = controller();
+    let mut seed = 7u64;
+    let mut unit = move || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut fingers: Vec<(u64, ScreenPoint)> = Vec::new();
+    let mut next_id = 1;
+    let (mut lowest, mut steepest) = (f64::INFINITY, 0.0f64);
+    for k in 1..=1800 {
+        let t = f64::from(k) / 30.0;
+        let mut contacts = Vec::new();
+        if fingers.len() < 10 && unit() < 0.2 {
+            // On empty space: the left or right edge strips.
+            let x = if unit() < 0.5 { 60.0 } else { 1220.0 };
+            let p = ScreenPoint::new(x, 100.0 + 520.0 * unit());
+            contacts.push(contact(next_id, Phase::Down, p));
+            fingers.push((next_id, p));
+            next_id += 1;
+        }
+        let lift = if !fingers.is_empty() && unit() < 0.05 {
+            Some((unit() * fingers.len() as f64) as usize % fingers.len())
+        } else {
+            None
+        };
+        for (i, (id, p)) in fingers.iter_mut().enumerate() {
+            // Wandering, mostly downwards (tilting the view up over the
+            // character) and together (zooming out).
+            p.x = (p.x + (unit() - 0.5) * 80.0 + (640.0 - p.x) * 0.05).clamp(0.0, 1279.0);
+            p.y = (p.y + (unit() - 0.3) * 80.0).clamp(0.0, 719.0);
+            let phase = if Some(i) == lift {
+                Phase::Up
+            } else {
+                Phase::Move
+            };
+            if !contacts.iter().any(|c| c.id == *id) {
+                contacts.push(contact(*id, phase, *p));
+            }
+        }
+        if let Some(i) = lift {
+            fingers.remove(i);
+        }
+        ctl.touch(&frame(t, contacts));
+        ctl.advance(t);
+        let cam = ctl.rig.camera();
+        let roles = &ctl.character().roles;
+        let at = |r: Role| cam.project(ctl.world().positions[roles.get(r)]).unwrap();
+        let feet = at(Role::LeftFoot).y.max(at(Role::RightFoot).y);
+        lowest = lowest.min(feet - at(Role::Head).y);
+        steepest = steepest.max(ctl.rig.orbit.pitch);
+    }
+    println!(
+        "many camera fingers: figure at least {lowest:.0} px tall of 720, tilt at most {:.1}°",
+        steepest.to_degrees()
+    );
+    assert!(next_id > 50, "{next_id} fingers went down");
+    assert!(steepest <= 40f64.to_radians() + 1e-9);
+    assert!(lowest >= 0.25 * 720.0, "{lowest} px");
+}
+
+#[test]
 fn a_cancelled_contact_lets_go() {
     let mut ctl = controller();
     ctl.advance(1.0 / 30.0);

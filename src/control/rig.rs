@@ -22,12 +22,16 @@ pub struct RigLimits {
 impl Default for RigLimits {
     fn default() -> Self {
         Self {
+            // Never overhead: from above 40° a figure reads as a head and
+            // shoulders, and drags of its parts lose their height.
             min_pitch: (-2.0f64).to_radians(),
-            max_pitch: 65.0f64.to_radians(),
+            max_pitch: 40.0f64.to_radians(),
             // The whole body (0 to 1.9 m around the look-at point at
-            // 0.95 m) stays in a 40° view from 3 m.
+            // 0.95 m) stays in a 40° view from 3 m; from 6 m, tilted as
+            // far as it goes, a 1.7 m figure still fills a quarter of the
+            // picture's height (8 m and 65° left it 80 px of 720).
             min_distance: 3.0,
-            max_distance: 8.0,
+            max_distance: 6.0,
             orbit_per_px: 0.006,
         }
     }
