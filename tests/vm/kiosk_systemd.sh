@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The kiosk as an operator installs it: a Debian guest (debootstrap,
-# cached) with the release binary, the library, the config and the unit
-# installed as the README says, booted with systemd under qemu (TCG, no
-# network, virtio-vga display). Checked from the host:
+# cached) with the package built by systemd/deb/build.sh installed with
+# apt and the unit enabled, as the README says, booted with systemd under
+# qemu (TCG, no network, virtio-vga display). Checked from the host:
 # - the service reaches READY on KMS (active, the character on screen);
 # - `marionette play` drags the character through a uinput panel, the
 #   panel goes away and comes back and drags it again;
@@ -45,17 +45,23 @@ trap 'rm -rf "$work"' EXIT
 rootfs="$work/rootfs"
 cp -a "$base" "$rootfs"
 
-# Installed as the README's "Installing a kiosk" says.
-strip --strip-debug -o "$rootfs/usr/bin/marionette" "$bin"
-mkdir -p "$rootfs/usr/share/marionette" "$rootfs/etc/marionette"
-cp -r "$root/assets/library" "$rootfs/usr/share/marionette/library"
-install -m 644 "$root/config/marionette.toml" "$rootfs/etc/marionette/marionette.toml"
-chroot "$rootfs" groupadd -f render
-chroot "$rootfs" useradd --system --no-create-home --shell /usr/sbin/nologin \
-    --groups input,video,render marionette
-install -m 644 "$root/systemd/marionette.service" "$rootfs/etc/systemd/system/"
+# Installed as the README's "Installing a kiosk" says: the package built
+# (from the binary under test), `apt install`ed, the unit enabled (started
+# when the guest boots: a chroot runs no services).
+deb=$(MARIONETTE_DEB_BIN="$bin" bash "$root/systemd/deb/build.sh" | tail -n 1)
+cp "$root/$deb" "$rootfs/root/"
+chroot "$rootfs" sh -c "cd /root && apt install -y ./$(basename "$deb")" >"$work/apt.log" 2>&1 \
+    || { cat "$work/apt.log" >&2; echo "vm test: the package does not install" >&2; exit 1; }
+rm "$rootfs/root/$(basename "$deb")"
+chroot "$rootfs" systemctl enable marionette.service
+for f in /usr/bin/marionette /lib/systemd/system/marionette.service /etc/marionette/marionette.toml \
+         /usr/share/marionette/library/library.toml /usr/share/marionette/recordings/demo.evemu \
+         /usr/share/doc/marionette/README.md; do
+    [ -e "$rootfs$f" ] || { echo "vm test: the package did not install $f" >&2; exit 1; }
+done
+chroot "$rootfs" id -nG marionette | grep -qw render \
+    || { echo "vm test: the marionette user lacks its groups" >&2; exit 1; }
 mkdir -p "$rootfs/etc/systemd/system/multi-user.target.wants"
-ln -s /etc/systemd/system/marionette.service "$rootfs/etc/systemd/system/multi-user.target.wants/"
 # Test only: the CPU renderer is quicker with 128-bit vectors under TCG.
 mkdir -p "$rootfs/etc/systemd/system/marionette.service.d"
 printf '[Service]\nEnvironment=LP_NATIVE_VECTOR_WIDTH=128\n' \
