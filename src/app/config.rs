@@ -69,6 +69,9 @@ pub struct KioskConfig {
     /// An evemu recording the character then performs in a loop until
     /// someone touches; empty for none.
     pub attract: PathBuf,
+    /// When `run` cannot start (configuration, library), the reason stays
+    /// on the display this long (s) before the process exits; 0: none.
+    pub error_screen_s: f64,
 }
 
 impl Default for KioskConfig {
@@ -76,6 +79,7 @@ impl Default for KioskConfig {
         Self {
             idle_after_s: 45.0,
             attract: PathBuf::new(),
+            error_screen_s: 60.0,
         }
     }
 }
@@ -190,7 +194,15 @@ impl Config {
                 ),
             ));
         }
-        in_ranges(&[("kiosk.idle_after_s", self.kiosk.idle_after_s, 1.0, 86_400.0)])?;
+        in_ranges(&[
+            ("kiosk.idle_after_s", self.kiosk.idle_after_s, 1.0, 86_400.0),
+            (
+                "kiosk.error_screen_s",
+                self.kiosk.error_screen_s,
+                0.0,
+                3_600.0,
+            ),
+        ])?;
         let t = &self.tracking;
         in_ranges(&[
             ("tracking.settle_s", t.settle_s, 0.0, 2.0),

@@ -132,7 +132,14 @@ wait $!; echo "play3 rc=$?" >> /tmp/rc
 wait $cal; echo "calibrate rc=$?" >> /tmp/rc
 cp /m.toml /tmp/m.toml
 cmp -s /m.toml.bak /m.orig.toml && echo "backup kept" >> /tmp/rc
-for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml; do
+# A library folder that does not exist: the reason on the display for
+# kiosk.error_screen_s, then exit 78.
+printf '[character]\nlibrary = "/no-such-library"\n[kiosk]\nerror_screen_s = 8\n[display]\nstatus_line = false\n' > /bad.toml
+marionette --config /bad.toml run > /tmp/bad.log 2>&1 &
+bad=$!
+sleep 4; echo "MARK cannot-start"
+wait $bad; echo "bad library rc=$?" >> /tmp/rc
+for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f

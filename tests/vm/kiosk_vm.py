@@ -78,6 +78,24 @@ else:
     want = [1.05, 0.0, -0.03, 0.0, 0.95, 0.02]
     if any(abs(g - w) > 0.01 for g, w in zip(got, want)):
         failures.append(f"calibration: matrix {got}, expected about {want}")
+# A kiosk that cannot start says why on the display, then exits 78.
+if "bad library rc=78" not in rc:
+    failures.append("a missing library folder should exit 78 after the error screen")
+bad = open(os.path.join(out, "bad.log")).read() if os.path.exists(os.path.join(out, "bad.log")) else ""
+if "the reason is on the display" not in bad:
+    failures.append("the error screen was not shown:\n" + bad[-1500:])
+path = os.path.join(out, "cannot-start.ppm")
+if not os.path.exists(path):
+    failures.append("no screen grabbed at 'cannot-start'")
+else:
+    w, h, px = ppm(path)
+    # Warm title and hint text and light reason text on the dark screen.
+    warm = sum(1 for i in range(0, len(px), 3) if px[i] > 200 and 80 < px[i + 1] < 230 and px[i + 2] < 150)
+    light = sum(1 for i in range(0, len(px), 3) if px[i] > 200 and px[i + 1] > 200 and px[i + 2] > 200)
+    dark = sum(1 for i in range(0, len(px), 3) if px[i] < 60 and px[i + 1] < 60 and px[i + 2] < 70)
+    print(f"cannot-start: {warm} warm, {light} light, {dark} dark pixels of {w * h}")
+    if warm < 300 or light < 300 or dark < 0.7 * w * h:
+        failures.append(f"cannot-start: no error text on the screen ({warm} warm, {light} light, {dark} dark)")
 if failures:
     print("kiosk log:\n" + log[-3000:])
     raise SystemExit("vm test failed:\n  " + "\n  ".join(failures))

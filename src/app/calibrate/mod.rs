@@ -21,14 +21,14 @@ use thiserror::Error;
 use self::procedure::{Collecting, FindDevice, Finding, TARGETS, Touches};
 use super::config::Config;
 use super::kiosk::InputThread;
+use super::message::{screen, to_output};
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::calibration::{CalibrationError, RawPoint, Solution, SolveOptions, solve};
 use crate::input::hub::LiveError;
 use crate::platform::clock::{Clock, Monotonic};
-use crate::render::contact::draw_text;
 use crate::render::headless::Image;
-use crate::screen::{Rotation, ScreenPoint};
+use crate::screen::ScreenPoint;
 
 /// Why calibration stopped without writing.
 #[derive(Debug, Error)]
@@ -161,82 +161,6 @@ fn write_config(path: &Path, text: &str) -> Result<Option<PathBuf>, CalibrateErr
     }
     std::fs::rename(&tmp, path).map_err(werr(path))?;
     Ok(backup)
-}
-
-/// A picture-sized screen with a target, a message and a hint.
-fn screen(size: (u32, u32), target: Option<ScreenPoint>, lines: &[&str], colour: [u8; 4]) -> Image {
-    let (w, h) = size;
-    let mut img = Image::filled(w, h, [24, 28, 38, 255]);
-    if let Some(t) = target {
-        let (cx, cy) = (t.x.round() as i64, t.y.round() as i64);
-        let mut put = |x: i64, y: i64, c: [u8; 4]| {
-            if (0..i64::from(w)).contains(&x) && (0..i64::from(h)).contains(&y) {
-                let i = (y as usize * w as usize + x as usize) * 4;
-                img.rgba[i..i + 4].copy_from_slice(&c);
-            }
-        };
-        let white = [240, 240, 240, 255];
-        for d in -30..=30i64 {
-            for k in -1..=1 {
-                put(cx + d, cy + k, white);
-                put(cx + k, cy + d, white);
-            }
-        }
-        for a in 0..720 {
-            let th = f64::from(a) * std::f64::consts::TAU / 720.0;
-            for r in [18.0, 19.0, 20.0] {
-                put(
-                    cx + (r * th.cos()).round() as i64,
-                    cy + (r * th.sin()).round() as i64,
-                    [255, 150, 40, 255],
-                );
-            }
-        }
-    }
-    // Text up to three times the font's size, as large as fits, centred.
-    for (k, line) in lines.iter().enumerate() {
-        let lw = line.chars().count() as u32 * 8;
-        let scale = (w * 9 / 10 / lw.max(1)).clamp(1, 3);
-        let mut small = Image::filled(lw.max(1), 8, [24, 28, 38, 255]);
-        draw_text(&mut small, 0, 0, line, colour);
-        let x0 = (w.saturating_sub(lw * scale)) / 2;
-        let y0 = h / 2 + 60 + k as u32 * 30;
-        for y in 0..8 * scale {
-            for x in 0..lw * scale {
-                let (px, py) = (x0 + x, y0 + y);
-                if px < w && py < h {
-                    let s = small.pixel(x / scale, y / scale);
-                    let i = (py as usize * w as usize + px as usize) * 4;
-                    img.rgba[i..i + 4].copy_from_slice(&s);
-                }
-            }
-        }
-    }
-    img
-}
-
-/// The picture turned onto the output (the panel's mounting).
-fn to_output(img: &Image, rotation: Rotation) -> Image {
-    let (w, h) = (img.width, img.height);
-    let deg = rotation.degrees();
-    let (ow, oh) = if deg % 180 == 0 { (w, h) } else { (h, w) };
-    if deg == 0 {
-        return img.clone();
-    }
-    let mut out = Image::filled(ow, oh, [0, 0, 0, 255]);
-    for y in 0..h {
-        for x in 0..w {
-            let (ox, oy) = match deg {
-                90 => (h - 1 - y, x),
-                180 => (w - 1 - x, h - 1 - y),
-                _ => (y, w - 1 - x),
-            };
-            let s = img.pixel(x, y);
-            let i = (oy as usize * ow as usize + ox as usize) * 4;
-            out.rgba[i..i + 4].copy_from_slice(&s);
-        }
-    }
-    out
 }
 
 /// Calibrate a touchscreen on the display; `config` is the configuration
@@ -472,14 +396,5 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "new");
         assert_eq!(std::fs::read_to_string(bak).unwrap(), "old");
         assert!(!dir.path().join("marionette.toml.tmp").exists());
-    }
-
-    #[test]
-    fn pictures_turn_onto_the_output() {
-        let mut img = Image::filled(3, 2, [0, 0, 0, 255]);
-        img.rgba[0..4].copy_from_slice(&[255, 0, 0, 255]); // top-left
-        let r = to_output(&img, Rotation::from_degrees(90).unwrap());
-        assert_eq!((r.width, r.height), (2, 3));
-        assert_eq!(r.pixel(1, 0), [255, 0, 0, 255], "top-left goes top-right");
     }
 }

@@ -72,11 +72,26 @@ pub fn main() -> ExitCode {
             });
         }
     };
+    // `run` shows why it cannot start on the display before it exits.
+    let kiosk_dri = match &cli.command {
+        Command::Run { dri, .. } => Some(dri.clone()),
+        _ => None,
+    };
     let config = match load_config(cli.config.as_deref()) {
         Ok(c) => c,
         Err(e) => {
             logging::init("info");
             eprintln!("marionette: {e}");
+            if let Some(dri) = &kiosk_dri {
+                let defaults = Config::default();
+                crate::app::fault::show(
+                    &defaults.display,
+                    dri,
+                    exit::CONFIG,
+                    &e.to_string(),
+                    std::time::Duration::from_secs_f64(defaults.kiosk.error_screen_s),
+                );
+            }
             return ExitCode::from(exit::CONFIG);
         }
     };
@@ -89,6 +104,15 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
             eprintln!("marionette: {}", f.message);
+            if let (Some(dri), exit::CONFIG | exit::DATAERR) = (&kiosk_dri, f.code) {
+                crate::app::fault::show(
+                    &config.display,
+                    dri,
+                    f.code,
+                    &f.message,
+                    std::time::Duration::from_secs_f64(config.kiosk.error_screen_s),
+                );
+            }
             ExitCode::from(f.code)
         }
     }
