@@ -73,6 +73,7 @@ fn bench(c: &mut Criterion) {
                 executable: true,
             }],
             status: Some("posing | holding right_hand, left_foot | 12.3 ms".into()),
+            service: None,
         };
         let character = scene::compose(
             &v,

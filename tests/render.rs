@@ -11,7 +11,7 @@ use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
-use marionette::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
+use marionette::control::marks::{FingerMark, FingerUse, Marks, ServiceMarks, TrajectoryMark};
 use marionette::render::gpu::{AdapterChoice, Gpu};
 use marionette::render::headless::{Headless, Image};
 use marionette::render::scene::{self, View};
@@ -168,6 +168,7 @@ fn held_scene(view: &View) -> marionette::render::mesh::DrawList {
             },
         ],
         status: Some("posing | right_hand, left_foot held | 12.3 ms".into()),
+        service: None,
     };
     scene::compose(
         view,
@@ -177,6 +178,54 @@ fn held_scene(view: &View) -> marionette::render::mesh::DrawList {
         &[Role::RightHand, Role::LeftFoot],
         &marks,
     )
+}
+
+#[test]
+fn the_service_view_draws_its_panel_and_the_fingers_trails() {
+    let lib = library();
+    let clip = &lib.clips["pose_stance.bvh"];
+    let world = forward_kinematics(&clip.skeleton, &clip.frames[0]);
+    let view = View {
+        camera: camera(640.0, 360.0),
+        rotation: Rotation::R0,
+    };
+    let render = |marks: &Marks| {
+        let list = scene::compose(&view, &clip.skeleton, &clip.roles, &world, &[], marks);
+        headless(640, 360).render(&list).unwrap()
+    };
+    let trail: Vec<ScreenPoint> = (0..20)
+        .map(|k| ScreenPoint::new(420.0 + 8.0 * f64::from(k), 250.0 - 3.0 * f64::from(k)))
+        .collect();
+    let on = Marks {
+        service: Some(ServiceMarks {
+            lines: vec![
+                "SERVICE VIEW   Virtual-1 640x360".into(),
+                "touchscreen: /dev/input/event5 \"demo panel\"".into(),
+                "59.9 fps   frame 2.5 / 7.0 ms   touch to flip 22 / 41 ms".into(),
+            ],
+            trails: vec![trail],
+        }),
+        ..Marks::default()
+    };
+    let cyan = |img: &Image, x0: u32, y0: u32, x1: u32, y1: u32| {
+        let mut n = 0;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let [r, g, b, _] = img.pixel(x, y);
+                n += usize::from(g > 200 && b > 200 && g > r.saturating_add(60));
+            }
+        }
+        n
+    };
+    let (with, without) = (render(&on), render(&Marks::default()));
+    // The text panel at the top left, the trail and crosshair at the right.
+    assert!(
+        cyan(&with, 0, 0, 640, 80) > 500,
+        "{}",
+        cyan(&with, 0, 0, 640, 80)
+    );
+    assert!(cyan(&with, 400, 180, 640, 270) > 100);
+    assert_eq!(cyan(&without, 0, 0, 640, 360), 0);
 }
 
 #[test]

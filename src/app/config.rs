@@ -72,6 +72,9 @@ pub struct KioskConfig {
     /// When `run` cannot start (configuration, library), the reason stays
     /// on the display this long (s) before the process exits; 0: none.
     pub error_screen_s: f64,
+    /// Where to write the vital signs every minute in Prometheus text
+    /// format (node_exporter's textfile collector); empty: nowhere.
+    pub metrics_textfile: PathBuf,
 }
 
 impl Default for KioskConfig {
@@ -80,6 +83,7 @@ impl Default for KioskConfig {
             idle_after_s: 45.0,
             attract: PathBuf::new(),
             error_screen_s: 60.0,
+            metrics_textfile: PathBuf::new(),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! What the controller asks to be drawn over the picture: a mark under
 //! every finger, the trajectories of the actions a held part can start (the
-//! paper's Fig. 4), and a status line. The renderer draws them.
+//! paper's Fig. 4), a status line and the service view. The renderer draws
+//! them.
 
 use crate::character::roles::Role;
 use crate::screen::ScreenPoint;
@@ -29,10 +30,19 @@ pub struct TrajectoryMark {
     pub executable: bool,
 }
 
+/// The service view: lines of text in a panel, and every finger's recent
+/// path (its calibrated points, oldest first).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ServiceMarks {
+    pub lines: Vec<String>,
+    pub trails: Vec<Vec<ScreenPoint>>,
+}
+
 /// Everything drawn over the picture.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Marks {
     pub fingers: Vec<FingerMark>,
     pub trajectories: Vec<TrajectoryMark>,
     pub status: Option<String>,
+    pub service: Option<ServiceMarks>,
 }

@@ -24,6 +24,10 @@ pub struct DisplayConfig {
     pub trajectories: bool,
     /// Show a status line (mode, action, frame time).
     pub status_line: bool,
+    /// Show the service view from the start (touchscreens, fingers'
+    /// calibrated points and trails, frame rate, latency); five fingers
+    /// held three seconds toggle it either way.
+    pub service_view: bool,
     /// The KMS output to drive, by connector name (`HDMI-A-1`; see
     /// `marionette list-outputs`); empty: the first connected one.
     pub output: String,
@@ -43,6 +47,7 @@ impl Default for DisplayConfig {
             samples: 0,
             trajectories: true,
             status_line: true,
+            service_view: false,
             output: String::new(),
             mode: String::new(),
             presenter: "auto".to_owned(),

@@ -10,7 +10,7 @@ use super::mesh::{Mesh, Overlay, text_width};
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
-use crate::control::marks::{FingerUse, Marks};
+use crate::control::marks::{FingerUse, Marks, ServiceMarks};
 use crate::render::mesh::DrawList;
 use crate::screen::Rotation;
 
@@ -305,13 +305,52 @@ pub fn overlay(marks: &Marks, width: f64) -> Overlay {
         o.ring(c, 34.0, 5.0, ring);
         o.disc(c, 5.0, ring);
     }
+    let mut top = 0.0;
     if let Some(text) = &marks.status {
         let scale = 2.0;
         let w = text_width(text, scale).min(width as f32) + 24.0;
         o.rect(0.0, 0.0, w, 8.0 * scale + 16.0, [0.0, 0.0, 0.0, 0.55]);
         o.text(12.0, 8.0, scale, text, [0.95, 0.95, 0.95, 1.0]);
+        top = 8.0 * scale + 16.0;
+    }
+    if let Some(service) = &marks.service {
+        service_overlay(&mut o, service, width, top);
     }
     o
+}
+
+/// The service view: every finger's trail and calibrated point (a
+/// crosshair), and a panel of text lines under the status line.
+fn service_overlay(o: &mut Overlay, service: &ServiceMarks, width: f64, top: f32) {
+    let cyan = [0.2, 0.95, 0.95, 0.95];
+    for trail in &service.trails {
+        let pts: Vec<[f32; 2]> = trail.iter().map(|p| [p.x as f32, p.y as f32]).collect();
+        o.polyline(&pts, 3.0, cyan);
+        if let Some(&[x, y]) = pts.last() {
+            o.rect(x - 14.0, y - 1.0, 28.0, 2.0, cyan);
+            o.rect(x - 1.0, y - 14.0, 2.0, 28.0, cyan);
+        }
+    }
+    let widest = |scale: f32| {
+        service
+            .lines
+            .iter()
+            .map(|l| text_width(l, scale))
+            .fold(0.0, f32::max)
+    };
+    // Twice the font's size where the longest line fits.
+    let scale = if widest(2.0) + 24.0 <= width as f32 {
+        2.0
+    } else {
+        1.0
+    };
+    let line_h = 8.0 * scale + 6.0;
+    let w = widest(scale).min(width as f32) + 24.0;
+    let h = service.lines.len() as f32 * line_h + 12.0;
+    o.rect(0.0, top, w, h, [0.0, 0.05, 0.1, 0.7]);
+    for (k, line) in service.lines.iter().enumerate() {
+        o.text(12.0, top + 8.0 + k as f32 * line_h, scale, line, cyan);
+    }
 }
 
 /// The character with its overlays.

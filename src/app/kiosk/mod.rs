@@ -12,7 +12,9 @@
 
 mod attract;
 mod input_thread;
+mod service;
 pub(crate) mod timers;
+mod vitals;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -33,7 +35,9 @@ use crate::render::gpu::{AdapterChoice, GpuError};
 
 use self::attract::Attract;
 pub(crate) use self::input_thread::InputThread;
+use self::service::ServiceView;
 use self::timers::{ATTRACT_DELAY_S, Timers};
+use self::vitals::Vitals;
 use super::frame::{self, Backend, Flow, Since};
 
 /// Why the kiosk stopped.
@@ -165,6 +169,14 @@ pub fn run_with_clock(
         notifier.watchdog_interval().map(|d| d.as_secs_f64()),
     );
     let frame_s = 1.0 / f64::from(screen.refresh_hz());
+    let textfile =
+        Some(config.kiosk.metrics_textfile.clone()).filter(|p| !p.as_os_str().is_empty());
+    let starts = textfile
+        .as_ref()
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .map_or(0, |t| vitals::starts_before(&t))
+        + 1;
+    let service = ServiceView::new(config.display.service_view);
     let mut kiosk = Kiosk {
         start: frames,
         screen,
@@ -179,6 +191,11 @@ pub fn run_with_clock(
         last_shown: None,
         ready: false,
         frame_s,
+        vitals: Vitals::new(0.0, starts),
+        service,
+        flips_seen: 0,
+        textfile,
+        textfile_written: false,
     };
     frame::run(&mut ctl, &mut frames, &mut kiosk)?;
     let Kiosk {
@@ -228,6 +245,13 @@ struct Kiosk<'a> {
     last_shown: Option<Shown>,
     ready: bool,
     frame_s: f64,
+    vitals: Vitals,
+    service: ServiceView,
+    /// Page flips counted so far (the screen's count).
+    flips_seen: u64,
+    /// Where the vital signs go every minute, if anywhere.
+    textfile: Option<PathBuf>,
+    textfile_written: bool,
 }
 
 impl Backend for Kiosk<'_> {
@@ -262,14 +286,26 @@ impl Backend for Kiosk<'_> {
                     for c in &mut contacts {
                         c.id += u64::from(device) << 32;
                     }
-                    let ft = self.timers.touch(self.start.seconds(time_us), t);
-                    ctl.touch(&ScreenFrame { t: ft, contacts });
+                    let event_t = self.start.seconds(time_us);
+                    let downs = contacts
+                        .iter()
+                        .filter(|c| c.phase == crate::input::touch::Phase::Down)
+                        .count();
+                    self.vitals.touched(event_t, downs);
+                    let ft = self.timers.touch(event_t, t);
+                    let frame = ScreenFrame { t: ft, contacts };
+                    self.service.touch(&frame, t);
+                    ctl.touch(&frame);
                 }
-                HubEvent::Added { path, name, .. } => {
+                HubEvent::Added { device, path, name } => {
                     tracing::info!(path = %path.display(), %name, "touchscreen added");
+                    self.service
+                        .panels
+                        .insert(device, format!("{} \"{name}\"", path.display()));
                 }
-                HubEvent::Removed { path, name, .. } => {
+                HubEvent::Removed { device, path, name } => {
                     tracing::info!(path = %path.display(), %name, "touchscreen removed");
+                    self.service.panels.remove(&device);
                 }
             }
         }
@@ -292,6 +328,14 @@ impl Backend for Kiosk<'_> {
     }
 
     fn frame(&mut self, ctl: &mut Controller, t: f64) -> Result<Flow, RunError> {
+        for e in ctl.take_events() {
+            if let crate::control::action::timeline::ActionEvent::Started { action, .. } = e {
+                tracing::info!(%action, "action started");
+                self.vitals.action_started();
+            }
+        }
+        self.service.tick(t);
+        self.vital_signs(t);
         let (screen, timers, stats) = (&mut self.screen, &mut self.timers, &mut self.stats);
         // Show it, unless the display is another program's for now.
         if timers.display_retry_due(t) && screen.reacquire() {
@@ -322,16 +366,25 @@ impl Backend for Kiosk<'_> {
             orbit.distance,
             marks.fingers.len(),
         );
-        let changed = self.last_shown.as_ref().is_none_or(|s| {
-            !same_pose(&s.0, &key.0)
-                || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
-                || !marks.fingers.is_empty()
-                || ctl.action().is_some()
-        });
+        let changed = self.service.on
+            || self.last_shown.as_ref().is_none_or(|s| {
+                !same_pose(&s.0, &key.0)
+                    || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
+                    || !marks.fingers.is_empty()
+                    || ctl.action().is_some()
+            });
         if timers.can_draw() && !screen.flip_pending() && changed {
             let mut marks = marks;
             if display.status_line {
                 marks.status = status_line(ctl);
+            }
+            if self.service.on {
+                let now = self.vitals.summary(t);
+                let figures = match self.vitals.last {
+                    Some(last) if now.frames < 30 => last,
+                    _ => now,
+                };
+                marks.service = self.service.marks(&figures, screen.name(), display.size());
             }
             let list = frame::compose(ctl, display.rotation(), &marks);
             let started = std::time::Instant::now();
@@ -342,6 +395,11 @@ impl Backend for Kiosk<'_> {
                         stats.render_ms_mean += ms;
                         stats.render_ms_max = stats.render_ms_max.max(ms);
                         stats.frames += 1;
+                        self.vitals.drawn(ms);
+                        if screen.fd().is_none() {
+                            // The swapchain shows it at the next vblank.
+                            self.vitals.flipped(t + self.frame_s);
+                        }
                         self.last_shown = Some(key);
                         if !self.ready && screen.fd().is_none() {
                             // The swapchain shows it at the next vblank.
@@ -384,7 +442,47 @@ impl Backend for Kiosk<'_> {
         let moving = changed || self.attract.is_some();
         let wait_s = timers::wait_s(moving, screen.fd().is_none(), self.frame_s);
         wait(&self.input, screen, Duration::from_secs_f64(wait_s))?;
+        if screen.fd().is_some() && screen.flips() > self.flips_seen {
+            self.flips_seen = screen.flips();
+            self.vitals.flipped(self.start.now());
+        }
         Ok(Flow::Continue)
+    }
+}
+
+impl Kiosk<'_> {
+    /// Every minute: the vital signs to the journal and to the textfile.
+    fn vital_signs(&mut self, t: f64) {
+        // The textfile is written once as soon as the kiosk shows the
+        // character (a start counts at once), then every minute.
+        let first = self.ready && !self.textfile_written;
+        let due = self.vitals.window_due(t);
+        if due.is_none() && !first {
+            return;
+        }
+        let s = due.unwrap_or_else(|| self.vitals.summary(t));
+        self.textfile_written = true;
+        let totals = self.vitals.totals;
+        let panels = self.service.panels.len();
+        if due.is_some() {
+            tracing::info!(
+                fps = (s.fps * 10.0).round() / 10.0,
+                frame_ms_p50 = (s.frame_ms_p50 * 100.0).round() / 100.0,
+                frame_ms_p99 = (s.frame_ms_p99 * 100.0).round() / 100.0,
+                touch_to_flip_ms_p50 = (s.latency_ms_p50 * 10.0).round() / 10.0,
+                touch_to_flip_ms_p99 = (s.latency_ms_p99 * 10.0).round() / 10.0,
+                touches = totals.touches,
+                actions_started = totals.actions_started,
+                touchscreens = panels,
+                "vitals over the last minute"
+            );
+        }
+        if let Some(path) = &self.textfile {
+            if let Err(e) = vitals::write_atomically(path, &vitals::prometheus(&s, &totals, panels))
+            {
+                tracing::warn!(path = %path.display(), error = %e, "cannot write the metrics textfile (ReadWritePaths= in the unit?)");
+            }
+        }
     }
 }
 
