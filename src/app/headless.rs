@@ -53,6 +53,9 @@ pub struct Options {
     pub adapter: AdapterChoice,
     /// Keep every stepped posture in [`Summary::poses`].
     pub keep_poses: bool,
+    /// Measure motion quality as the replay runs, into
+    /// [`Summary::metrics`] (bounded memory, however long the recording).
+    pub measure: bool,
     /// Tracking control on (off: the output is the synthesised posture).
     pub tracking: bool,
 }
@@ -68,6 +71,7 @@ impl Default for Options {
             sheet_frames: 16,
             adapter: AdapterChoice::Auto,
             keep_poses: false,
+            measure: false,
             tracking: true,
         }
     }
@@ -108,6 +112,9 @@ pub struct Summary {
     /// Every stepped posture, with [`Options::keep_poses`].
     #[serde(skip)]
     pub poses: Vec<crate::character::skeleton::Pose>,
+    /// Motion quality, with [`Options::measure`].
+    #[serde(skip)]
+    pub metrics: Option<crate::tools::metrics::Metrics>,
 }
 
 fn digest(hash: &mut u64, ctl: &Controller) {
@@ -225,6 +232,7 @@ struct Replay<'a> {
     held_ever: BTreeSet<String>,
     thumbs: Vec<(Image, String, f64)>,
     times: Vec<f64>,
+    meter: Option<crate::tools::metrics::Meter<'a>>,
 }
 
 impl Backend for Replay<'_> {
@@ -240,6 +248,9 @@ impl Backend for Replay<'_> {
         digest(&mut self.hash, ctl);
         if self.opts.keep_poses {
             summary.poses.push(ctl.pose().clone());
+        }
+        if let Some(m) = &mut self.meter {
+            m.push(ctl.pose());
         }
         let held = ctl.held();
         summary.most_held_at_once = summary.most_held_at_once.max(held.len());
@@ -343,6 +354,7 @@ pub fn run(
     }
     let (pw, ph) = config.display.size();
     let (ow, oh) = config.display.output_size();
+    let measured = ch.clone();
     let mut ctl = Controller::new(ch, settings, f64::from(pw), f64::from(ph), 0.0);
     let touch_frames = frames.len();
     let ticker = Ticker::new(frames, opts.tick_hz);
@@ -388,6 +400,13 @@ pub fn run(
         held_ever: BTreeSet::new(),
         thumbs: Vec::new(),
         times: Vec::new(),
+        meter: opts.measure.then(|| {
+            crate::tools::metrics::Meter::new(
+                &measured.lib.skeleton,
+                &measured.roles,
+                1.0 / opts.tick_hz,
+            )
+        }),
     };
     super::frame::run(&mut ctl, &mut Steps::new(opts.tick_hz), &mut replay)?;
     let Replay {
@@ -396,8 +415,10 @@ pub fn run(
         held_ever,
         thumbs,
         times,
+        meter,
         ..
     } = replay;
+    summary.metrics = meter.map(crate::tools::metrics::Meter::finish);
     summary.parts_held = held_ever.into_iter().collect();
     summary.pose_digest = format!("{hash:016x}");
     if !times.is_empty() {

@@ -48,97 +48,112 @@ fn finite(p: &Pose) -> bool {
         && p.translations.iter().all(|t| t.is_finite())
 }
 
-/// Measure postures stepped every `dt` seconds.
-#[must_use]
-pub fn measure(skeleton: &Skeleton, roles: &RoleMap, poses: &[Pose], dt: f64) -> Metrics {
-    let mut m = Metrics {
-        frames: poses.len(),
-        ..Metrics::default()
-    };
-    let good: Vec<bool> = poses.iter().map(finite).collect();
-    m.nan_frames = good.iter().filter(|g| !**g).count();
-    // Angular speed of every joint's local rotation.
-    let speeds: Vec<Option<Vec<f64>>> = poses
-        .windows(2)
-        .zip(good.windows(2))
-        .map(|(p, g)| {
-            (g[0] && g[1]).then(|| {
-                p[0].rotations
-                    .iter()
-                    .zip(&p[1].rotations)
-                    .map(|(a, b)| a.angle_between(*b) / dt)
-                    .collect()
-            })
-        })
-        .collect();
-    for (k, w) in speeds.windows(2).enumerate() {
-        let (Some(a), Some(b)) = (&w[0], &w[1]) else {
-            continue;
-        };
-        let mut frame_max = (0.0f64, 0usize);
-        for (j, (x, y)) in a.iter().zip(b).enumerate() {
-            let jump = (y - x).abs();
-            if jump > frame_max.0 {
-                frame_max = (jump, j);
-            }
-            if jump > m.max_joint_speed_jump_rad_s {
-                m.max_joint_speed_jump_rad_s = jump;
-                m.worst_jump = format!(
-                    "{} at {:.2} s",
-                    skeleton.joints[j].name,
-                    (k + 2) as f64 * dt
-                );
-            }
-        }
-        if frame_max.0 > POP_RAD_S {
-            m.pops += 1;
-            if m.pop_list.len() < MAX_LISTED {
-                m.pop_list.push(format!(
-                    "{:.2} s {} {:.1} rad/s",
-                    (k + 2) as f64 * dt,
-                    skeleton.joints[frame_max.1].name,
-                    frame_max.0
-                ));
-            }
+/// Motion quality of postures stepped every `dt` seconds, one posture at a
+/// time, in bounded memory: it keeps the last
+/// posture and its joints' speeds only, so a replay of hours is measured
+/// as it runs.
+pub struct Meter<'a> {
+    skeleton: &'a Skeleton,
+    feet: [usize; 2],
+    dt: f64,
+    m: Metrics,
+    /// The last posture (when finite), its world pose and its joints'
+    /// angular speeds since the one before (when both were finite).
+    last: Option<(Pose, WorldPose)>,
+    speeds: Option<Vec<f64>>,
+    skate_sum: f64,
+    skate_n: usize,
+}
+
+impl<'a> Meter<'a> {
+    #[must_use]
+    pub fn new(skeleton: &'a Skeleton, roles: &RoleMap, dt: f64) -> Self {
+        Self {
+            skeleton,
+            feet: [roles.get(Role::LeftFoot), roles.get(Role::RightFoot)],
+            dt,
+            m: Metrics::default(),
+            last: None,
+            speeds: None,
+            skate_sum: 0.0,
+            skate_n: 0,
         }
     }
-    // Feet: planted while the sole is within 2 cm of the floor in both
-    // frames; the floor is at 0.
-    let worlds: Vec<Option<WorldPose>> = poses
-        .iter()
-        .zip(&good)
-        .map(|(p, g)| g.then(|| forward_kinematics(skeleton, p)))
-        .collect();
-    let feet = [roles.get(Role::LeftFoot), roles.get(Role::RightFoot)];
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (k, pair) in worlds.windows(2).enumerate() {
-        let (Some(a), Some(b)) = (&pair[0], &pair[1]) else {
-            continue;
-        };
-        for &f in &feet {
-            let (sa, sb) = (sole(skeleton, a, f), sole(skeleton, b, f));
-            if sa.y < 0.02 && sb.y < 0.02 {
-                let mm = (sb - sa).with_y(0.0).length() * 1e3;
-                sum += mm;
-                n += 1;
-                if mm > m.foot_skate_max_mm {
-                    m.foot_skate_max_mm = mm;
-                    m.worst_skate = format!(
-                        "{} at {:.2} s",
-                        skeleton.joints[f].name,
-                        (k + 2) as f64 * dt
-                    );
+
+    /// The next posture.
+    pub fn push(&mut self, pose: &Pose) {
+        let (skeleton, dt) = (self.skeleton, self.dt);
+        let k = self.m.frames;
+        self.m.frames += 1;
+        if !finite(pose) {
+            self.m.nan_frames += 1;
+            self.last = None;
+            self.speeds = None;
+            return;
+        }
+        let world = forward_kinematics(skeleton, pose);
+        let m = &mut self.m;
+        if let Some((prev, prev_world)) = &self.last {
+            // Angular speed of every joint's local rotation, and its jump
+            // from the frame before.
+            let speeds: Vec<f64> = prev
+                .rotations
+                .iter()
+                .zip(&pose.rotations)
+                .map(|(a, b)| a.angle_between(*b) / dt)
+                .collect();
+            if let Some(before) = &self.speeds {
+                let mut frame_max = (0.0f64, 0usize);
+                for (j, (x, y)) in before.iter().zip(&speeds).enumerate() {
+                    let jump = (y - x).abs();
+                    if jump > frame_max.0 {
+                        frame_max = (jump, j);
+                    }
+                    if jump > m.max_joint_speed_jump_rad_s {
+                        m.max_joint_speed_jump_rad_s = jump;
+                        m.worst_jump = format!(
+                            "{} at {:.2} s",
+                            skeleton.joints[j].name,
+                            (k + 1) as f64 * dt
+                        );
+                    }
+                }
+                if frame_max.0 > POP_RAD_S {
+                    m.pops += 1;
+                    if m.pop_list.len() < MAX_LISTED {
+                        m.pop_list.push(format!(
+                            "{:.2} s {} {:.1} rad/s",
+                            (k + 1) as f64 * dt,
+                            skeleton.joints[frame_max.1].name,
+                            frame_max.0
+                        ));
+                    }
+                }
+            }
+            self.speeds = Some(speeds);
+            // Feet: planted while the sole is within 2 cm of the floor in
+            // both frames; the floor is at 0.
+            for &f in &self.feet {
+                let (sa, sb) = (sole(skeleton, prev_world, f), sole(skeleton, &world, f));
+                if sa.y < 0.02 && sb.y < 0.02 {
+                    let mm = (sb - sa).with_y(0.0).length() * 1e3;
+                    self.skate_sum += mm;
+                    self.skate_n += 1;
+                    if mm > m.foot_skate_max_mm {
+                        m.foot_skate_max_mm = mm;
+                        m.worst_skate = format!(
+                            "{} at {:.2} s",
+                            skeleton.joints[f].name,
+                            (k + 1) as f64 * dt
+                        );
+                    }
                 }
             }
         }
-    }
-    m.foot_skate_mm_per_frame = if n == 0 { 0.0 } else { sum / n as f64 };
-    for (k, w) in worlds.iter().enumerate() {
-        let Some(w) = w else { continue };
         for i in 0..skeleton.len() {
-            let y = w
+            let y = world
                 .end_site(skeleton, i)
-                .map_or(w.positions[i].y, |e| e.y.min(w.positions[i].y));
+                .map_or(world.positions[i].y, |e| e.y.min(world.positions[i].y));
             if -y * 1e3 > m.ground_penetration_mm {
                 m.ground_penetration_mm = -y * 1e3;
                 m.worst_penetration = format!(
@@ -148,11 +163,70 @@ pub fn measure(skeleton: &Skeleton, roles: &RoleMap, poses: &[Pose], dt: f64) ->
                 );
             }
         }
+        self.last = Some((pose.clone(), world));
     }
-    let r = |v: f64| (v * 1000.0).round() / 1000.0;
-    m.max_joint_speed_jump_rad_s = r(m.max_joint_speed_jump_rad_s);
-    m.foot_skate_mm_per_frame = r(m.foot_skate_mm_per_frame);
-    m.foot_skate_max_mm = r(m.foot_skate_max_mm);
-    m.ground_penetration_mm = r(m.ground_penetration_mm);
-    m
+
+    /// The figures over every posture pushed.
+    #[must_use]
+    pub fn finish(self) -> Metrics {
+        let mut m = self.m;
+        m.foot_skate_mm_per_frame = if self.skate_n == 0 {
+            0.0
+        } else {
+            self.skate_sum / self.skate_n as f64
+        };
+        let r = |v: f64| (v * 1000.0).round() / 1000.0;
+        m.max_joint_speed_jump_rad_s = r(m.max_joint_speed_jump_rad_s);
+        m.foot_skate_mm_per_frame = r(m.foot_skate_mm_per_frame);
+        m.foot_skate_max_mm = r(m.foot_skate_max_mm);
+        m.ground_penetration_mm = r(m.ground_penetration_mm);
+        m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{DQuat, DVec3};
+
+    use super::*;
+    use crate::character::skeleton::Joint;
+
+    #[test]
+    fn a_sudden_turn_is_a_pop_and_a_nan_frame_breaks_the_chain() {
+        let joint = |name: &str, parent, y| Joint {
+            name: name.to_owned(),
+            parent,
+            offset: DVec3::new(0.0, y, 0.0),
+            end_site: None,
+        };
+        let skeleton = Skeleton {
+            joints: vec![joint("Hips", None, 1.0), joint("Spine", Some(0), 0.3)],
+        };
+        let mut roles = RoleMap::default();
+        for r in Role::ALL {
+            roles.0.insert(r, 1);
+        }
+        roles.0.insert(Role::Pelvis, 0);
+        let pose = |angle: f64| Pose {
+            translations: vec![DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, 0.3, 0.0)],
+            rotations: vec![DQuat::IDENTITY, DQuat::from_rotation_x(angle)],
+        };
+        let dt = 1.0 / 30.0;
+        let mut m = Meter::new(&skeleton, &roles, dt);
+        // Still, still, then 0.5 rad in one frame: 15 rad/s at once.
+        for a in [0.0, 0.0, 0.5, 0.5] {
+            m.push(&pose(a));
+        }
+        let mut nan = pose(0.5);
+        nan.rotations[1] = DQuat::from_xyzw(f64::NAN, 0.0, 0.0, 1.0);
+        m.push(&nan);
+        // After the NaN, speeds start afresh: no jump from the bad frame.
+        m.push(&pose(1.5));
+        let r = m.finish();
+        assert_eq!(r.frames, 6);
+        assert_eq!(r.nan_frames, 1);
+        assert_eq!(r.pops, 2, "{r:?}");
+        assert!((r.max_joint_speed_jump_rad_s - 15.0).abs() < 1e-3, "{r:?}");
+        assert_eq!(r.worst_jump, "Spine at 0.10 s");
+    }
 }

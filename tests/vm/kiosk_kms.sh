@@ -77,6 +77,8 @@ library = "/library"
 [input]
 rescan_interval_ms = 100
 grab = true
+[kiosk]
+metrics_textfile = "/tmp/marionette.prom"
 [display]
 status_line = false
 TOML
@@ -132,6 +134,15 @@ wait $!; echo "play3 rc=$?" >> /tmp/rc
 wait $cal; echo "calibrate rc=$?" >> /tmp/rc
 cp /m.toml /tmp/m.toml
 cmp -s /m.toml.bak /m.orig.toml && echo "backup kept" >> /tmp/rc
+# The service view on: the panel's name, the figures and the finger's
+# trail over the scene.
+{ cat /m.orig.toml; echo 'service_view = true'; } > /svc.toml   # [display] is last
+marionette --config /svc.toml run --seconds 16 > /tmp/svc.log 2>&1 &
+svc=$!
+sleep 7
+$m play /drag.evemu --settle-ms 800 2> /tmp/play4.log &
+sleep 2; echo "MARK service"
+wait $!; wait $svc; echo "service rc=$?" >> /tmp/rc
 # A library folder that does not exist: the reason on the display for
 # kiosk.error_screen_s, then exit 78.
 printf '[character]\nlibrary = "/no-such-library"\n[kiosk]\nerror_screen_s = 8\n[display]\nstatus_line = false\n' > /bad.toml
@@ -139,7 +150,8 @@ marionette --config /bad.toml run > /tmp/bad.log 2>&1 &
 bad=$!
 sleep 4; echo "MARK cannot-start"
 wait $bad; echo "bad library rc=$?" >> /tmp/rc
-for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log; do
+cp /tmp/marionette.prom /tmp/prom.txt 2>/dev/null
+for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log svc.log prom.txt; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f

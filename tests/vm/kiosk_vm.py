@@ -78,6 +78,25 @@ else:
     want = [1.05, 0.0, -0.03, 0.0, 0.95, 0.02]
     if any(abs(g - w) > 0.01 for g, w in zip(got, want)):
         failures.append(f"calibration: matrix {got}, expected about {want}")
+# The metrics textfile, in Prometheus text format.
+prom = open(os.path.join(out, "prom.txt")).read() if os.path.exists(os.path.join(out, "prom.txt")) else ""
+# Two starts wrote it: the kiosk, then the service view run, which read
+# the count back.
+for want in ["marionette_starts_total 2", "marionette_touchscreens ", "marionette_fps "]:
+    if want not in prom:
+        failures.append(f"expected '{want}' in the metrics textfile:\n" + prom[-800:])
+# The service view: its cyan text and the finger's trail on the screen.
+if "service rc=0" not in rc:
+    failures.append("the kiosk with the service view should run and stop cleanly")
+path = os.path.join(out, "service.ppm")
+if not os.path.exists(path):
+    failures.append("no screen grabbed at 'service'")
+else:
+    w, h, px = ppm(path)
+    cyan = sum(1 for i in range(0, len(px), 3) if px[i + 1] > 200 and px[i + 2] > 200 and px[i + 1] > px[i] + 60)
+    print(f"service: {cyan} cyan pixels")
+    if cyan < 400:
+        failures.append(f"service view: no panel or trail on the screen ({cyan} cyan pixels)")
 # A kiosk that cannot start says why on the display, then exits 78.
 if "bad library rc=78" not in rc:
     failures.append("a missing library folder should exit 78 after the error screen")

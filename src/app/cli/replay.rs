@@ -95,13 +95,23 @@ pub(super) fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Fail
     show(config, &rec, out_dir, fps, u64::MAX)
 }
 
-/// A recording's postures, the controller stepped at `tick_hz` (0: the
-/// library's frame rate) up to the recording's end, without rendering.
+/// What a replay without rendering keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Keep {
+    Poses,
+    Metrics,
+}
+
+/// A recording replayed without rendering, the controller stepped at
+/// `tick_hz` (0: the library's frame rate) up to the recording's end:
+/// every posture kept (`Keep::Poses`), or measured as it goes in bounded
+/// memory (`Keep::Metrics`).
 pub(super) fn replay_poses(
     config: &Config,
     file: &Path,
     tick_hz: f64,
     tracking: bool,
+    keep: Keep,
 ) -> Result<
     (
         std::sync::Arc<crate::control::character::Character>,
@@ -127,7 +137,8 @@ pub(super) fn replay_poses(
     };
     let opts = headless::Options {
         tick_hz,
-        keep_poses: true,
+        keep_poses: keep == Keep::Poses,
+        measure: keep == Keep::Metrics,
         until: Some(pipeline::summarize(&rec).0.replay_s),
         tracking,
         ..headless::Options::default()
@@ -142,9 +153,8 @@ pub(super) fn replay_metrics(
     out: &Path,
     no_tracking: bool,
 ) -> Result<(), Failure> {
-    let (ch, summary, tick_hz) = replay_poses(config, file, 30.0, !no_tracking)?;
-    let m =
-        crate::tools::metrics::measure(&ch.lib.skeleton, &ch.roles, &summary.poses, 1.0 / tick_hz);
+    let (_, summary, _) = replay_poses(config, file, 30.0, !no_tracking, Keep::Metrics)?;
+    let m = summary.metrics.clone().unwrap_or_default();
     let mut json = serde_json::to_value(&m).map_err(|e| Failure::new(exit::FAILURE, e))?;
     json["tracking"] = serde_json::Value::Bool(!no_tracking);
     json["actions"] = summary
@@ -182,7 +192,7 @@ pub(super) fn replay_metrics(
 }
 
 pub(super) fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(), Failure> {
-    let (ch, summary, tick_hz) = replay_poses(config, file, 0.0, true)?;
+    let (ch, summary, tick_hz) = replay_poses(config, file, 0.0, true, Keep::Poses)?;
     let translates: Vec<bool> = (0..ch.lib.skeleton.len()).map(|j| j == 0).collect();
     let text =
         crate::character::bvh::write(&ch.lib.skeleton, &translates, &summary.poses, 1.0 / tick_hz);
