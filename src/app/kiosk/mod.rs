@@ -196,6 +196,9 @@ pub fn run_with_clock(
         flips_seen: 0,
         textfile,
         textfile_written: false,
+        no_panel_since: None,
+        no_panel_said: false,
+        no_panel_shown: false,
     };
     frame::run(&mut ctl, &mut frames, &mut kiosk)?;
     let Kiosk {
@@ -252,7 +255,16 @@ struct Kiosk<'a> {
     /// Where the vital signs go every minute, if anywhere.
     textfile: Option<PathBuf>,
     textfile_written: bool,
+    /// Since when no touchscreen is read, whether the log said so, and
+    /// whether the display shows it.
+    no_panel_since: Option<f64>,
+    no_panel_said: bool,
+    no_panel_shown: bool,
 }
+
+/// After this long without a touchscreen the display says so (s).
+const NO_PANEL_NOTICE_S: f64 = 5.0;
+const NO_PANEL_NOTICE: &str = "No touchscreen found: plug one in";
 
 impl Backend for Kiosk<'_> {
     type Error = RunError;
@@ -366,7 +378,23 @@ impl Backend for Kiosk<'_> {
             orbit.distance,
             marks.fingers.len(),
         );
+        // No touchscreen for a while: say so on the display (the kiosk
+        // goes on and picks one up when it is plugged in).
+        let no_panel = self.service.panels.is_empty() && {
+            let since = *self.no_panel_since.get_or_insert(t);
+            t - since >= NO_PANEL_NOTICE_S
+        };
+        if self.service.panels.is_empty() {
+            if no_panel && !self.no_panel_said {
+                tracing::warn!(dir = %self.config.input.dev_dir.display(), "no touchscreen is read: the display says so until one is plugged in (marionette list-devices says what each input is)");
+                self.no_panel_said = true;
+            }
+        } else {
+            self.no_panel_since = None;
+            self.no_panel_said = false;
+        }
         let changed = self.service.on
+            || no_panel != self.no_panel_shown
             || self.last_shown.as_ref().is_none_or(|s| {
                 !same_pose(&s.0, &key.0)
                     || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
@@ -377,6 +405,9 @@ impl Backend for Kiosk<'_> {
             let mut marks = marks;
             if display.status_line {
                 marks.status = status_line(ctl);
+            }
+            if no_panel {
+                marks.status = Some(NO_PANEL_NOTICE.to_owned());
             }
             if self.service.on {
                 let now = self.vitals.summary(t);
@@ -396,6 +427,7 @@ impl Backend for Kiosk<'_> {
                         stats.render_ms_max = stats.render_ms_max.max(ms);
                         stats.frames += 1;
                         self.vitals.drawn(ms);
+                        self.no_panel_shown = no_panel;
                         if screen.fd().is_none() {
                             // The swapchain shows it at the next vblank.
                             self.vitals.flipped(t + self.frame_s);
