@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics, sole};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
 
 /// A jump in a joint's angular speed larger than this between two frames
 /// (rad/s) counts as a pop: 10 rad/s in one 1/30 s frame is 300 rad/s²,
@@ -46,6 +46,15 @@ fn finite(p: &Pose) -> bool {
         .iter()
         .all(|q| q.to_array().iter().all(|v| v.is_finite()))
         && p.translations.iter().all(|t| t.is_finite())
+}
+
+/// The points of a foot that can touch the floor: the ankle, the joints
+/// below it and their End Sites, in a fixed order.
+fn foot_points(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> Vec<glam::DVec3> {
+    (0..skeleton.len())
+        .filter(|&i| i == ankle || skeleton.is_ancestor(ankle, i))
+        .flat_map(|i| std::iter::once(w.positions[i]).chain(w.end_site(skeleton, i)))
+        .collect()
 }
 
 /// Motion quality of postures stepped every `dt` seconds, one posture at a
@@ -131,12 +140,20 @@ impl<'a> Meter<'a> {
                 }
             }
             self.speeds = Some(speeds);
-            // Feet: planted while the sole is within 2 cm of the floor in
-            // both frames; the floor is at 0.
+            // Feet: a point of the foot (ankle, toes, their End Sites)
+            // within 2 cm of the floor in both frames is planted, and its
+            // horizontal slide is skating; a foot's slide in a step is its
+            // planted points' largest. The same point is followed from
+            // frame to frame: a foot that rolls from heel to toes does not
+            // skate, though its lowest point moves.
             for &f in &self.feet {
-                let (sa, sb) = (sole(skeleton, prev_world, f), sole(skeleton, &world, f));
-                if sa.y < 0.02 && sb.y < 0.02 {
-                    let mm = (sb - sa).with_y(0.0).length() * 1e3;
+                let planted: Vec<f64> = foot_points(skeleton, prev_world, f)
+                    .into_iter()
+                    .zip(foot_points(skeleton, &world, f))
+                    .filter(|(a, b)| a.y < 0.02 && b.y < 0.02)
+                    .map(|(a, b)| (b - a).with_y(0.0).length() * 1e3)
+                    .collect();
+                if let Some(mm) = planted.into_iter().reduce(f64::max) {
                     self.skate_sum += mm;
                     self.skate_n += 1;
                     if mm > m.foot_skate_max_mm {
@@ -190,6 +207,60 @@ mod tests {
 
     use super::*;
     use crate::character::skeleton::Joint;
+
+    #[test]
+    fn a_foot_that_rolls_onto_its_toes_does_not_skate_one_that_slides_does() {
+        // An ankle 8 cm up, the toe joint 12 cm ahead and 1 cm off the
+        // floor, the toe tip 5 cm further and 3 mm higher (a flat foot's
+        // lowest point is the toe joint); the foot turns about the tip.
+        let joint = |name: &str, parent, offset: DVec3| Joint {
+            name: name.to_owned(),
+            parent,
+            offset,
+            end_site: None,
+        };
+        let mut skeleton = Skeleton {
+            joints: vec![
+                joint("LeftFoot", None, DVec3::ZERO),
+                joint("LeftToe", Some(0), DVec3::new(0.0, -0.07, 0.12)),
+            ],
+        };
+        skeleton.joints[1].end_site = Some(DVec3::new(0.0, 0.003, 0.05));
+        let mut roles = RoleMap::default();
+        for r in Role::ALL {
+            roles.0.insert(r, 0);
+        }
+        let tip = DVec3::new(0.0, 0.013, 0.17);
+        let pose = |pitch: f64, slide: f64| {
+            // Turned about the toe tip, then slid along x.
+            let q = DQuat::from_rotation_x(pitch);
+            let ankle = tip + q * (DVec3::new(0.0, 0.08, 0.0) - tip) + DVec3::X * slide;
+            Pose {
+                translations: vec![ankle, DVec3::new(0.0, -0.07, 0.12)],
+                rotations: vec![q, DQuat::IDENTITY],
+            }
+        };
+        let skate = |poses: &[Pose]| {
+            let mut m = Meter::new(&skeleton, &roles, 1.0 / 30.0);
+            for p in poses {
+                m.push(p);
+            }
+            m.finish().foot_skate_max_mm
+        };
+        // Rolling: the lowest point jumps 5 cm from the toe joint to the
+        // tip, but the tip stays where it is.
+        let low = |p: &Pose| {
+            crate::character::skeleton::sole(&skeleton, &forward_kinematics(&skeleton, p), 0)
+        };
+        let jumped = (low(&pose(0.2, 0.0)) - low(&pose(0.0, 0.0)))
+            .with_y(0.0)
+            .length();
+        assert!(jumped > 0.04, "{jumped}");
+        let roll = skate(&[pose(0.0, 0.0), pose(0.2, 0.0), pose(0.4, 0.0)]);
+        assert!(roll < 0.5, "{roll} mm");
+        let slide = skate(&[pose(0.0, 0.0), pose(0.0, 0.03)]);
+        assert!((slide - 30.0).abs() < 0.5, "{slide} mm");
+    }
 
     #[test]
     fn a_sudden_turn_is_a_pop_and_a_nan_frame_breaks_the_chain() {
