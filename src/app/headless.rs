@@ -250,7 +250,7 @@ impl Backend for Replay<'_> {
             summary.poses.push(ctl.pose().clone());
         }
         if let Some(m) = &mut self.meter {
-            m.push(ctl.pose());
+            m.push(ctl.pose(), &ctl.held());
         }
         let held = ctl.held();
         summary.most_held_at_once = summary.most_held_at_once.max(held.len());

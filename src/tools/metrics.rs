@@ -89,8 +89,9 @@ impl<'a> Meter<'a> {
         }
     }
 
-    /// The next posture.
-    pub fn push(&mut self, pose: &Pose) {
+    /// The next posture, `held` the parts fingers hold: a foot a finger
+    /// drags along the floor is the visitor's doing, not skating.
+    pub fn push(&mut self, pose: &Pose, held: &[Role]) {
         let (skeleton, dt) = (self.skeleton, self.dt);
         let k = self.m.frames;
         self.m.frames += 1;
@@ -146,7 +147,10 @@ impl<'a> Meter<'a> {
             // planted points' largest. The same point is followed from
             // frame to frame: a foot that rolls from heel to toes does not
             // skate, though its lowest point moves.
-            for &f in &self.feet {
+            for (&f, role) in self.feet.iter().zip([Role::LeftFoot, Role::RightFoot]) {
+                if held.contains(&role) {
+                    continue;
+                }
                 let planted: Vec<f64> = foot_points(skeleton, prev_world, f)
                     .into_iter()
                     .zip(foot_points(skeleton, &world, f))
@@ -243,7 +247,7 @@ mod tests {
         let skate = |poses: &[Pose]| {
             let mut m = Meter::new(&skeleton, &roles, 1.0 / 30.0);
             for p in poses {
-                m.push(p);
+                m.push(p, &[]);
             }
             m.finish().foot_skate_max_mm
         };
@@ -286,13 +290,13 @@ mod tests {
         let mut m = Meter::new(&skeleton, &roles, dt);
         // Still, still, then 0.5 rad in one frame: 15 rad/s at once.
         for a in [0.0, 0.0, 0.5, 0.5] {
-            m.push(&pose(a));
+            m.push(&pose(a), &[]);
         }
         let mut nan = pose(0.5);
         nan.rotations[1] = DQuat::from_xyzw(f64::NAN, 0.0, 0.0, 1.0);
-        m.push(&nan);
+        m.push(&nan, &[]);
         // After the NaN, speeds start afresh: no jump from the bad frame.
-        m.push(&pose(1.5));
+        m.push(&pose(1.5), &[]);
         let r = m.finish();
         assert_eq!(r.frames, 6);
         assert_eq!(r.nan_frames, 1);
