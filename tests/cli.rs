@@ -4,15 +4,9 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn marionette(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_marionette"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run marionette")
-}
+use common::marionette;
 
 fn recording(name: &str) -> String {
     common::shared_dir()

@@ -4,20 +4,13 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use marionette::app::config::Config;
 use marionette::app::headless::{self, Options};
 use marionette::input::evemu::Recording;
 use marionette::input::pipeline;
 
-fn marionette(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_marionette"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run marionette")
-}
+use common::marionette;
 
 fn demo_recording() -> Recording {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/recordings/demo.evemu");

@@ -8,15 +8,9 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn marionette(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_marionette"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run marionette")
-}
+use common::marionette;
 
 fn atmel() -> std::path::PathBuf {
     common::shared_dir().join(common::ATMEL_DRAG)

@@ -5,18 +5,11 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 
-fn marionette(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_marionette"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run marionette")
-}
+use common::marionette;
 
 /// A folder of takes linked from the Bandai share: `(action, style)` files
 /// `d1_<action>_<style>_001.bvh` appear as `<name>_<style>_001.bvh`.

@@ -351,6 +351,17 @@ fn positions_relative_to_offsets(
     relative
 }
 
+/// The BVH files (`*.bvh`, any case) in `dir`, sorted by name.
+pub fn files_in(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
 /// The lowest point of a posture (joints and End Sites), in y.
 fn lowest(skeleton: &Skeleton, pose: &Pose) -> f64 {
     let w = forward_kinematics(skeleton, pose);

@@ -215,16 +215,10 @@ pub struct Plan {
 
 /// Read the takes in `src` and decide the library.
 pub fn plan(src: &Path) -> Result<Plan, InitError> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(src)
-        .map_err(|source| InitError::List {
-            path: src.to_owned(),
-            source,
-        })?
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
-        .collect();
-    files.sort();
+    let files = bvh::files_in(src).map_err(|source| InitError::List {
+        path: src.to_owned(),
+        source,
+    })?;
     if files.is_empty() {
         return Err(InitError::NoFiles {
             path: src.to_owned(),

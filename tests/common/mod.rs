@@ -18,6 +18,16 @@ pub fn shared_dir() -> PathBuf {
     dir
 }
 
+/// Run the marionette binary with `args` (RUST_LOG cleared, so the log
+/// level is the configuration's), and what it printed and returned.
+pub fn marionette(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run marionette")
+}
+
 /// `tests/data` in this repository.
 pub fn data_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data")

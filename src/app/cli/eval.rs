@@ -26,18 +26,12 @@ pub(super) fn eval_actions(
         .iter()
         .map(|a| ActionModel::build(&lib, a))
         .collect();
-    let mut files: Vec<PathBuf> = std::fs::read_dir(test_dir)
-        .map_err(|e| {
-            Failure::new(
-                exit::NOINPUT,
-                format!("cannot list {}: {e}", test_dir.display()),
-            )
-        })?
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
-        .collect();
-    files.sort();
+    let files = crate::character::bvh::files_in(test_dir).map_err(|e| {
+        Failure::new(
+            exit::NOINPUT,
+            format!("cannot list {}: {e}", test_dir.display()),
+        )
+    })?;
     let mut clips = Vec::new();
     for f in &files {
         let stem = f
