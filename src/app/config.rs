@@ -207,6 +207,16 @@ impl Config {
                 3_600.0,
             ),
         ])?;
+        let textfile = &self.kiosk.metrics_textfile;
+        if !textfile.as_os_str().is_empty() && !textfile.is_absolute() {
+            return Err(invalid(
+                "kiosk.metrics_textfile",
+                format!(
+                    "must be an absolute path (node_exporter's textfile directory, e.g. \"/var/lib/prometheus/node-exporter/marionette.prom\") or empty, found \"{}\"",
+                    textfile.display()
+                ),
+            ));
+        }
         let t = &self.tracking;
         in_ranges(&[
             ("tracking.settle_s", t.settle_s, 0.0, 2.0),
@@ -356,6 +366,19 @@ mod tests {
         assert!(e.contains("widht"), "{e}");
         assert!(e.contains("width"), "{e}");
         assert!(e.contains("line 2"), "{e}");
+    }
+
+    #[test]
+    fn the_metrics_textfile_is_an_absolute_path_or_nothing() {
+        let e = parse("[kiosk]\nmetrics_textfile = \"metrics.prom\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("kiosk.metrics_textfile") && e.contains("absolute"),
+            "{e}"
+        );
+        let c = parse("[kiosk]\nmetrics_textfile = \"/var/lib/prometheus/node-exporter/m.prom\"\n");
+        assert!(c.is_ok());
     }
 
     #[test]
