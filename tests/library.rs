@@ -1,6 +1,11 @@
 //! Motion libraries over real motion capture: a valid library loads; a
 //! broken one reports every problem at once, each naming what to fix.
 
+#![allow(
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 mod common;
 
 use std::path::Path;
@@ -292,4 +297,64 @@ fn another_performers_proportions_are_carried_onto_the_library_skeleton() {
             "{name}: lowest foot {was:.3} m, now {is:.3} m"
         );
     }
+}
+
+#[test]
+fn mirror_true_adds_the_action_with_the_other_hand_and_it_is_recognised() {
+    use marionette::control::action::model::ActionModel;
+    use marionette::tools::eval::actions::eval_actions;
+    // Only left punches taught; a right punch (the default library's own,
+    // not in this library) is asked for.
+    let dir = tempfile::tempdir().unwrap();
+    let assets = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+    write_library(
+        dir.path(),
+        &assets,
+        r#"
+[settings]
+[posing]
+clips = ["pose_stance.bvh"]
+[[action]]
+name = "punch_left"
+clips = ["punch_left_a.bvh", "punch_left_body.bvh"]
+primary = "left_hand"
+mirror = true
+segments = [{ until = 0.3, still = true, release = "backward" }, { until = 1.0, still = false, release = "forward" }]
+"#
+        .replace("[settings]\n", "")
+        .as_str(),
+    );
+    let lib = Library::load(dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    let names: Vec<&str> = lib.actions.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["punch_left", "punch_right"]);
+    let right = &lib.actions[1];
+    assert_eq!(right.primary, Role::RightHand);
+    assert_eq!(
+        right.clips,
+        ["punch_left_a.bvh~mirror", "punch_left_body.bvh~mirror"]
+    );
+    let actions: Vec<ActionModel> = lib
+        .actions
+        .iter()
+        .map(|a| ActionModel::build(&lib, a))
+        .collect();
+    let full = Library::load(&assets).unwrap();
+    let test = &full.clips["punch_right_a.bvh"];
+    let r = eval_actions(
+        &actions,
+        &[("punch_right".to_owned(), test)],
+        &marionette::control::action::trail::StartRule::default(),
+        1,
+    );
+    eprintln!("a right punch against mirrored left punches: {r:?}");
+    assert!(r.correct >= 0.5, "{r:?}");
+    // A middle-line part has no other side.
+    let bad = tempfile::tempdir().unwrap();
+    write_library(
+        bad.path(),
+        &assets,
+        "[posing]\nclips = [\"pose_stance.bvh\"]\n[[action]]\nname = \"bow\"\nclips = [\"bow_a.bvh\"]\nprimary = \"head\"\nmirror = true\nsegments = [{ until = 1.0, still = true, release = \"forward\" }]\n",
+    );
+    let e = Library::load(bad.path()).unwrap_err().to_string();
+    assert!(e.contains("middle line"), "{e}");
 }

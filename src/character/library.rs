@@ -95,6 +95,9 @@ struct ActionFile {
     clips: Vec<String>,
     primary: String,
     segments: Vec<Segment>,
+    /// Also the mirror image: the same action with the other hand or foot.
+    #[serde(default)]
+    mirror: bool,
 }
 
 #[derive(Debug, Deserialize)]
@@ -353,6 +356,49 @@ impl Library {
                 });
             }
         }
+        // Mirrored copies: the same action with the other side's part.
+        let mut mirrored = Vec::new();
+        for (a, file_a) in actions.iter().zip(
+            file.action
+                .iter()
+                .filter(|f| Role::from_name(&f.primary).is_some()),
+        ) {
+            if !file_a.mirror {
+                continue;
+            }
+            let label = format!("action `{}`", a.name);
+            let primary = a.primary.mirrored();
+            if primary == a.primary {
+                problems.push(format!("{label}: mirror = true, but its primary `{}` is on the middle line: its mirror image is the same action", a.primary.name()));
+                continue;
+            }
+            let name = mirrored_name(&a.name);
+            if file.action.iter().any(|f| f.name == name) {
+                problems.push(format!("{label}: mirror = true would add `{name}`, which the library has already; drop one"));
+                continue;
+            }
+            let mut names = Vec::new();
+            for c in &a.clips {
+                let Some(clip) = clips.get(c) else { continue };
+                match clip.mirrored() {
+                    Ok(m) => {
+                        let n = format!("{c}~mirror");
+                        clips.insert(n.clone(), m);
+                        names.push(n);
+                    }
+                    Err(e) => problems.push(format!(
+                        "{label}: mirror = true, but {c} has no mirror image: {e}"
+                    )),
+                }
+            }
+            mirrored.push(ActionDef {
+                name,
+                clips: names,
+                primary,
+                segments: a.segments.clone(),
+            });
+        }
+        actions.extend(mirrored);
         if !problems.is_empty() {
             return Err(fail(problems));
         }
@@ -380,6 +426,28 @@ impl Library {
             actions,
             action_lead_in: lead_in,
         })
+    }
+}
+
+/// The name of an action's mirror image: left and right swapped in its
+/// name, or `_mirror` added.
+#[must_use]
+pub fn mirrored_name(name: &str) -> String {
+    let swapped: String = name
+        .split('_')
+        .map(|w| match w {
+            "left" => "right",
+            "right" => "left",
+            "l" => "r",
+            "r" => "l",
+            w => w,
+        })
+        .collect::<Vec<_>>()
+        .join("_");
+    if swapped == name {
+        format!("{name}_mirror")
+    } else {
+        swapped
     }
 }
 

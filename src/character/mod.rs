@@ -12,6 +12,7 @@
 pub mod bvh;
 pub mod camera;
 pub mod library;
+pub mod mirror;
 pub mod motion;
 pub mod roles;
 pub mod skeleton;

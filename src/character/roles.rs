@@ -121,6 +121,28 @@ fn list(roles: &[Role]) -> String {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RoleMap(pub BTreeMap<Role, usize>);
 
+impl Role {
+    /// The same part on the other side (itself on the middle line).
+    #[must_use]
+    pub fn mirrored(self) -> Self {
+        match self {
+            Role::LeftShoulder => Role::RightShoulder,
+            Role::LeftElbow => Role::RightElbow,
+            Role::LeftHand => Role::RightHand,
+            Role::LeftHip => Role::RightHip,
+            Role::LeftKnee => Role::RightKnee,
+            Role::LeftFoot => Role::RightFoot,
+            Role::RightShoulder => Role::LeftShoulder,
+            Role::RightElbow => Role::LeftElbow,
+            Role::RightHand => Role::LeftHand,
+            Role::RightHip => Role::LeftHip,
+            Role::RightKnee => Role::LeftKnee,
+            Role::RightFoot => Role::LeftFoot,
+            other => other,
+        }
+    }
+}
+
 impl RoleMap {
     /// The joint of a role (every role is present in a filled map).
     #[must_use]
