@@ -358,3 +358,13 @@ segments = [{ until = 0.3, still = true, release = "backward" }, { until = 1.0, 
     let e = Library::load(bad.path()).unwrap_err().to_string();
     assert!(e.contains("middle line"), "{e}");
 }
+
+#[test]
+fn mirror_names_swap_the_side_or_say_mirror() {
+    use marionette::character::library::mirrored_name;
+    assert_eq!(mirrored_name("punch_left"), "punch_right");
+    assert_eq!(mirrored_name("raise-up-left-hand"), "raise-up-right-hand");
+    assert_eq!(mirrored_name("wave-right_2"), "wave-left_2");
+    assert_eq!(mirrored_name("leftover"), "leftover_mirror");
+    assert_eq!(mirrored_name("wave"), "wave_mirror");
+}

@@ -65,7 +65,13 @@ fn a_folder_of_takes_becomes_a_library_that_loads() {
             .unwrap_or_else(|| panic!("no action {name}: {stdout}"))
     };
     assert!(lib.actions.iter().all(|a| a.name != "pose"));
-    assert_eq!(lib.actions.len(), 6);
+    // Six actions, and the mirror images of the four led by one side's
+    // hand or foot (punch, kick, slash, bye-bye).
+    assert_eq!(lib.actions.len(), 10, "{stdout}");
+    let mirrored = action("punch_mirror");
+    assert_eq!(mirrored.primary, Role::RightHand);
+    assert!(mirrored.clips.iter().all(|c| c.ends_with("~mirror")));
+    assert_eq!(action("kick_mirror").primary, Role::LeftFoot);
     // The studio's punch take is five left punches, the kick three kicks,
     // the slash three slashes: each is cut into single actions.
     let punch = action("punch");

@@ -433,17 +433,21 @@ impl Library {
 /// name, or `_mirror` added.
 #[must_use]
 pub fn mirrored_name(name: &str) -> String {
-    let swapped: String = name
-        .split('_')
-        .map(|w| match w {
+    // Words between `_` and `-`, the separators kept.
+    let mut swapped = String::new();
+    for piece in name.split_inclusive(['_', '-']) {
+        let (word, sep) = piece
+            .strip_suffix(['_', '-'])
+            .map_or((piece, ""), |w| (w, &piece[w.len()..]));
+        swapped.push_str(match word {
             "left" => "right",
             "right" => "left",
             "l" => "r",
             "r" => "l",
             w => w,
-        })
-        .collect::<Vec<_>>()
-        .join("_");
+        });
+        swapped.push_str(sep);
+    }
     if swapped == name {
         format!("{name}_mirror")
     } else {

@@ -194,6 +194,8 @@ pub struct PlannedAction {
     /// Clip names: files, or `file#first-last` pieces of a long take.
     pub clips: Vec<String>,
     pub segments: Vec<Segment>,
+    /// Whether its mirror image is offered (`mirror = true`).
+    pub mirror: bool,
     /// What was decided and why, a line each.
     pub notes: Vec<String>,
 }
@@ -286,10 +288,29 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
             _ => {}
         }
     }
-    let actions = by_action
+    let mut actions: Vec<PlannedAction> = by_action
         .into_iter()
         .map(|(name, takes)| plan_action(name, &takes))
         .collect();
+    // An action led by one side's part is offered with the other side's
+    // too, unless the folder has that action already.
+    let names: Vec<String> = actions.iter().map(|a| a.name.clone()).collect();
+    for a in &mut actions {
+        let other = crate::character::library::mirrored_name(&a.name);
+        if a.primary.mirrored() == a.primary {
+            continue;
+        }
+        if names.contains(&other) {
+            a.notes
+                .push(format!("no mirror image: the takes have `{other}` already"));
+            continue;
+        }
+        a.mirror = true;
+        a.notes.push(format!(
+            "mirror = true: also `{other}`, led by the {}, from these clips mirrored",
+            a.primary.mirrored().name()
+        ));
+    }
     Ok(Plan {
         src: src.to_owned(),
         posing: takes.iter().map(|t| t.file.clone()).collect(),
@@ -391,6 +412,7 @@ fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
         ranges,
         clips,
         segments,
+        mirror: false,
         notes,
     }
 }
@@ -487,6 +509,9 @@ impl Plan {
             }
             let _ = writeln!(t, "name = {}", toml_string(&a.name));
             let _ = writeln!(t, "primary = {}", toml_string(a.primary.name()));
+            if a.mirror {
+                let _ = writeln!(t, "mirror = true");
+            }
             let _ = writeln!(t, "clips = [");
             for c in &a.clips {
                 let _ = writeln!(t, "  {},", toml_string(c));
