@@ -54,7 +54,7 @@ pub(super) fn eval_actions(
     }
     let tests: Vec<(String, &crate::character::motion::Clip)> =
         clips.iter().map(|(a, c)| (a.clone(), c)).collect();
-    let result = if models_only {
+    let mut result = if models_only {
         eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
     } else {
         let ch = crate::app::character::load(library)?;
@@ -63,6 +63,11 @@ pub(super) fn eval_actions(
             crate::tools::eval::live::judge(&ch, &settings, d)
         })
     };
+    result.separation = Some(crate::tools::eval::separation::separation(
+        &actions,
+        &tests,
+        &config.action.rule(),
+    ));
     let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }

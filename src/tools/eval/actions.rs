@@ -39,6 +39,11 @@ pub struct ActionEval {
     /// For each action tested, how many of its drags started each action
     /// (`"none"`: nothing started).
     pub confusion: BTreeMap<String, BTreeMap<String, usize>>,
+    /// How far apart the actions are from the trial views, next to how far
+    /// the held-out drags stray from their own action (`eval actions` adds
+    /// it; see [`super::separation`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub separation: Option<super::separation::Separation>,
 }
 
 /// One action's row of [`ActionEval`].
@@ -107,7 +112,9 @@ impl Lcg {
     }
 }
 
-fn camera(angle_deg: f64, at: &Placement, chest_height: f64) -> Camera {
+/// The camera of a trial: `angle_deg` around the character at `at`,
+/// 3 m from its chest.
+pub(crate) fn camera(angle_deg: f64, at: &Placement, chest_height: f64) -> Camera {
     let dir = DQuat::from_rotation_y(at.yaw + angle_deg.to_radians()) * DVec3::Z;
     let target = at.position + DVec3::Y * chest_height;
     Camera {
@@ -116,6 +123,15 @@ fn camera(angle_deg: f64, at: &Placement, chest_height: f64) -> Camera {
         fov_y_deg: 45.0,
         width: 1280.0,
         height: 720.0,
+    }
+}
+
+/// Which side the trial cameras stand on for a part: -1 for the right
+/// side's parts, 1 otherwise.
+pub(crate) fn side_of(role: Role) -> f64 {
+    match role {
+        Role::RightHand | Role::RightFoot | Role::RightElbow | Role::RightKnee => -1.0,
+        _ => 1.0,
     }
 }
 
@@ -215,10 +231,7 @@ pub fn eval_with(
         // The cameras stand on the side of the primary part, as a visitor
         // looking at the punching arm would: the far side's actions can be
         // along the line of sight, which the start rule excludes by design.
-        let side = match role {
-            Role::RightHand | Role::RightFoot | Role::RightElbow | Role::RightKnee => -1.0,
-            _ => 1.0,
-        };
+        let side = side_of(role);
         for angle in [90.0 * side, 45.0 * side] {
             let cam = camera(angle, &at, chest);
             for speed in [0.7, 1.0, 1.5] {
@@ -306,5 +319,6 @@ pub fn eval_with(
         decided_at: total.decided_at,
         actions: rows.into_iter().map(|(name, t)| t.row(name)).collect(),
         confusion,
+        separation: None,
     }
 }

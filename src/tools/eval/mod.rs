@@ -3,7 +3,9 @@
 //! - [`posing`]: postures reconstructed from constrained parts.
 //! - [`actions`]: drags replayed as finger trails, recognised or not.
 //! - [`live`]: the same drags through a whole controller.
+//! - [`separation`]: how far apart the actions are, next to the drags' spread.
 
 pub mod actions;
 pub mod live;
 pub mod posing;
+pub mod separation;
