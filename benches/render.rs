@@ -53,10 +53,12 @@ fn bench(c: &mut Criterion) {
                 FingerMark {
                     at: at(Role::RightHand),
                     usage: FingerUse::Part(Role::RightHand),
+                    tint: None,
                 },
                 FingerMark {
                     at: at(Role::LeftFoot),
                     usage: FingerUse::Part(Role::LeftFoot),
+                    tint: None,
                 },
             ],
             trajectories: vec![TrajectoryMark {
@@ -71,6 +73,7 @@ fn bench(c: &mut Criterion) {
                     })
                     .collect(),
                 executable: true,
+                tint: None,
             }],
             status: Some("posing | holding right_hand, left_foot | 12.3 ms".into()),
             service: None,

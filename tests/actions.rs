@@ -314,16 +314,12 @@ fn separation_shows_why_the_held_out_variants_are_told_apart() {
     // each tested action's drags lie closer to its own trajectory than any
     // other action of the same part does, from at least one view.
     for action in s.own.iter().map(|o| &o.action) {
-        let apart = s
-            .own
-            .iter()
-            .filter(|o| &o.action == action)
-            .any(|o| {
-                s.pairs
-                    .iter()
-                    .filter(|p| &p.action == action && p.view_deg == o.view_deg)
-                    .all(|p| p.cost_px > o.mean_px)
-            });
+        let apart = s.own.iter().filter(|o| &o.action == action).any(|o| {
+            s.pairs
+                .iter()
+                .filter(|p| &p.action == action && p.view_deg == o.view_deg)
+                .all(|p| p.cost_px > o.mean_px)
+        });
         assert!(apart, "{action}: {s:?}");
     }
 }

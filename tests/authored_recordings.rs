@@ -50,6 +50,23 @@ fn character_demo_recording_is_regenerated_identically() {
     check(&path, &synth);
 }
 
+#[test]
+fn duel_recording_is_regenerated_identically() {
+    // Authored against two of the default library's characters facing
+    // each other as `demo --scene duel` places them.
+    let config = marionette::app::config::Config::default().duel();
+    let stage = marionette::app::headless::table(
+        vec![common::character(), common::character()],
+        &config,
+        true,
+        0.0,
+    );
+    let synth =
+        marionette::tools::demo::author_duel(stage, &config.input, config.display.picture());
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/recordings/duel.evemu");
+    check(&path, &synth);
+}
+
 /// Four fingers moving for 600 frames with no time between them: played
 /// through uinput this overflows the evdev buffer of a reader that is not
 /// scheduled in time (a real SYN_DROPPED); then they rest and lift.

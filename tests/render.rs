@@ -147,24 +147,29 @@ fn held_scene(view: &View) -> marionette::render::mesh::DrawList {
             FingerMark {
                 at: hand,
                 usage: FingerUse::Part(Role::RightHand),
+                tint: None,
             },
             FingerMark {
                 at: foot,
                 usage: FingerUse::Part(Role::LeftFoot),
+                tint: None,
             },
             FingerMark {
                 at: ScreenPoint::new(cam.width * 0.85, cam.height * 0.8),
                 usage: FingerUse::Camera,
+                tint: None,
             },
         ],
         trajectories: vec![
             TrajectoryMark {
                 points: arc(hand, 160.0, -20.0),
                 executable: true,
+                tint: None,
             },
             TrajectoryMark {
                 points: arc(hand, -20.0, 120.0),
                 executable: false,
+                tint: None,
             },
         ],
         status: Some("posing | right_hand, left_foot held | 12.3 ms".into()),

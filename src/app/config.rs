@@ -15,7 +15,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::control::config::{ActionConfig, CharacterConfig, TrackingConfig};
+use crate::control::config::{
+    ActionConfig, CharacterConfig, Characters, MAX_CHARACTERS, TrackingConfig,
+};
 use crate::control::controller::Settings;
 use crate::display::config::DisplayConfig;
 use crate::input::config::{InputConfig, parse_usb_id};
@@ -46,6 +48,10 @@ pub enum ConfigError {
     },
 }
 
+/// Floor distance between the duel scene's characters (m): a punch or a
+/// kick reaches the other.
+pub const DUEL_SPACING_M: f64 = 0.9;
+
 /// The whole configuration.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -53,7 +59,7 @@ pub struct Config {
     pub display: DisplayConfig,
     pub input: InputConfig,
     pub action: ActionConfig,
-    pub character: CharacterConfig,
+    pub character: Characters,
     pub tracking: TrackingConfig,
     pub kiosk: KioskConfig,
     pub log: LogConfig,
@@ -168,16 +174,7 @@ impl Config {
                 format!("must be 0 (automatic), 1, 2, 4 or 8, found {}", d.samples),
             ));
         }
-        let c = &self.character;
-        in_ranges(&[
-            ("character.pick_radius_px", c.pick_radius_px, 1.0, 500.0),
-            (
-                "character.camera_home_after_s",
-                c.camera_home_after_s,
-                0.0,
-                3600.0,
-            ),
-        ])?;
+        self.validate_characters(&invalid)?;
         if !d.mode.is_empty()
             && crate::display::present::OutputChoice::parse_mode(&d.mode).is_none()
         {
@@ -308,18 +305,138 @@ impl Config {
 }
 
 impl Config {
+    /// `[character]` / `[[character]]`: how many, where they stand, their
+    /// tints and the table-wide settings of the first.
+    fn validate_characters(
+        &self,
+        invalid: &dyn Fn(&str, String) -> ConfigError,
+    ) -> Result<(), ConfigError> {
+        let all = &self.character;
+        let many = all.len() > 1;
+        let key = |k: usize, name: &str| {
+            if many {
+                format!("character[{k}].{name}")
+            } else {
+                format!("character.{name}")
+            }
+        };
+        if all.len() > MAX_CHARACTERS {
+            return Err(invalid(
+                "character",
+                format!(
+                    "{} [[character]] tables: a table holds at most {MAX_CHARACTERS} characters",
+                    all.len()
+                ),
+            ));
+        }
+        let first = all.first();
+        for (k, c) in all.iter().enumerate() {
+            let range = |name: &str, v: f64, lo: f64, hi: f64| {
+                if (lo..=hi).contains(&v) {
+                    Ok(())
+                } else {
+                    Err(invalid(
+                        &key(k, name),
+                        format!("must be between {lo} and {hi}, found {v}"),
+                    ))
+                }
+            };
+            range("pick_radius_px", c.pick_radius_px, 1.0, 500.0)?;
+            range("camera_home_after_s", c.camera_home_after_s, 0.0, 3600.0)?;
+            if k > 0
+                && (c.pick_radius_px != first.pick_radius_px
+                    || c.camera_home_after_s != first.camera_home_after_s)
+            {
+                return Err(invalid(
+                    &key(k, "pick_radius_px"),
+                    "and camera_home_after_s hold for the whole table: set them in the first [[character]] only".to_owned(),
+                ));
+            }
+            if let Some([x, z]) = c.place {
+                range("place", x, -5.0, 5.0)?;
+                range("place", z, -5.0, 5.0)?;
+            }
+            if let Some(f) = c.facing_deg {
+                range("facing_deg", f, -360.0, 360.0)?;
+            }
+            if let Some(t) = c.tint {
+                for v in t {
+                    range("tint", v, 0.0, 1.0)?;
+                }
+            }
+        }
+        let places = all.placements();
+        for (i, a) in places.iter().enumerate() {
+            for (j, b) in places.iter().enumerate().skip(i + 1) {
+                let apart = (a.0 - b.0).hypot(a.1 - b.1);
+                if apart < 0.6 {
+                    return Err(invalid(
+                        &key(j, "place"),
+                        format!(
+                            "stands {apart:.2} m from character {i}: give each its own `place`, at least 0.6 m apart (e.g. place = [{:.1}, 0.0])",
+                            a.0 + 1.2
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The duel scene's table: two characters [`DUEL_SPACING_M`] apart on
+    /// the X axis, facing each other (the first on the left of the home
+    /// view, in red; the second, in blue), of this configuration's first two
+    /// libraries (the first's twice when it has one character).
+    #[must_use]
+    pub fn duel(&self) -> Config {
+        let mut c = self.clone();
+        let first = self.character.first().clone();
+        let second = self
+            .character
+            .iter()
+            .nth(1)
+            .cloned()
+            .unwrap_or_else(|| first.clone());
+        let half = DUEL_SPACING_M / 2.0;
+        c.character = Characters(vec![
+            CharacterConfig {
+                place: Some([-half, 0.0]),
+                facing_deg: Some(90.0),
+                tint: None,
+                ..first
+            },
+            CharacterConfig {
+                place: Some([half, 0.0]),
+                facing_deg: Some(-90.0),
+                tint: None,
+                ..second
+            },
+        ]);
+        c
+    }
+
     /// The controller's settings from `[action]`, `[character]` and
     /// `[tracking]`.
     #[must_use]
     pub fn control_settings(&self) -> Settings {
-        Settings::from_sections(&self.action, &self.character, &self.tracking)
+        Settings::from_sections(&self.action, self.character.first(), &self.tracking)
     }
 
     /// Where the library is: the configured folder, else the shipped
     /// default library (installed, else next to the source tree).
     #[must_use]
     pub fn library_dir(&self) -> PathBuf {
-        let configured = &self.character.library;
+        Self::library_dir_of(self.character.first())
+    }
+
+    /// Where each character's library is, in `[[character]]` order.
+    #[must_use]
+    pub fn library_dirs(&self) -> Vec<PathBuf> {
+        self.character.iter().map(Self::library_dir_of).collect()
+    }
+
+    fn library_dir_of(character: &CharacterConfig) -> PathBuf {
+        let configured = &character.library;
         if !configured.as_os_str().is_empty() {
             return configured.clone();
         }

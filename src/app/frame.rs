@@ -8,8 +8,8 @@
 //! panels and page-flips on KMS (`app::kiosk`); the headless one replays a
 //! recording into PNG files (`app::headless`).
 
-use crate::control::controller::Controller;
 use crate::control::marks::Marks;
+use crate::control::stage::Stage;
 use crate::platform::clock::Clock;
 use crate::render::mesh::DrawList;
 use crate::render::scene::{self, View};
@@ -35,16 +35,16 @@ pub trait Backend {
     fn stop(&mut self, _t: f64) -> bool {
         false
     }
-    /// Hand the controller the touches due by `t`.
-    fn feed(&mut self, ctl: &mut Controller, t: f64);
-    /// The controller has advanced to `t`: show or record the frame, and
-    /// wait for the next if need be.
-    fn frame(&mut self, ctl: &mut Controller, t: f64) -> Result<Flow, Self::Error>;
+    /// Hand the table the touches due by `t`.
+    fn feed(&mut self, stage: &mut Stage, t: f64);
+    /// The table has advanced to `t`: show or record the frame, and wait
+    /// for the next if need be.
+    fn frame(&mut self, stage: &mut Stage, t: f64) -> Result<Flow, Self::Error>;
 }
 
 /// Run frames until the backend stops; returns the last frame's time.
 pub fn run<B: Backend>(
-    ctl: &mut Controller,
+    ctl: &mut Stage,
     clock: &mut dyn FrameClock,
     backend: &mut B,
 ) -> Result<f64, B::Error> {
@@ -118,22 +118,32 @@ impl FrameClock for Since<'_> {
     }
 }
 
-/// The draw list for the controller's current posture and view.
+/// The draw list for the table's current postures and view: every
+/// character in its tint.
 #[must_use]
-pub fn compose(ctl: &Controller, rotation: Rotation, marks: &Marks) -> DrawList {
+pub fn compose(stage: &Stage, rotation: Rotation, marks: &Marks) -> DrawList {
     let view = View {
-        camera: ctl.rig.camera(),
+        camera: stage.rig().camera(),
         rotation,
     };
-    let c = ctl.character();
-    scene::compose(
-        &view,
-        &c.lib.skeleton,
-        &c.roles,
-        ctl.world(),
-        &ctl.held(),
-        marks,
-    )
+    let held: Vec<Vec<crate::character::roles::Role>> =
+        stage.actors().iter().map(|a| a.ctl.held()).collect();
+    let bodies: Vec<scene::Body<'_>> = stage
+        .actors()
+        .iter()
+        .zip(&held)
+        .map(|(a, held)| {
+            let c = a.ctl.character();
+            scene::Body {
+                skeleton: &c.lib.skeleton,
+                roles: &c.roles,
+                world: a.ctl.world(),
+                held,
+                tint: a.tint,
+            }
+        })
+        .collect();
+    scene::compose_bodies(&view, &bodies, marks)
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! `[action]`, `[character]` and `[tracking]`: how drags start actions,
+//! `[action]`, `[character]` (or `[[character]]`) and `[tracking]`: how drags start actions,
 //! how fingers and the camera behave, and how the shown motion follows the
 //! synthesised one. The application composes these sections into its
 //! configuration and validates them; [`Settings::from_sections`] turns them
@@ -51,6 +51,15 @@ pub struct CharacterConfig {
     /// The camera eases back to its home view after this long without a
     /// touch (s).
     pub camera_home_after_s: f64,
+    /// Where the character stands on the floor, `[x, z]` in metres; unset:
+    /// see [`Characters::placements`].
+    pub place: Option<[f64; 2]>,
+    /// Which way it faces (degrees from +Z, the camera's home side,
+    /// positive towards +X); unset: see [`Characters::placements`].
+    pub facing_deg: Option<f64>,
+    /// Colour of its clothes, linear RGB 0..1; unset: the default shirt
+    /// for a lone character, else one of [`TINTS`].
+    pub tint: Option<[f64; 3]>,
 }
 
 impl Default for CharacterConfig {
@@ -60,7 +69,137 @@ impl Default for CharacterConfig {
             library: PathBuf::new(),
             pick_radius_px: s.pick_radius_px,
             camera_home_after_s: s.home_after_s,
+            place: None,
+            facing_deg: None,
+            tint: None,
         }
+    }
+}
+
+/// The most characters a table holds.
+pub const MAX_CHARACTERS: usize = 4;
+
+/// Tints of characters that share the table and set none, in order.
+pub const TINTS: [[f64; 3]; MAX_CHARACTERS] = [
+    [0.62, 0.1, 0.07],
+    [0.09, 0.26, 0.55],
+    [0.75, 0.5, 0.05],
+    [0.12, 0.45, 0.2],
+];
+
+/// Spacing of characters placed by default (m).
+pub const DEFAULT_SPACING_M: f64 = 1.2;
+
+/// The characters: `[character]` (one table, one character) or
+/// `[[character]]` (one table each, up to [`MAX_CHARACTERS`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Characters(pub Vec<CharacterConfig>);
+
+impl Default for Characters {
+    fn default() -> Self {
+        Self(vec![CharacterConfig::default()])
+    }
+}
+
+impl Characters {
+    /// The first character's table: the one whose `pick_radius_px` and
+    /// `camera_home_after_s` hold for the whole table.
+    #[must_use]
+    pub fn first(&self) -> &CharacterConfig {
+        // Never empty: parsing refuses an empty list.
+        &self.0[0]
+    }
+
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    pub fn iter(&self) -> std::slice::Iter<'_, CharacterConfig> {
+        self.0.iter()
+    }
+
+    /// Where each character stands and faces: `(x, z, yaw radians)`.
+    /// Unset places spread the characters along X, [`DEFAULT_SPACING_M`]
+    /// apart around the origin (a lone character at the origin); unset
+    /// facings turn two characters towards each other, and otherwise face
+    /// the camera's home side (+Z).
+    #[must_use]
+    pub fn placements(&self) -> Vec<(f64, f64, f64)> {
+        let n = self.0.len();
+        self.0
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let [x, z] = c
+                    .place
+                    .unwrap_or([(k as f64 - (n as f64 - 1.0) / 2.0) * DEFAULT_SPACING_M, 0.0]);
+                let facing = c.facing_deg.map_or_else(
+                    || match (n, k) {
+                        (2, 0) => std::f64::consts::FRAC_PI_2,
+                        (2, _) => -std::f64::consts::FRAC_PI_2,
+                        _ => 0.0,
+                    },
+                    f64::to_radians,
+                );
+                (x, z, facing)
+            })
+            .collect()
+    }
+
+    /// Each character's tint (`None`: the default clothes).
+    #[must_use]
+    pub fn tints(&self) -> Vec<Option<[f32; 3]>> {
+        let n = self.0.len();
+        self.0
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                c.tint
+                    .or_else(|| (n > 1).then(|| TINTS[k % TINTS.len()]))
+                    .map(|t| t.map(|v| v as f32))
+            })
+            .collect()
+    }
+}
+
+impl<'de> Deserialize<'de> for Characters {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct OneOrMany;
+        impl<'de> serde::de::Visitor<'de> for OneOrMany {
+            type Value = Characters;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a [character] table or [[character]] tables")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Characters, A::Error> {
+                CharacterConfig::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(|c| Characters(vec![c]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Characters, A::Error> {
+                let mut all = Vec::new();
+                while let Some(c) = seq.next_element::<CharacterConfig>()? {
+                    all.push(c);
+                }
+                if all.is_empty() {
+                    return Err(serde::de::Error::custom(
+                        "no character: give at least one [[character]] table",
+                    ));
+                }
+                Ok(Characters(all))
+            }
+        }
+        d.deserialize_any(OneOrMany)
     }
 }
 

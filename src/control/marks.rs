@@ -20,6 +20,8 @@ pub enum FingerUse {
 pub struct FingerMark {
     pub at: ScreenPoint,
     pub usage: FingerUse,
+    /// The tint of the character the finger holds (several characters).
+    pub tint: Option<[f32; 3]>,
 }
 
 /// An action's trajectory as seen from the camera (the paper's Fig. 4).
@@ -28,6 +30,8 @@ pub struct TrajectoryMark {
     pub points: Vec<ScreenPoint>,
     /// Whether a drag along it can start the action from this view.
     pub executable: bool,
+    /// The tint of the character whose action it is (several characters).
+    pub tint: Option<[f32; 3]>,
 }
 
 /// The service view: lines of text in a panel, and every finger's recent

@@ -6,6 +6,8 @@
 //! - `tracking`: acceleration-based tracking (eq. 2-4).
 //! - [`controller`]: routes fingers to body parts or the camera and runs
 //!   posing, action and tracking control with the ragdoll's effects.
+//! - [`stage`]: the table: one character or several, the shared camera,
+//!   which finger belongs to whom, and bodies meeting.
 //! - [`marks`]: what is drawn over the picture for the fingers.
 //! - `rig`: the camera; `ticker`: stepping a controller through
 //!   touch frames at a fixed rate; `config`: its configuration sections.
@@ -17,5 +19,6 @@ pub mod controller;
 pub mod marks;
 pub mod posing;
 pub(crate) mod rig;
+pub mod stage;
 pub(crate) mod ticker;
 pub(crate) mod tracking;

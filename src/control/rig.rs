@@ -5,6 +5,7 @@
 use glam::{DQuat, DVec3};
 
 use crate::character::camera::Camera;
+use crate::screen::ScreenPoint;
 
 /// Limits and the home view.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -128,6 +129,24 @@ impl Rig {
             self.orbit.yaw += twist;
         }
         self.clamp();
+    }
+
+    /// Fingers on empty space moved from the first point of each pair to
+    /// the second: one turns and tilts the view, two zoom and turn it.
+    pub fn gesture(&mut self, moves: &[(ScreenPoint, ScreenPoint)]) {
+        match moves {
+            [(a, b)] => self.drag(b.x - a.x, b.y - a.y),
+            [(a0, a1), (b0, b1), ..] => {
+                let d0 = a0.distance(*b0);
+                let d1 = a1.distance(*b1);
+                let ang = |p: &ScreenPoint, q: &ScreenPoint| (q.y - p.y).atan2(q.x - p.x);
+                let twist = crate::control::posing::sample::wrap(ang(a1, b1) - ang(a0, b0));
+                if d0 > 10.0 {
+                    self.pinch(d1 / d0, twist);
+                }
+            }
+            [] => {}
+        }
     }
 
     /// Ease the look-at point towards above `floor_point` and, when

@@ -90,6 +90,89 @@ impl Segment {
     pub fn com_in(&self, w: &WorldPose) -> DVec3 {
         w.positions[self.def.joint] + self.rotation_in(w) * self.com_off
     }
+
+    /// The segment's capsule where a posture puts it.
+    #[must_use]
+    pub fn capsule_in(&self, w: &WorldPose) -> Capsule {
+        let rot = self.rotation_in(w);
+        let com = self.com_in(w);
+        let mid = (self.def.ends[0] + self.def.ends[1]) * 0.5;
+        Capsule {
+            a: com + rot * (self.def.ends[0] - mid),
+            b: com + rot * (self.def.ends[1] - mid),
+            radius: self.def.radius,
+        }
+    }
+
+    /// The segment's mass (kg).
+    #[must_use]
+    pub fn mass(&self) -> f64 {
+        self.def.mass
+    }
+}
+
+/// A capsule: the points within `radius` of the segment from `a` to `b`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Capsule {
+    pub a: DVec3,
+    pub b: DVec3,
+    pub radius: f64,
+}
+
+impl Capsule {
+    /// Where two capsules overlap: the closest points of their segments
+    /// (on `self`, on `other`) and how deep they sink into each other (m),
+    /// if they do.
+    #[must_use]
+    pub fn overlap(&self, other: &Capsule) -> Option<(DVec3, DVec3, f64)> {
+        let (p, q) = closest_points(self.a, self.b, other.a, other.b);
+        let depth = self.radius + other.radius - p.distance(q);
+        (depth > 0.0).then_some((p, q, depth))
+    }
+
+    /// The middle of the segment.
+    #[must_use]
+    pub fn centre(&self) -> DVec3 {
+        (self.a + self.b) * 0.5
+    }
+}
+
+/// The closest points of segments `p0-p1` and `q0-q1`.
+#[must_use]
+pub fn closest_points(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> (DVec3, DVec3) {
+    let d1 = p1 - p0;
+    let d2 = q1 - q0;
+    let r = p0 - q0;
+    let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
+    const EPS: f64 = 1e-12;
+    let (s, t) = if a <= EPS && e <= EPS {
+        (0.0, 0.0)
+    } else if a <= EPS {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= EPS {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > EPS {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    (p0 + d1 * s, q0 + d2 * t)
 }
 
 /// What the simulation gives for one segment this frame.
@@ -290,6 +373,21 @@ impl Ragdoll {
         if drifted {
             tracing::debug!("ragdoll drifted from the posture; put back on it");
             self.reset(shown, None);
+        }
+    }
+
+    /// An impulse (N·s, world) on segment `k`'s centre of mass: a blow
+    /// from outside the body, which the pull then brings back.
+    pub fn push(&mut self, k: usize, impulse: DVec3) {
+        if !impulse.is_finite() {
+            return;
+        }
+        if let Some(b) = self
+            .segments
+            .get(k)
+            .and_then(|s| self.world.bodies.get_mut(s.body))
+        {
+            b.apply_impulse(v32(impulse), true);
         }
     }
 

@@ -278,16 +278,25 @@ fn body_into(mesh: &mut Mesh, segments: &[Segment], held: &[Role]) {
     }
 }
 
+/// A tint brightened for a mark over the picture (the clothes' colours
+/// are dark), with alpha `a`.
+fn bright(c: [f32; 3], a: f32) -> [f32; 4] {
+    let top = c[0].max(c[1]).max(c[2]).max(1e-3);
+    let k = 1.0 / top;
+    [c[0] * k, c[1] * k, c[2] * k, a]
+}
+
 /// The overlays of one frame.
 #[must_use]
 pub fn overlay(marks: &Marks, width: f64) -> Overlay {
     let mut o = Overlay::default();
     for t in &marks.trajectories {
         let pts: Vec<[f32; 2]> = t.points.iter().map(|p| [p.x as f32, p.y as f32]).collect();
-        let color = if t.executable {
-            [0.85, 0.03, 0.02, 0.9]
-        } else {
-            [1.0, 0.42, 0.62, 0.75]
+        let color = match (t.tint, t.executable) {
+            (None, true) => [0.85, 0.03, 0.02, 0.9],
+            (None, false) => [1.0, 0.42, 0.62, 0.75],
+            (Some(c), true) => bright(c, 0.9),
+            (Some(c), false) => bright(c.map(|v| 0.5 + 0.5 * v), 0.6),
         };
         o.polyline(&pts, 5.0, color);
         if pts.len() >= 2 {
@@ -297,9 +306,10 @@ pub fn overlay(marks: &Marks, width: f64) -> Overlay {
     }
     for f in &marks.fingers {
         let c = [f.at.x as f32, f.at.y as f32];
-        let ring = match f.usage {
-            FingerUse::Part(_) => [1.0, 0.45, 0.08, 0.95],
-            FingerUse::Camera => [0.55, 0.75, 1.0, 0.9],
+        let ring = match (f.usage, f.tint) {
+            (FingerUse::Part(_), None) => [1.0, 0.45, 0.08, 0.95],
+            (FingerUse::Part(_), Some(c)) => bright(c, 0.95),
+            (FingerUse::Camera, _) => [0.55, 0.75, 1.0, 0.9],
         };
         o.disc(c, 34.0, [0.0, 0.0, 0.0, 0.22]);
         o.ring(c, 34.0, 5.0, ring);
@@ -363,15 +373,66 @@ pub fn compose(
     held: &[Role],
     marks: &Marks,
 ) -> DrawList {
+    compose_bodies(
+        view,
+        &[Body {
+            skeleton,
+            roles,
+            world,
+            held,
+            tint: None,
+        }],
+        marks,
+    )
+}
+
+/// One character to draw: its posture, the parts fingers hold, and the
+/// tint of its clothes (`None`: the default blue shirt).
+#[derive(Clone, Copy, Debug)]
+pub struct Body<'a> {
+    pub skeleton: &'a Skeleton,
+    pub roles: &'a RoleMap,
+    pub world: &'a WorldPose,
+    pub held: &'a [Role],
+    pub tint: Option<[f32; 3]>,
+}
+
+/// The draw list of several characters, each with its shadow, and the
+/// overlays of every visitor.
+#[must_use]
+pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawList {
     let mut list = view.empty(true);
-    let segs = segments(skeleton, roles, world);
-    body_into(&mut list.body, &segs, held);
-    for s in &segs {
-        list.shadow
-            .capsule_with(s.a.as_vec3(), s.b.as_vec3(), s.r as f32, [0.0; 4], 10, 2);
+    for b in bodies {
+        let mut segs = segments(b.skeleton, b.roles, b.world);
+        if let Some(tint) = b.tint {
+            for s in &mut segs {
+                s.color = tinted(s.color, tint);
+            }
+        }
+        body_into(&mut list.body, &segs, b.held);
+        for s in &segs {
+            list.shadow
+                .capsule_with(s.a.as_vec3(), s.b.as_vec3(), s.r as f32, [0.0; 4], 10, 2);
+        }
     }
     list.overlay = overlay(marks, view.camera.width);
     list
+}
+
+/// Clothes take the tint (the shirt, the tint itself; trousers, a dark
+/// shade of it); skin and shoes stay as they are.
+fn tinted(color: [f32; 3], tint: [f32; 3]) -> [f32; 3] {
+    if color == SHIRT {
+        tint
+    } else if color == TROUSERS {
+        [
+            0.5 * TROUSERS[0] + 0.25 * tint[0],
+            0.5 * TROUSERS[1] + 0.25 * tint[1],
+            0.5 * TROUSERS[2] + 0.25 * tint[2],
+        ]
+    } else {
+        color
+    }
 }
 
 /// The bare scene benchmarks compare with: `n` lit boxes, no floor, no

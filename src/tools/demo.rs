@@ -10,6 +10,7 @@ use crate::character::roles::Role;
 use crate::control::action::trail::TrailPoint;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
+use crate::control::stage::Stage;
 use crate::control::ticker::Ticker;
 use crate::input::config::InputConfig;
 use crate::input::pipeline;
@@ -26,7 +27,7 @@ const MAX: i32 = 4095;
 
 struct Author<'a> {
     synth: Synth,
-    ctl: Controller,
+    ctl: Stage,
     ticker: Ticker,
     input: &'a InputConfig,
     picture: Picture,
@@ -64,11 +65,17 @@ impl Author<'_> {
         }
     }
 
-    /// Where a body part is on the screen now.
+    /// Where a body part of the first character is on the screen now.
     fn part(&mut self, role: Role) -> ScreenPoint {
+        self.part_of(0, role)
+    }
+
+    /// Where a body part of character `k` is on the screen now.
+    fn part_of(&mut self, k: usize, role: Role) -> ScreenPoint {
         self.sync();
-        let cam = self.ctl.rig.camera();
-        let p = self.ctl.world().positions[self.ctl.character().roles.get(role)];
+        let cam = self.ctl.rig().camera();
+        let c = &self.ctl.actors()[k].ctl;
+        let p = c.world().positions[c.character().roles.get(role)];
         cam.project(p)
             .unwrap_or(ScreenPoint::new(self.width / 2.0, self.height / 2.0))
     }
@@ -104,57 +111,97 @@ impl Author<'_> {
     /// place ambiguous), then lift and wait for the action to finish by
     /// itself.
     fn action(&mut self, name: &str) {
-        let Some(index) = self
-            .ctl
-            .character()
-            .actions
-            .iter()
-            .position(|a| a.def.name == name)
-        else {
+        self.actions(&[(0, 0, name)]);
+    }
+
+    /// Several drags at once, `(character, finger slot, action)`, each as
+    /// [`Self::action`] describes; all lift once the last has gone its way.
+    fn actions(&mut self, drags: &[(usize, i32, &str)]) {
+        struct Drag {
+            slot: i32,
+            traj: Vec<TrailPoint>,
+            offset: (f64, f64),
+            end: f64,
+        }
+        let mut planned = Vec::new();
+        for &(k, slot, name) in drags {
+            let Some(index) = self.ctl.actors()[k]
+                .ctl
+                .character()
+                .actions
+                .iter()
+                .position(|a| a.def.name == name)
+            else {
+                continue;
+            };
+            let role = self.ctl.actors()[k].ctl.character().actions[index]
+                .def
+                .primary;
+            let start = self.part_of(k, role);
+            let cam = self.ctl.rig().camera();
+            let c = &self.ctl.actors()[k].ctl;
+            let at = c.placement_now();
+            let traj = c.character().actions[index].projected(&cam, &at);
+            let Some(first) = traj.first().copied() else {
+                continue;
+            };
+            let end = traj
+                .iter()
+                .max_by(|a, b| {
+                    let d = |p: &TrailPoint| p.at.distance(first.at);
+                    d(a).total_cmp(&d(b))
+                })
+                .map_or(0.0, |p| p.t)
+                .max(0.7 * traj.last().map_or(0.0, |p| p.t));
+            self.down(slot, start);
+            planned.push(Drag {
+                slot,
+                offset: (start.x - first.at.x, start.y - first.at.y),
+                traj,
+                end,
+            });
+        }
+        if planned.is_empty() {
             return;
-        };
-        let role = self.ctl.character().actions[index].def.primary;
-        let start = self.part(role);
-        let cam = self.ctl.rig.camera();
-        let at = self.ctl.placement_now();
-        let traj = self.ctl.character().actions[index].projected(&cam, &at);
-        let Some(first) = traj.first().copied() else {
-            return;
-        };
-        let (ox, oy) = (start.x - first.at.x, start.y - first.at.y);
-        self.down(0, start);
+        }
         self.frame();
-        let end = traj
-            .iter()
-            .max_by(|a, b| {
-                let d = |p: &TrailPoint| p.at.distance(first.at);
-                d(a).total_cmp(&d(b))
-            })
-            .map_or(0.0, |p| p.t)
-            .max(0.7 * traj.last().map_or(0.0, |p| p.t));
+        let last = planned.iter().map(|d| d.end).fold(0.0, f64::max);
         let mut t = 0.0;
-        while t < end {
+        while t < last {
             t += DT;
-            let k = traj.partition_point(|p| p.t <= t).clamp(1, traj.len() - 1);
-            let (a, b) = (traj[k - 1], traj[k]);
-            let s = ((t - a.t) / (b.t - a.t).max(1e-9)).clamp(0.0, 1.0);
-            self.to(
-                0,
-                ScreenPoint::new(
-                    a.at.x + (b.at.x - a.at.x) * s + ox,
-                    a.at.y + (b.at.y - a.at.y) * s + oy,
-                ),
-            );
+            for d in &planned {
+                if t - DT >= d.end {
+                    continue;
+                }
+                let traj = &d.traj;
+                let k = traj.partition_point(|p| p.t <= t).clamp(1, traj.len() - 1);
+                let (a, b) = (traj[k - 1], traj[k]);
+                let s = ((t - a.t) / (b.t - a.t).max(1e-9)).clamp(0.0, 1.0);
+                self.to(
+                    d.slot,
+                    ScreenPoint::new(
+                        a.at.x + (b.at.x - a.at.x) * s + d.offset.0,
+                        a.at.y + (b.at.y - a.at.y) * s + d.offset.1,
+                    ),
+                );
+            }
             self.frame();
         }
         self.wait(0.1);
-        self.synth.up(0);
+        for d in &planned {
+            self.synth.up(d.slot);
+        }
         self.frame();
-        // Let it finish (at most 4 s), then a breath.
+        // Let them finish (at most 4 s), then a breath.
         for _ in 0..40 {
             self.wait(0.1);
             self.sync();
-            if matches!(self.ctl.mode(), Mode::Posing) {
+            if self
+                .ctl
+                .actors()
+                .iter()
+                .all(|a| matches!(a.ctl.mode(), Mode::Posing))
+            {
                 break;
             }
         }
@@ -177,7 +224,7 @@ pub fn author_demo(
     let (width, height) = (f64::from(width), f64::from(height));
     let mut a = Author {
         synth: Synth::new(panel("marionette demo panel", 10, MAX)),
-        ctl: Controller::new(ch, settings, width, height, 0.0),
+        ctl: Stage::single(Controller::new(ch, settings, width, height, 0.0)),
         ticker: Ticker::new(Vec::new(), TICK_HZ),
         input,
         picture,
@@ -285,5 +332,50 @@ pub fn author_demo(
     a.wait(0.5);
     // Idle: the camera eases back home.
     a.wait(settings.home_after_s + 3.5);
+    a.synth
+}
+
+/// The duel recording, for a table of two characters facing each other
+/// (the first on the left of the home view, the second on the right): both
+/// visitors grab their character at once and raise its hands, then each
+/// starts actions by drags, the first punching, the second kicking back,
+/// then both at once.
+#[must_use]
+pub fn author_duel(stage: Stage, input: &InputConfig, picture: Picture) -> Synth {
+    let (width, height) = picture.size();
+    let (width, height) = (f64::from(width), f64::from(height));
+    let mut a = Author {
+        synth: Synth::new(panel("marionette duel panel", 10, MAX)),
+        ctl: stage,
+        ticker: Ticker::new(Vec::new(), TICK_HZ),
+        input,
+        picture,
+        width,
+        height,
+        time: 0.0,
+    };
+    a.frame();
+    a.wait(0.8);
+    // Both characters held at once: each visitor raises a hand.
+    let (l, r) = (a.part_of(0, Role::RightHand), a.part_of(1, Role::LeftHand));
+    a.down(0, l);
+    a.down(1, r);
+    a.frame();
+    a.glide(
+        &[
+            (0, &|u| ScreenPoint::new(l.x - 30.0 * u, l.y - 170.0 * u)),
+            (1, &|u| ScreenPoint::new(r.x + 30.0 * u, r.y - 170.0 * u)),
+        ],
+        1.5,
+    );
+    a.wait(0.4);
+    a.synth.up(0).up(1);
+    a.frame();
+    a.wait(1.0);
+    // The first punches, the second kicks back, then both at once.
+    a.actions(&[(0, 0, "punch_right")]);
+    a.actions(&[(1, 1, "kick_left")]);
+    a.actions(&[(0, 0, "kick_right"), (1, 1, "punch_left")]);
+    a.wait(1.5);
     a.synth
 }

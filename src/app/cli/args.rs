@@ -30,6 +30,10 @@ pub(super) enum Command {
         /// Frames written per second of recording.
         #[arg(long, default_value_t = 10.0)]
         fps: f64,
+        /// Which bundled scene: `solo` (one character, one visitor) or
+        /// `duel` (two characters, two visitors, hits).
+        #[arg(long, value_enum, default_value = "solo")]
+        scene: Scene,
     },
     Inspect {
         /// An evemu recording, or a .bvh file
@@ -254,6 +258,13 @@ pub(super) enum EvalCommand {
         #[arg(long)]
         models_only: bool,
     },
+}
+
+/// The bundled demo scenes.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum Scene {
+    Solo,
+    Duel,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]

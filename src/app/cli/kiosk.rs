@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::replay::character;
+use super::replay::cast;
 use super::{Failure, stdout_error};
 use crate::app::config::Config;
 use crate::app::exit::{self};
@@ -53,13 +53,13 @@ pub(super) fn run_kiosk(
     seconds: Option<f64>,
 ) -> Result<(), Failure> {
     use crate::app::kiosk as run;
-    let ch = character(config)?;
+    let cast = cast(config)?;
     let opts = run::RunOptions {
         dri_dir: dri,
         seconds,
         ..run::RunOptions::default()
     };
-    run::run(ch, config, &opts)
+    run::run(cast, config, &opts)
         .map(|_| ())
         .map_err(Failure::from)
 }

@@ -130,7 +130,7 @@ fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
 
 fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
     match command {
-        Command::Demo { out, fps } => demo(config, &out, fps),
+        Command::Demo { out, fps, scene } => demo(config, &out, fps, scene),
         Command::Inspect { file } => inspect(config, &file),
         Command::Replay {
             file,

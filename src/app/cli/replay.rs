@@ -29,6 +29,43 @@ pub(super) fn character(
     Ok(crate::app::character::load(&dir)?)
 }
 
+/// Every configured character (`[[character]]`), in order; characters of
+/// one library share it.
+pub(super) fn cast(
+    config: &Config,
+) -> Result<Vec<std::sync::Arc<crate::control::character::Character>>, Failure> {
+    let dirs = config.library_dirs();
+    let mut loaded: Vec<(
+        std::path::PathBuf,
+        std::sync::Arc<crate::control::character::Character>,
+    )> = Vec::new();
+    let mut out = Vec::new();
+    for (k, dir) in dirs.iter().enumerate() {
+        if let Some((_, ch)) = loaded.iter().find(|(d, _)| d == dir) {
+            out.push(ch.clone());
+            continue;
+        }
+        if !dir.is_dir() {
+            let key = if dirs.len() > 1 {
+                format!("character[{k}].library")
+            } else {
+                "character.library".to_owned()
+            };
+            return Err(Failure::new(
+                exit::CONFIG,
+                format!(
+                    "the motion library folder {} does not exist: fix `{key}` in the configuration (empty for the shipped library)",
+                    dir.display()
+                ),
+            ));
+        }
+        let ch = crate::app::character::load(dir)?;
+        loaded.push((dir.clone(), ch.clone()));
+        out.push(ch);
+    }
+    Ok(out)
+}
+
 /// A recording through the whole pipeline into images.
 pub(super) fn show(
     config: &Config,
@@ -53,7 +90,7 @@ pub(super) fn show(
             ),
         ));
     }
-    let ch = character(config)?;
+    let cast = cast(config)?;
     let frames = pipeline::replay(rec, &config.input, config.display.picture())
         .map_err(|e| Failure::new(exit::DATAERR, e))?;
     let opts = headless::Options {
@@ -62,7 +99,7 @@ pub(super) fn show(
         until: Some(summary.replay_s),
         ..headless::Options::default()
     };
-    let summary = headless::run(ch, config, frames, &opts).map_err(Failure::from)?;
+    let summary = headless::run_table(cast, config, frames, &opts).map_err(Failure::from)?;
     writeln!(std::io::stdout(), "{summary}").map_err(stdout_error)
 }
 
@@ -80,19 +117,39 @@ fn check_fps(fps: f64) -> Result<(), Failure> {
     ))
 }
 
-pub(super) fn demo(config: &Config, out_dir: &Path, fps: f64) -> Result<(), Failure> {
+pub(super) fn demo(
+    config: &Config,
+    out_dir: &Path,
+    fps: f64,
+    scene: super::args::Scene,
+) -> Result<(), Failure> {
     check_fps(fps)?;
-    // The recording is built into the binary: the demo works from anywhere.
-    let rec = Recording::parse(DEMO_RECORDING, Path::new("assets/recordings/demo.evemu"))?;
+    // The recordings are built into the binary: the demo works from
+    // anywhere.
+    let (text, name, config) = match scene {
+        super::args::Scene::Solo => (
+            DEMO_RECORDING,
+            "assets/recordings/demo.evemu",
+            config.clone(),
+        ),
+        super::args::Scene::Duel => (
+            DUEL_RECORDING,
+            "assets/recordings/duel.evemu",
+            config.duel(),
+        ),
+    };
+    let rec = Recording::parse(text, Path::new(name))?;
     let (summary, _) = pipeline::summarize(&rec);
     writeln!(
         std::io::stdout(),
-        "demo: assets/recordings/demo.evemu ({:.1} s, {} finger contacts)",
+        "demo: {name} ({:.1} s, {} finger contacts, {} character{})",
         summary.duration_s,
-        summary.touch_sequences
+        summary.touch_sequences,
+        config.character.len(),
+        if config.character.len() == 1 { "" } else { "s" }
     )
     .map_err(stdout_error)?;
-    show(config, &rec, out_dir, fps, u64::MAX)
+    show(&config, &rec, out_dir, fps, u64::MAX)
 }
 
 /// What a replay without rendering keeps.
@@ -210,3 +267,4 @@ pub(super) fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(),
 }
 
 pub(super) const DEMO_RECORDING: &str = include_str!("../../../assets/recordings/demo.evemu");
+pub(super) const DUEL_RECORDING: &str = include_str!("../../../assets/recordings/duel.evemu");

@@ -24,7 +24,7 @@ use thiserror::Error;
 
 use super::config::Config;
 use crate::control::character::Character;
-use crate::control::controller::Controller;
+use crate::control::stage::Stage;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::hub::{HubEvent, LiveError};
@@ -120,14 +120,18 @@ fn same_pose(a: &crate::character::skeleton::Pose, b: &crate::character::skeleto
 
 /// Run the kiosk until SIGTERM/SIGINT (or `opts.seconds`), on the
 /// monotonic clock.
-pub fn run(ch: Arc<Character>, config: &Config, opts: &RunOptions) -> Result<RunStats, RunError> {
-    run_with_clock(ch, config, opts, &Monotonic)
+pub fn run(
+    cast: Vec<Arc<Character>>,
+    config: &Config,
+    opts: &RunOptions,
+) -> Result<RunStats, RunError> {
+    run_with_clock(cast, config, opts, &Monotonic)
 }
 
 /// [`run`] on any clock: the loop reads the time only through `clock`,
 /// and every timing decision is made by [`Timers`].
 pub fn run_with_clock(
-    ch: Arc<Character>,
+    cast: Vec<Arc<Character>>,
     config: &Config,
     opts: &RunOptions,
     clock: &dyn Clock,
@@ -148,7 +152,6 @@ pub fn run_with_clock(
     let mut config = config.clone();
     config.display.width = ow;
     config.display.height = oh;
-    let (pw, ph) = config.display.size();
     let attract_frames = load_attract(&config)?;
     let dev_dir = &config.input.dev_dir;
     if !dev_dir.is_dir() {
@@ -156,13 +159,8 @@ pub fn run_with_clock(
     }
     let input = InputThread::start(config.clone())?;
     let mut frames = Since::new(clock);
-    let mut ctl = Controller::new(
-        ch,
-        config.control_settings(),
-        f64::from(pw),
-        f64::from(ph),
-        0.0,
-    );
+    let mut ctl = crate::app::headless::table(cast, &config, true, 0.0);
+    tracing::info!(characters = ctl.actors().len(), "characters on the table");
     let timers = Timers::new(
         config.kiosk.idle_after_s,
         opts.seconds,
@@ -229,7 +227,7 @@ pub fn run_with_clock(
 
 /// What was last shown: the posture, the camera's yaw, pitch and
 /// distance, and how many fingers had marks.
-type Shown = (crate::character::skeleton::Pose, f64, f64, f64, usize);
+type Shown = (Vec<crate::character::skeleton::Pose>, f64, f64, f64, usize);
 
 /// The kiosk's backend of the frame loop: touches from the panels (and
 /// the attract loop when idle), frames to the KMS output.
@@ -278,7 +276,7 @@ impl Backend for Kiosk<'_> {
         stop
     }
 
-    fn feed(&mut self, ctl: &mut Controller, t: f64) {
+    fn feed(&mut self, ctl: &mut Stage, t: f64) {
         // Touches: real ones first end the attract loop.
         self.input.drain(&mut self.events);
         for e in self.events.drain(..) {
@@ -339,8 +337,8 @@ impl Backend for Kiosk<'_> {
         }
     }
 
-    fn frame(&mut self, ctl: &mut Controller, t: f64) -> Result<Flow, RunError> {
-        for e in ctl.take_events() {
+    fn frame(&mut self, ctl: &mut Stage, t: f64) -> Result<Flow, RunError> {
+        for (_, e) in ctl.take_events() {
             if let crate::control::action::timeline::ActionEvent::Started { action, .. } = e {
                 tracing::info!(%action, "action started");
                 self.vitals.action_started();
@@ -369,10 +367,16 @@ impl Backend for Kiosk<'_> {
             }
         }
         let display = &self.config.display;
-        let orbit = ctl.rig.orbit;
+        for h in ctl.take_hits() {
+            self.vitals.hit(h.impulse_ns);
+        }
+        let orbit = ctl.rig().orbit;
         let marks = ctl.marks(display.trajectories);
         let key = (
-            ctl.pose().clone(),
+            ctl.actors()
+                .iter()
+                .map(|a| a.ctl.pose().clone())
+                .collect::<Vec<_>>(),
             orbit.yaw,
             orbit.pitch,
             orbit.distance,
@@ -396,7 +400,8 @@ impl Backend for Kiosk<'_> {
         let changed = self.service.on
             || no_panel != self.no_panel_shown
             || self.last_shown.as_ref().is_none_or(|s| {
-                !same_pose(&s.0, &key.0)
+                s.0.len() != key.0.len()
+                    || s.0.iter().zip(&key.0).any(|(a, b)| !same_pose(a, b))
                     || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
                     || !marks.fingers.is_empty()
                     || ctl.action().is_some()
@@ -505,6 +510,7 @@ impl Kiosk<'_> {
                 touch_to_flip_ms_p99 = (s.latency_ms_p99 * 10.0).round() / 10.0,
                 touches = totals.touches,
                 actions_started = totals.actions_started,
+                hits = totals.hits,
                 touchscreens = panels,
                 "vitals over the last minute"
             );
@@ -520,7 +526,7 @@ impl Kiosk<'_> {
 
 /// The kiosk's status line: the action and its progress, or the held
 /// parts; nothing when nothing is held.
-fn status_line(ctl: &Controller) -> Option<String> {
+fn status_line(ctl: &Stage) -> Option<String> {
     let held: Vec<&str> = ctl.held().iter().map(|r| r.name()).collect();
     Some(match ctl.action() {
         Some((name, time)) => format!("{name} {:>3.0}%", time * 100.0),

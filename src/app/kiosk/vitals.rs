@@ -35,6 +35,8 @@ pub struct Totals {
     /// Fingers that went down.
     pub touches: u64,
     pub actions_started: u64,
+    /// Blows one character's body landed on another's.
+    pub hits: u64,
     /// Times the kiosk started (this one included), carried over in the
     /// textfile: a restart by systemd shows as a step.
     pub starts: u64,
@@ -77,6 +79,12 @@ impl Vitals {
 
     pub fn action_started(&mut self) {
         self.totals.actions_started += 1;
+    }
+
+    /// One character's body hit another's with `impulse_ns` (N·s).
+    pub fn hit(&mut self, impulse_ns: f64) {
+        self.totals.hits += 1;
+        tracing::debug!(impulse_ns, hits = self.totals.hits, "hit counted");
     }
 
     /// A frame was drawn in `render_ms` and queued for the next flip.
@@ -190,6 +198,12 @@ pub fn prometheus(s: &Summary, totals: &Totals, panels: usize) -> String {
         &[("", totals.actions_started as f64)],
     );
     metric(
+        "marionette_hits_total",
+        "counter",
+        "Blows one character's body landed on another's since the kiosk started.",
+        &[("", totals.hits as f64)],
+    );
+    metric(
         "marionette_starts_total",
         "counter",
         "Times the kiosk started (restarts included).",
@@ -290,6 +304,7 @@ mod tests {
         let totals = Totals {
             touches: 42,
             actions_started: 7,
+            hits: 2,
             starts: 3,
         };
         let text = prometheus(&s, &totals, 1);
@@ -298,6 +313,7 @@ mod tests {
             "marionette_frame_seconds{quantile=\"0.99\"} 0.0095\n",
             "marionette_touch_to_flip_seconds{quantile=\"0.5\"} 0.021\n",
             "marionette_touches_total 42\n",
+            "marionette_hits_total 2\n",
             "marionette_actions_started_total 7\n",
             "marionette_touchscreens 1\n",
             "# TYPE marionette_starts_total counter\n",

@@ -76,10 +76,12 @@ impl Controller {
                 Grab::Part { role, at, .. } => FingerMark {
                     at: *at,
                     usage: FingerUse::Part(*role),
+                    tint: None,
                 },
                 Grab::Camera { at } => FingerMark {
                     at: *at,
                     usage: FingerUse::Camera,
+                    tint: None,
                 },
             });
         }
@@ -94,6 +96,7 @@ impl Controller {
                         points: a.projected(&camera, &at).iter().map(|p| p.at).collect(),
                         executable: view_angle_deg(dir, eye)
                             > self.settings.rule.min_view_angle_deg,
+                        tint: None,
                     });
                 }
             }

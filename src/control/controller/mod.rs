@@ -14,6 +14,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 mod actions;
+mod contact;
 mod effects;
 
 use super::character::Character;
@@ -134,6 +135,9 @@ pub struct Controller {
     time: f64,
     last_touch: f64,
     events: Vec<ActionEvent>,
+    /// How far another character's body pushed this one (m, on the
+    /// floor): added to the pelvis, fading as the body recovers.
+    shove: DVec3,
 }
 
 /// The longest drag kept for recognition (s): longer than any action.
@@ -149,14 +153,33 @@ const GROUND_CONTACT_M: f64 = 0.03;
 /// Longest tracking sub-step (s): explicit integration stays stable.
 pub const MAX_SUBSTEP: f64 = 0.004;
 
+/// A push from another character fades with this time constant (s): the
+/// body is back where it stood within about a second.
+const SHOVE_RECOVERY_S: f64 = 0.3;
+
 impl Controller {
     /// A character at rest at the origin facing +Z, seen in a picture of
     /// `width` x `height` pixels, at time `t` (seconds).
     #[must_use]
     pub fn new(ch: Arc<Character>, settings: Settings, width: f64, height: f64, t: f64) -> Self {
+        Self::standing(ch, settings, width, height, t, DVec3::ZERO, 0.0)
+    }
+
+    /// A character at rest at floor point `position` facing `yaw`
+    /// (radians from +Z, positive towards +X).
+    #[must_use]
+    pub fn standing(
+        ch: Arc<Character>,
+        settings: Settings,
+        width: f64,
+        height: f64,
+        t: f64,
+        position: DVec3,
+        yaw: f64,
+    ) -> Self {
         let at = Placement {
-            position: DVec3::ZERO,
-            yaw: 0.0,
+            position: position.with_y(0.0),
+            yaw,
             anchor: Anchor::ClipStart,
         };
         let pose = ch.rest_pose(&at);
@@ -192,6 +215,7 @@ impl Controller {
             time: t,
             last_touch: t,
             events: Vec::new(),
+            shove: DVec3::ZERO,
             ch,
         }
     }
@@ -399,19 +423,7 @@ impl Controller {
                 Grab::Part { .. } => None,
             })
             .collect();
-        match moves.as_slice() {
-            [(a, b)] => self.rig.drag(b.x - a.x, b.y - a.y),
-            [(a0, a1), (b0, b1), ..] => {
-                let d0 = a0.distance(*b0);
-                let d1 = a1.distance(*b1);
-                let ang = |p: &ScreenPoint, q: &ScreenPoint| (q.y - p.y).atan2(q.x - p.x);
-                let twist = crate::control::posing::sample::wrap(ang(a1, b1) - ang(a0, b0));
-                if d0 > 10.0 {
-                    self.rig.pinch(d1 / d0, twist);
-                }
-            }
-            [] => {}
-        }
+        self.rig.gesture(&moves);
     }
 
     fn begin_posing(&mut self) {
@@ -515,6 +527,13 @@ impl Controller {
         self.output = self.tracker.pose.clone();
         if self.settings.physics && self.settings.settle_s > 0.0 {
             self.physical_effects(dt);
+        }
+        if self.shove != DVec3::ZERO {
+            self.output.translations[0] += self.shove;
+            self.shove *= (-dt / SHOVE_RECOVERY_S).exp();
+            if self.shove.length() < 1e-4 {
+                self.shove = DVec3::ZERO;
+            }
         }
         self.fix_feet(dt);
         self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);

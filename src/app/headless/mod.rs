@@ -7,14 +7,17 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use serde::Serialize;
 use thiserror::Error;
 
+mod summary;
+
+pub use self::summary::{ActionRecord, CharacterSummary, HitRecord, Summary};
 use super::config::Config;
 use super::frame::{Backend, Flow, Steps};
 use crate::control::action::timeline::ActionEvent;
 use crate::control::character::Character;
-use crate::control::controller::{Controller, Mode};
+use crate::control::controller::Controller;
+use crate::control::stage::{Actor, Stage};
 use crate::control::ticker::Ticker;
 use crate::input::touch::ScreenFrame;
 use crate::render::contact;
@@ -77,48 +80,13 @@ impl Default for Options {
     }
 }
 
-/// An action as it happened.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ActionRecord {
-    pub action: String,
-    pub started_s: f64,
-    /// `finished`, `cancelled`, or `playing` at the end of the replay.
-    pub outcome: String,
-    pub ended_s: Option<f64>,
+fn digest(hash: &mut u64, stage: &Stage) {
+    for a in stage.actors() {
+        digest_pose(hash, a.ctl.pose());
+    }
 }
 
-/// What a run did.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Summary {
-    pub duration_s: f64,
-    pub touch_frames: usize,
-    pub steps: usize,
-    pub frames_written: usize,
-    pub actions: Vec<ActionRecord>,
-    /// Body parts fingers held.
-    pub parts_held: Vec<String>,
-    /// Most parts held at once.
-    pub most_held_at_once: usize,
-    /// Whether fingers on empty space moved the camera.
-    pub camera_moved: bool,
-    /// Render plus readback, per written frame (ms; 0 without rendering).
-    pub frame_ms_mean: f64,
-    pub frame_ms_max: f64,
-    /// FNV-1a digest of every posture stepped: equal digests, equal runs.
-    pub pose_digest: String,
-    pub sheet: Option<PathBuf>,
-    /// Where the frames, sheet and summary are.
-    pub out: Option<PathBuf>,
-    /// Every stepped posture, with [`Options::keep_poses`].
-    #[serde(skip)]
-    pub poses: Vec<crate::character::skeleton::Pose>,
-    /// Motion quality, with [`Options::measure`].
-    #[serde(skip)]
-    pub metrics: Option<crate::tools::metrics::Metrics>,
-}
-
-fn digest(hash: &mut u64, ctl: &Controller) {
-    let pose = ctl.pose();
+fn digest_pose(hash: &mut u64, pose: &crate::character::skeleton::Pose) {
     let values = pose
         .rotations
         .iter()
@@ -133,7 +101,7 @@ fn digest(hash: &mut u64, ctl: &Controller) {
 }
 
 /// The status line for the picture: recording time, mode, held parts.
-fn status(ctl: &Controller, t: f64) -> String {
+fn status(ctl: &Stage, t: f64) -> String {
     let held: Vec<&str> = ctl.held().iter().map(|r| r.name()).collect();
     let mode = match ctl.action() {
         Some((name, time)) => format!("action {name} {:>3.0}%", time * 100.0),
@@ -147,7 +115,7 @@ fn status(ctl: &Controller, t: f64) -> String {
     s
 }
 
-fn label(ctl: &Controller, t: f64) -> String {
+fn label(ctl: &Stage, t: f64) -> String {
     match ctl.action() {
         Some((name, _)) => format!("{t:.1}s {name}"),
         None if !ctl.held().is_empty() => format!("{t:.1}s posing {}", ctl.held().len()),
@@ -176,21 +144,21 @@ enum Shows {
 /// stretches where something happens (an action, a pose held, the camera
 /// moving) and takes one step from each (60% into it), plus the first and
 /// last steps; evenly thinned to `max`.
-fn key_steps(ctl: &Controller, ticker: &Ticker, end: f64, max: usize) -> Vec<usize> {
+fn key_steps(ctl: &Stage, ticker: &Ticker, end: f64, max: usize) -> Vec<usize> {
     let (mut ctl, mut ticker) = (ctl.clone(), ticker.clone());
     let mut runs: Vec<(Shows, usize, usize)> = Vec::new();
     let mut step = 0;
-    let mut orbit = ctl.rig.orbit;
+    let mut orbit = ctl.rig().orbit;
     loop {
         let t = ticker.step(&mut ctl);
         step += 1;
         let shows = match ctl.action() {
             Some((name, _)) => Shows::Action(name.to_owned()),
             None if !ctl.held().is_empty() => Shows::Posing(ctl.held().len()),
-            None if ctl.rig.orbit != orbit => Shows::Camera,
+            None if ctl.rig().orbit != orbit => Shows::Camera,
             None => Shows::Rest,
         };
-        orbit = ctl.rig.orbit;
+        orbit = ctl.rig().orbit;
         match runs.last_mut() {
             Some((s, _, last)) if *s == shows => *last = step,
             _ => runs.push((shows, step, step)),
@@ -233,16 +201,19 @@ struct Replay<'a> {
     thumbs: Vec<(Image, String, f64)>,
     times: Vec<f64>,
     meter: Option<crate::tools::metrics::Meter<'a>>,
+    /// Each character's actions, hits and held parts (a table of several).
+    per: Vec<CharacterSummary>,
+    held_by: Vec<BTreeSet<String>>,
 }
 
 impl Backend for Replay<'_> {
     type Error = HeadlessError;
 
-    fn feed(&mut self, ctl: &mut Controller, t: f64) {
+    fn feed(&mut self, ctl: &mut Stage, t: f64) {
         self.touches.feed(ctl, t);
     }
 
-    fn frame(&mut self, ctl: &mut Controller, t: f64) -> Result<Flow, HeadlessError> {
+    fn frame(&mut self, ctl: &mut Stage, t: f64) -> Result<Flow, HeadlessError> {
         let summary = &mut self.summary;
         summary.steps += 1;
         digest(&mut self.hash, ctl);
@@ -250,27 +221,71 @@ impl Backend for Replay<'_> {
             summary.poses.push(ctl.pose().clone());
         }
         if let Some(m) = &mut self.meter {
-            m.push(ctl.pose(), &ctl.held());
+            m.push(ctl.pose(), &ctl.actors()[0].ctl.held());
         }
         let held = ctl.held();
         summary.most_held_at_once = summary.most_held_at_once.max(held.len());
         self.held_ever
             .extend(held.iter().map(|r| r.name().to_owned()));
         let home = self.home;
-        if ctl.rig.orbit != home && !matches!(ctl.mode(), Mode::Action(_)) {
-            summary.camera_moved |= (ctl.rig.orbit.yaw - home.yaw).abs() > 0.05
-                || (ctl.rig.orbit.distance - home.distance).abs() > 0.05;
+        let orbit = ctl.rig().orbit;
+        if orbit != home && !ctl.any_action() {
+            summary.camera_moved |= (orbit.yaw - home.yaw).abs() > 0.05
+                || (orbit.distance - home.distance).abs() > 0.05;
         }
-        for e in ctl.take_events() {
+        for (k, a) in ctl.actors().iter().enumerate() {
+            if let Some(set) = self.held_by.get_mut(k) {
+                set.extend(a.ctl.held().iter().map(|r| r.name().to_owned()));
+            }
+        }
+        for h in ctl.take_hits() {
+            for (k, role, other, part, other_part) in [
+                (
+                    h.striker,
+                    "landed",
+                    h.struck,
+                    &h.striker_part,
+                    &h.struck_part,
+                ),
+                (
+                    h.struck,
+                    "taken",
+                    h.striker,
+                    &h.struck_part,
+                    &h.striker_part,
+                ),
+            ] {
+                if let Some(c) = self.per.get_mut(k) {
+                    c.hits.push(HitRecord {
+                        time_s: h.time_s,
+                        role: role.to_owned(),
+                        other,
+                        part: part.clone(),
+                        other_part: other_part.clone(),
+                        impulse_ns: h.impulse_ns,
+                        speed_m_s: h.speed_m_s,
+                    });
+                }
+            }
+        }
+        for (k, e) in ctl.take_events() {
+            let records = if self.per.is_empty() {
+                &mut summary.actions
+            } else {
+                match self.per.get_mut(k) {
+                    Some(c) => &mut c.actions,
+                    None => continue,
+                }
+            };
             match e {
-                ActionEvent::Started { action, time_s } => summary.actions.push(ActionRecord {
+                ActionEvent::Started { action, time_s } => records.push(ActionRecord {
                     action,
                     started_s: time_s,
                     outcome: "playing".into(),
                     ended_s: None,
                 }),
                 ActionEvent::Finished { time_s, .. } | ActionEvent::Cancelled { time_s, .. } => {
-                    if let Some(r) = summary.actions.last_mut() {
+                    if let Some(r) = records.last_mut() {
                         r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
                             "finished".into()
                         } else {
@@ -348,14 +363,56 @@ pub fn run(
     frames: Vec<ScreenFrame>,
     opts: &Options,
 ) -> Result<Summary, HeadlessError> {
+    run_table(vec![ch], config, frames, opts)
+}
+
+/// The table the configuration describes: `cast[k]` stands where
+/// `[[character]]` number `k` says, in its tint.
+#[must_use]
+pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64) -> Stage {
     let mut settings = config.control_settings();
-    if !opts.tracking {
+    if !tracking {
         settings.settle_s = 0.0;
     }
     let (pw, ph) = config.display.size();
+    let (w, h) = (f64::from(pw), f64::from(ph));
+    let places = config.character.placements();
+    let tints = config.character.tints();
+    let actors: Vec<Actor> = cast
+        .into_iter()
+        .enumerate()
+        .map(|(k, ch)| {
+            let (x, z, yaw) = places.get(k).copied().unwrap_or((k as f64 * 1.2, 0.0, 0.0));
+            Actor {
+                ctl: Controller::standing(ch, settings, w, h, t, glam::DVec3::new(x, 0.0, z), yaw),
+                tint: tints.get(k).copied().flatten(),
+                hits_landed: 0,
+                hits_taken: 0,
+            }
+        })
+        .collect();
+    Stage::new(actors, w, h, t)
+}
+
+/// Replay `frames` on a table of `cast` (one character or several).
+///
+/// # Panics
+/// With an empty cast.
+pub fn run_table(
+    cast: Vec<Arc<Character>>,
+    config: &Config,
+    frames: Vec<ScreenFrame>,
+    opts: &Options,
+) -> Result<Summary, HeadlessError> {
     let (ow, oh) = config.display.output_size();
-    let measured = ch.clone();
-    let mut ctl = Controller::new(ch, settings, f64::from(pw), f64::from(ph), 0.0);
+    let measured = cast[0].clone();
+    let libraries: Vec<String> = config
+        .library_dirs()
+        .iter()
+        .map(|d| d.display().to_string())
+        .collect();
+    let n = cast.len();
+    let mut ctl = table(cast, config, opts.tracking, 0.0);
     let touch_frames = frames.len();
     let ticker = Ticker::new(frames, opts.tick_hz);
     let end = (ticker.end() + opts.tail_s).max(opts.until.unwrap_or(0.0));
@@ -390,7 +447,7 @@ pub fn run(
         end,
         every: (opts.tick_hz / opts.fps.max(1e-3)).round().max(1.0) as usize,
         key,
-        home: ctl.rig.orbit,
+        home: ctl.rig().orbit,
         headless,
         summary: Summary {
             touch_frames,
@@ -400,6 +457,17 @@ pub fn run(
         held_ever: BTreeSet::new(),
         thumbs: Vec::new(),
         times: Vec::new(),
+        per: if n > 1 {
+            (0..n)
+                .map(|k| CharacterSummary {
+                    library: libraries.get(k).cloned().unwrap_or_default(),
+                    ..CharacterSummary::default()
+                })
+                .collect()
+        } else {
+            Vec::new()
+        },
+        held_by: vec![BTreeSet::new(); n],
         meter: opts.measure.then(|| {
             crate::tools::metrics::Meter::new(
                 &measured.lib.skeleton,
@@ -416,8 +484,21 @@ pub fn run(
         thumbs,
         times,
         meter,
+        mut per,
+        held_by,
         ..
     } = replay;
+    for ((c, held), a) in per.iter_mut().zip(held_by).zip(ctl.actors()) {
+        c.parts_held = held.into_iter().collect();
+        c.hits_landed = a.hits_landed;
+        c.hits_taken = a.hits_taken;
+    }
+    if !per.is_empty() {
+        let mut all: Vec<ActionRecord> = per.iter().flat_map(|c| c.actions.clone()).collect();
+        all.sort_by(|a, b| a.started_s.total_cmp(&b.started_s));
+        summary.actions = all;
+    }
+    summary.characters = per;
     summary.metrics = meter.map(crate::tools::metrics::Meter::finish);
     summary.parts_held = held_ever.into_iter().collect();
     summary.pose_digest = format!("{hash:016x}");
@@ -441,52 +522,4 @@ pub fn run(
             .map_err(|source| HeadlessError::Write { path, source })?;
     }
     Ok(summary)
-}
-
-impl std::fmt::Display for Summary {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(
-            f,
-            "replayed {:.1} s: {} touch frames, {} controller steps",
-            self.duration_s, self.touch_frames, self.steps
-        )?;
-        writeln!(
-            f,
-            "posing: parts held {} (at most {} at once); camera moved: {}",
-            if self.parts_held.is_empty() {
-                "none".to_owned()
-            } else {
-                self.parts_held.join(", ")
-            },
-            self.most_held_at_once,
-            if self.camera_moved { "yes" } else { "no" }
-        )?;
-        writeln!(f, "actions started by drags: {}", self.actions.len())?;
-        for a in &self.actions {
-            writeln!(
-                f,
-                "  {:6.2} s  {:<12} {}{}",
-                a.started_s,
-                a.action,
-                a.outcome,
-                a.ended_s
-                    .map(|e| format!(" at {e:.2} s"))
-                    .unwrap_or_default()
-            )?;
-        }
-        if self.frames_written > 0 {
-            writeln!(
-                f,
-                "frames: {} written, render + readback {:.1} ms mean, {:.1} ms max",
-                self.frames_written, self.frame_ms_mean, self.frame_ms_max
-            )?;
-        }
-        if let Some(s) = &self.sheet {
-            writeln!(f, "contact sheet: {}", s.display())?;
-        }
-        if let Some(o) = &self.out {
-            writeln!(f, "frames and summary.json in {}", o.display())?;
-        }
-        write!(f, "pose digest: {}", self.pose_digest)
-    }
 }

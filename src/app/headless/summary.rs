@@ -1,0 +1,125 @@
+//! What a headless run did: the summary printed and written to
+//! `summary.json`.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+/// An action as it happened.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ActionRecord {
+    pub action: String,
+    pub started_s: f64,
+    /// `finished`, `cancelled`, or `playing` at the end of the replay.
+    pub outcome: String,
+    pub ended_s: Option<f64>,
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Summary {
+    pub duration_s: f64,
+    pub touch_frames: usize,
+    pub steps: usize,
+    pub frames_written: usize,
+    pub actions: Vec<ActionRecord>,
+    /// Body parts fingers held.
+    pub parts_held: Vec<String>,
+    /// Most parts held at once.
+    pub most_held_at_once: usize,
+    /// Whether fingers on empty space moved the camera.
+    pub camera_moved: bool,
+    /// Render plus readback, per written frame (ms; 0 without rendering).
+    pub frame_ms_mean: f64,
+    pub frame_ms_max: f64,
+    /// FNV-1a digest of every posture stepped: equal digests, equal runs.
+    pub pose_digest: String,
+    pub sheet: Option<PathBuf>,
+    /// Where the frames, sheet and summary are.
+    pub out: Option<PathBuf>,
+    /// Every stepped posture, with [`Options::keep_poses`].
+    #[serde(skip)]
+    pub poses: Vec<crate::character::skeleton::Pose>,
+    /// Motion quality, with [`Options::measure`].
+    #[serde(skip)]
+    pub metrics: Option<crate::tools::metrics::Metrics>,
+    /// Each character of a table of several: its actions and hits.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub characters: Vec<CharacterSummary>,
+}
+
+/// One character of a table of several, in [`Summary::characters`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct CharacterSummary {
+    /// Its library folder.
+    pub library: String,
+    pub actions: Vec<ActionRecord>,
+    /// Hits it landed on another character or took from one.
+    pub hits: Vec<HitRecord>,
+    pub hits_landed: usize,
+    pub hits_taken: usize,
+    pub parts_held: Vec<String>,
+}
+
+/// A hit as it happened, from one character's side.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HitRecord {
+    pub time_s: f64,
+    /// `landed` or `taken`.
+    pub role: String,
+    /// The other character's index.
+    pub other: usize,
+    /// Its own segment and the other's (joint names).
+    pub part: String,
+    pub other_part: String,
+    pub impulse_ns: f64,
+    pub speed_m_s: f64,
+}
+
+impl std::fmt::Display for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "replayed {:.1} s: {} touch frames, {} controller steps",
+            self.duration_s, self.touch_frames, self.steps
+        )?;
+        writeln!(
+            f,
+            "posing: parts held {} (at most {} at once); camera moved: {}",
+            if self.parts_held.is_empty() {
+                "none".to_owned()
+            } else {
+                self.parts_held.join(", ")
+            },
+            self.most_held_at_once,
+            if self.camera_moved { "yes" } else { "no" }
+        )?;
+        writeln!(f, "actions started by drags: {}", self.actions.len())?;
+        for a in &self.actions {
+            writeln!(
+                f,
+                "  {:6.2} s  {:<12} {}{}",
+                a.started_s,
+                a.action,
+                a.outcome,
+                a.ended_s
+                    .map(|e| format!(" at {e:.2} s"))
+                    .unwrap_or_default()
+            )?;
+        }
+        if self.frames_written > 0 {
+            writeln!(
+                f,
+                "frames: {} written, render + readback {:.1} ms mean, {:.1} ms max",
+                self.frames_written, self.frame_ms_mean, self.frame_ms_max
+            )?;
+        }
+        if let Some(s) = &self.sheet {
+            writeln!(f, "contact sheet: {}", s.display())?;
+        }
+        if let Some(o) = &self.out {
+            writeln!(f, "frames and summary.json in {}", o.display())?;
+        }
+        write!(f, "pose digest: {}", self.pose_digest)
+    }
+}

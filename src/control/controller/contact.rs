@@ -1,0 +1,47 @@
+//! Another character's body: the capsules this one offers to collision
+//! tests, and how a blow from outside reaches it.
+
+use glam::DVec3;
+
+use super::Controller;
+
+impl Controller {
+    /// The body's capsules in the posture shown, one per ragdoll segment,
+    /// with the name of the joint each carries.
+    #[must_use]
+    pub fn capsules(&self) -> Vec<(crate::physics::ragdoll::Capsule, &str)> {
+        self.ragdoll
+            .segments()
+            .iter()
+            .map(|s| {
+                (
+                    s.capsule_in(&self.world),
+                    self.ch.lib.skeleton.joints[s.joint()].name.as_str(),
+                )
+            })
+            .collect()
+    }
+
+    /// Mass of each ragdoll segment (kg), in [`Self::capsules`]' order.
+    #[must_use]
+    pub fn segment_masses(&self) -> Vec<f64> {
+        self.ragdoll.segments().iter().map(|s| s.mass()).collect()
+    }
+
+    /// A blow from outside: `impulse` (N·s) on segment `k` of the ragdoll,
+    /// which shows through the physical effects on the regions no finger
+    /// holds (eq. 5-7), and the body moved by `shove` (m, on the floor)
+    /// at once, fading back as it recovers; feet that carry the body stay
+    /// where they stand.
+    pub fn hit(&mut self, k: usize, impulse: DVec3, shove: DVec3) {
+        self.ragdoll.push(k, impulse);
+        let shove = shove.with_y(0.0);
+        if shove.is_finite() && shove != DVec3::ZERO {
+            self.shove += shove;
+            self.output.translations[0] += shove;
+            for p in &mut self.world.positions {
+                *p += shove;
+            }
+        }
+    }
+}

@@ -1,0 +1,464 @@
+//! The table: one character or several, the camera they share, which
+//! finger belongs to which character, and their bodies meeting.
+//!
+//! - **Ownership.** A finger that goes down on a body part belongs to the
+//!   character whose part it is (the nearest part on the screen when two
+//!   characters' parts are within reach) until it lifts: only that
+//!   character's controller sees it, so posing, action recognition and
+//!   playback, tracking and foot IK run per character.
+//! - **Camera.** A finger on empty floor turns, tilts or zooms the shared
+//!   camera only while no character is held; while one is, such a finger
+//!   does nothing until it lifts (a visitor's stray finger never swings the
+//!   view from under another visitor's drag), and the view does not follow
+//!   the characters while any is held. Idle, the camera eases home:
+//!   a view across the line the characters stand on, far enough back to
+//!   frame all of them.
+//! - **Contact.** After each step the characters' body capsules are tested
+//!   pairwise. Where two overlap they are pushed apart on the floor at once
+//!   (the push fades as the bodies recover, feet staying planted), and when
+//!   a contact begins with the bodies closing, it is a hit: an impulse on
+//!   the struck segment's ragdoll body (and its reaction on the striker's),
+//!   which shows through the physical effects (eq. 5-7) on the regions no
+//!   finger holds. Every hit is logged and counted.
+//!
+//! A table of one character is exactly that character's controller: every
+//! call goes straight to it.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::DVec3;
+
+mod contact;
+
+use super::controller::{Controller, Mode};
+use super::marks::{FingerMark, FingerUse, Marks};
+use super::rig::{Orbit, Rig};
+use crate::character::roles::Role;
+use crate::character::skeleton::Pose;
+use crate::control::action::timeline::ActionEvent;
+use crate::control::posing::pick::pick;
+use crate::input::touch::{ContactId, Phase, ScreenFrame, Tool};
+use crate::physics::ragdoll::Capsule;
+use crate::screen::ScreenPoint;
+
+/// One character on the table.
+#[derive(Clone)]
+pub struct Actor {
+    pub ctl: Controller,
+    /// Colour of its clothes (`None`: the default).
+    pub tint: Option<[f32; 3]>,
+    /// Hits it landed and took.
+    pub hits_landed: usize,
+    pub hits_taken: usize,
+}
+
+/// A blow from one character's body on another's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hit {
+    pub time_s: f64,
+    /// Index of the character whose segment moved into the other.
+    pub striker: usize,
+    pub struck: usize,
+    /// The joints whose segments met.
+    pub striker_part: String,
+    pub struck_part: String,
+    /// Impulse on the struck segment (N·s).
+    pub impulse_ns: f64,
+    /// How fast the segments closed (m/s).
+    pub speed_m_s: f64,
+}
+
+/// Whom a finger belongs to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Owner {
+    Character(usize),
+    Camera(ScreenPoint),
+    /// On empty floor while a character is held: ignored until it lifts.
+    Parked(ScreenPoint),
+}
+
+/// Contacts closing slower than this are bodies resting against each
+/// other, not hits (m/s).
+const HIT_SPEED_M_S: f64 = 0.3;
+/// Share of a hit's relative velocity kept in the bounce (0 dead, 1
+/// elastic).
+const RESTITUTION: f64 = 0.3;
+/// Passes of pushing apart per step.
+const SEPARATION_PASSES: usize = 6;
+
+/// The table's state between frames.
+#[derive(Clone)]
+pub struct Stage {
+    actors: Vec<Actor>,
+    /// The shared camera (several characters; one uses its controller's).
+    rig: Rig,
+    owners: BTreeMap<ContactId, Owner>,
+    /// Each character's capsules last step, for the segments' speeds.
+    last: Vec<Vec<Capsule>>,
+    /// Segment pairs `(i, a, j, b)` overlapping last step.
+    touching: BTreeSet<(usize, usize, usize, usize)>,
+    hits: Vec<Hit>,
+    /// Deepest overlap left after the last step's separation (m).
+    depth_left: f64,
+    time: f64,
+    last_touch: f64,
+}
+
+impl Stage {
+    /// A table of `actors` (at least one), its picture `width` x `height`
+    /// pixels, at time `t`.
+    ///
+    /// # Panics
+    /// With no actor.
+    #[must_use]
+    pub fn new(actors: Vec<Actor>, width: f64, height: f64, t: f64) -> Self {
+        assert!(!actors.is_empty(), "a table needs a character");
+        let mut rig = Rig::new(width, height);
+        if actors.len() > 1 {
+            rig.home = home_view(&actors, &rig);
+            rig.orbit = rig.home;
+            rig.target = centre(&actors).with_y(rig.target.y);
+        }
+        let mut actors = actors;
+        if actors.len() > 1 {
+            for a in &mut actors {
+                a.ctl.rig = rig.clone();
+            }
+        }
+        let last = actors.iter().map(|a| caps(&a.ctl)).collect();
+        Self {
+            actors,
+            rig,
+            owners: BTreeMap::new(),
+            last,
+            touching: BTreeSet::new(),
+            hits: Vec::new(),
+            depth_left: 0.0,
+            time: t,
+            last_touch: t,
+        }
+    }
+
+    /// A table of one character.
+    #[must_use]
+    pub fn single(ctl: Controller) -> Self {
+        let (w, h) = (ctl.rig.width, ctl.rig.height);
+        // A lone character keeps its own time and camera.
+        let t = 0.0;
+        Self::new(
+            vec![Actor {
+                ctl,
+                tint: None,
+                hits_landed: 0,
+                hits_taken: 0,
+            }],
+            w,
+            h,
+            t,
+        )
+    }
+
+    #[must_use]
+    pub fn actors(&self) -> &[Actor] {
+        &self.actors
+    }
+
+    pub fn actors_mut(&mut self) -> &mut [Actor] {
+        &mut self.actors
+    }
+
+    fn many(&self) -> bool {
+        self.actors.len() > 1
+    }
+
+    /// The camera everyone sees through.
+    #[must_use]
+    pub fn rig(&self) -> &Rig {
+        if self.many() {
+            &self.rig
+        } else {
+            &self.actors[0].ctl.rig
+        }
+    }
+
+    pub fn rig_mut(&mut self) -> &mut Rig {
+        if self.many() {
+            &mut self.rig
+        } else {
+            &mut self.actors[0].ctl.rig
+        }
+    }
+
+    /// The first character's posture (a lone character's digest).
+    #[must_use]
+    pub fn pose(&self) -> &Pose {
+        self.actors[0].ctl.pose()
+    }
+
+    /// Parts held, over every character.
+    #[must_use]
+    pub fn held(&self) -> Vec<Role> {
+        self.actors.iter().flat_map(|a| a.ctl.held()).collect()
+    }
+
+    /// The first action playing (by character order), if any.
+    #[must_use]
+    pub fn action(&self) -> Option<(&str, f64)> {
+        self.actors.iter().find_map(|a| a.ctl.action())
+    }
+
+    /// Whether any character plays an action.
+    #[must_use]
+    pub fn any_action(&self) -> bool {
+        self.actors
+            .iter()
+            .any(|a| matches!(a.ctl.mode(), Mode::Action(_)))
+    }
+
+    /// Whether a finger on empty floor is moving the camera.
+    #[must_use]
+    pub fn touching_camera(&self) -> bool {
+        if self.many() {
+            self.owners.values().any(|o| matches!(o, Owner::Camera(_)))
+        } else {
+            self.actors[0].ctl.touching_camera()
+        }
+    }
+
+    /// Seconds since anyone touched the table.
+    #[must_use]
+    pub fn idle_s(&self) -> f64 {
+        if self.many() {
+            if self.owners.is_empty() {
+                self.time - self.last_touch
+            } else {
+                0.0
+            }
+        } else {
+            self.actors[0].ctl.idle_s()
+        }
+    }
+
+    /// Every character back to rest where it stands (see
+    /// [`Controller::go_to_rest`]).
+    pub fn go_to_rest(&mut self) {
+        for a in &mut self.actors {
+            a.ctl.go_to_rest();
+        }
+    }
+
+    /// Action events since the last call, with the character's index.
+    pub fn take_events(&mut self) -> Vec<(usize, ActionEvent)> {
+        self.actors
+            .iter_mut()
+            .enumerate()
+            .flat_map(|(k, a)| a.ctl.take_events().into_iter().map(move |e| (k, e)))
+            .collect()
+    }
+
+    /// Hits since the last call.
+    pub fn take_hits(&mut self) -> Vec<Hit> {
+        std::mem::take(&mut self.hits)
+    }
+
+    /// Deepest overlap of two characters' bodies left after the last step
+    /// (m).
+    #[must_use]
+    pub fn depth_left(&self) -> f64 {
+        self.depth_left
+    }
+
+    /// Finger marks and trajectories of every character, in its tint, and
+    /// the marks of fingers on the floor.
+    #[must_use]
+    pub fn marks(&self, trajectories: bool) -> Marks {
+        if !self.many() {
+            return self.actors[0].ctl.marks(trajectories);
+        }
+        let mut marks = Marks::default();
+        for a in &self.actors {
+            let mut m = a.ctl.marks(trajectories);
+            for f in &mut m.fingers {
+                f.tint = a.tint;
+            }
+            for t in &mut m.trajectories {
+                t.tint = a.tint;
+            }
+            marks.fingers.extend(m.fingers);
+            marks.trajectories.extend(m.trajectories);
+        }
+        for o in self.owners.values() {
+            if let Owner::Camera(at) | Owner::Parked(at) = o {
+                marks.fingers.push(FingerMark {
+                    at: *at,
+                    usage: FingerUse::Camera,
+                    tint: None,
+                });
+            }
+        }
+        marks
+    }
+
+    /// Apply one frame of touches.
+    pub fn touch(&mut self, frame: &ScreenFrame) {
+        if !self.many() {
+            self.actors[0].ctl.touch(frame);
+            return;
+        }
+        let camera = self.rig.camera();
+        let mut per: Vec<Vec<crate::input::touch::ScreenContact>> =
+            vec![Vec::new(); self.actors.len()];
+        let mut moves = Vec::new();
+        for c in frame.contacts.iter().filter(|c| c.tool == Tool::Finger) {
+            let p = c.screen;
+            if c.phase == Phase::Down {
+                let owner = match self.grabbed(&camera, p) {
+                    Some(k) => {
+                        // A character is held now: fingers on the floor
+                        // stop moving the camera.
+                        for o in self.owners.values_mut() {
+                            if let Owner::Camera(at) = *o {
+                                *o = Owner::Parked(at);
+                            }
+                        }
+                        Owner::Character(k)
+                    }
+                    None if self.held_any() => Owner::Parked(p),
+                    None => Owner::Camera(p),
+                };
+                if let Owner::Character(k) = owner {
+                    per[k].push(*c);
+                }
+                self.owners.insert(c.id, owner);
+            } else if c.phase.is_down() {
+                match self.owners.get_mut(&c.id) {
+                    Some(Owner::Character(k)) => per[*k].push(*c),
+                    Some(Owner::Camera(at)) => {
+                        moves.push((*at, p));
+                        *at = p;
+                    }
+                    Some(Owner::Parked(at)) => *at = p,
+                    None => {}
+                }
+            } else if let Some(Owner::Character(k)) = self.owners.remove(&c.id) {
+                per[k].push(*c);
+            }
+        }
+        if !frame.contacts.is_empty() {
+            self.last_touch = frame.t;
+        }
+        for (a, contacts) in self.actors.iter_mut().zip(per) {
+            if !contacts.is_empty() {
+                // Each controller picks through the camera everyone sees.
+                a.ctl.rig = self.rig.clone();
+                a.ctl.touch(&ScreenFrame {
+                    t: frame.t,
+                    contacts,
+                });
+            }
+        }
+        self.rig.gesture(&moves);
+    }
+
+    fn held_any(&self) -> bool {
+        self.owners
+            .values()
+            .any(|o| matches!(o, Owner::Character(_)))
+    }
+
+    /// The character whose body part a finger at `p` grabs: of those with
+    /// a part within reach, the one whose part is nearest on the screen.
+    fn grabbed(&self, camera: &crate::character::camera::Camera, p: ScreenPoint) -> Option<usize> {
+        self.actors
+            .iter()
+            .enumerate()
+            .filter_map(|(k, a)| {
+                let ch = a.ctl.character();
+                let role = pick(
+                    camera,
+                    &ch.lib.skeleton,
+                    &ch.roles,
+                    a.ctl.world(),
+                    p,
+                    a.ctl.settings.pick_radius_px,
+                )?;
+                let at = camera.project(a.ctl.world().positions[ch.roles.get(role)])?;
+                Some((k, at.distance(p)))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k)
+    }
+
+    /// Advance every character to `t`, then let their bodies meet.
+    pub fn advance(&mut self, t: f64) {
+        if !self.many() {
+            self.actors[0].ctl.advance(t);
+            return;
+        }
+        let dt = (t - self.time).clamp(0.0, 0.25);
+        self.time = t;
+        for a in &mut self.actors {
+            a.ctl.rig = self.rig.clone();
+            a.ctl.advance(t);
+        }
+        self.contacts(dt);
+        // The view stays put while anyone holds a character: a visitor's
+        // drag never moves the camera under another visitor's finger.
+        if !self.held_any() {
+            let idle = self.idle_s() > self.actors[0].ctl.settings.home_after_s;
+            let floor = centre(&self.actors);
+            self.rig.settle(floor, idle, dt);
+        }
+    }
+
+    /// Touches up to `t`, then advance to `t`.
+    pub fn step(&mut self, frames: &[ScreenFrame], t: f64) {
+        for f in frames {
+            self.touch(f);
+        }
+        self.advance(t);
+    }
+}
+
+fn caps(ctl: &Controller) -> Vec<Capsule> {
+    ctl.capsules().into_iter().map(|(c, _)| c).collect()
+}
+
+/// The middle of the characters' floor points.
+fn centre(actors: &[Actor]) -> DVec3 {
+    let sum: DVec3 = actors
+        .iter()
+        .map(|a| {
+            let c = a.ctl.character();
+            a.ctl.world().positions[c.roles.get(Role::Pelvis)].with_y(0.0)
+        })
+        .sum();
+    sum / actors.len().max(1) as f64
+}
+
+/// The home view of several characters: across the line from the first
+/// to the last (from its +Z side), far enough back to frame them all.
+fn home_view(actors: &[Actor], rig: &Rig) -> Orbit {
+    let floor = |a: &Actor| {
+        let c = a.ctl.character();
+        a.ctl.world().positions[c.roles.get(Role::Pelvis)].with_y(0.0)
+    };
+    let (first, last) = (floor(&actors[0]), floor(&actors[actors.len() - 1]));
+    let line = (last - first).try_normalize().unwrap_or(DVec3::X);
+    let mut across = DVec3::new(-line.z, 0.0, line.x);
+    if across.z < 0.0 {
+        across = -across;
+    }
+    let c = centre(actors);
+    let span = actors
+        .iter()
+        .map(|a| (floor(a) - c).length())
+        .fold(0.0, f64::max);
+    let home = Orbit::HOME;
+    Orbit {
+        yaw: across.x.atan2(across.z),
+        pitch: home.pitch,
+        distance: (home.distance + span * 1.2)
+            .clamp(rig.limits.min_distance, rig.limits.max_distance),
+    }
+}
