@@ -16,6 +16,9 @@ impl Stage {
         let n = self.actors.len();
         let now: Vec<Vec<Capsule>> = self.actors.iter().map(|a| caps(&a.ctl)).collect();
         let mut touching = BTreeSet::new();
+        // Segments that struck or were struck this step, with the other
+        // character: one hit each per step.
+        let mut hit_now: BTreeSet<(usize, usize, usize)> = BTreeSet::new();
         for i in 0..n {
             for j in i + 1..n {
                 for (a, ca) in now[i].iter().enumerate() {
@@ -24,7 +27,18 @@ impl Stage {
                             continue;
                         };
                         touching.insert((i, a, j, b));
-                        if self.touching.contains(&(i, a, j, b)) || dt <= 0.0 {
+                        // A contact begins when neither segment touched
+                        // the other body last step (a fist sliding from
+                        // one segment of a chest to the next is one hit).
+                        let was = self
+                            .touching
+                            .iter()
+                            .any(|&(pi, pa, pj, pb)| (pi, pj) == (i, j) && (pa == a || pb == b));
+                        if was
+                            || hit_now.contains(&(i, a, j))
+                            || hit_now.contains(&(j, b, i))
+                            || dt <= 0.0
+                        {
                             continue;
                         }
                         // Normal from j's segment to i's.
@@ -83,6 +97,8 @@ impl Stage {
                         self.actors[striker]
                             .ctl
                             .hit(s_seg, -dir * impulse, DVec3::ZERO);
+                        hit_now.insert((i, a, j));
+                        hit_now.insert((j, b, i));
                         self.actors[striker].hits_landed += 1;
                         self.actors[struck].hits_taken += 1;
                         self.hits.push(hit);
