@@ -1,7 +1,11 @@
 //! The whole controller step (touches → posing or action → tracking with
 //! the ragdoll's physical effects → foot IK) for one character and for
-//! four, with two fingers posing.
+//! four, with two fingers posing; and tables of two and four characters
+//! standing within reach of each other, a finger posing each one's hand,
+//! collisions between their bodies included.
 //! `cargo bench --bench controller`.
+
+#![allow(clippy::print_stderr, reason = "the contacts seen are printed")]
 
 use std::sync::Arc;
 
@@ -10,6 +14,7 @@ use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::control::character::Character;
 use marionette::control::controller::{Controller, Settings};
+use marionette::control::stage::{Actor, Stage};
 use marionette::input::calibration::RawPoint;
 use marionette::input::touch::{Phase, Tool};
 use marionette::input::touch::{ScreenContact, ScreenFrame};
@@ -72,6 +77,95 @@ fn bench(c: &mut Criterion) {
                 }
             })
         });
+    }
+    g.finish();
+    table(c, &ch);
+}
+
+/// `n` characters on a circle 0.7 m across, facing its centre: each body
+/// within reach of its neighbours.
+fn circle(ch: &Arc<Character>, n: usize) -> Stage {
+    let actors = (0..n)
+        .map(|k| {
+            let a = k as f64 / n as f64 * std::f64::consts::TAU;
+            let at = glam::DVec3::new(0.35 * a.cos(), 0.0, 0.35 * a.sin());
+            // Facing the centre: yaw 0 faces +Z.
+            let yaw = (-at.x).atan2(-at.z);
+            Actor {
+                ctl: Controller::standing(
+                    ch.clone(),
+                    Settings::default(),
+                    1280.0,
+                    720.0,
+                    0.0,
+                    at,
+                    yaw,
+                ),
+                tint: None,
+                hits_landed: 0,
+                hits_taken: 0,
+            }
+        })
+        .collect();
+    Stage::new(actors, 1280.0, 720.0, 0.0)
+}
+
+fn table(c: &mut Criterion, ch: &Arc<Character>) {
+    let mut g = c.benchmark_group("table step");
+    for n in [2usize, 4] {
+        let mut stage = circle(ch, n);
+        stage.advance(1.0 / 30.0);
+        let cam = stage.rig().camera();
+        let hands: Vec<ScreenPoint> = stage
+            .actors()
+            .iter()
+            .map(|a| {
+                let w = a.ctl.world();
+                cam.project(w.positions[ch.roles.get(Role::RightHand)])
+                    .unwrap()
+            })
+            .collect();
+        stage.touch(&ScreenFrame {
+            t: 0.04,
+            contacts: hands
+                .iter()
+                .enumerate()
+                .map(|(k, p)| contact(k as u64 + 1, Phase::Down, *p))
+                .collect(),
+        });
+        let mut k = 2u32;
+        let mut hits = 0usize;
+        let mut deepest: f64 = 0.0;
+        g.bench_function(
+            format!("{n} characters in reach, a finger posing each"),
+            |b| {
+                b.iter(|| {
+                    k += 1;
+                    let t = f64::from(k) / 30.0;
+                    let a = t * 0.8;
+                    stage.touch(&ScreenFrame {
+                        t,
+                        contacts: hands
+                            .iter()
+                            .enumerate()
+                            .map(|(i, p)| {
+                                contact(
+                                    i as u64 + 1,
+                                    Phase::Move,
+                                    ScreenPoint::new(p.x + 60.0 * a.cos(), p.y - 60.0 * a.sin()),
+                                )
+                            })
+                            .collect(),
+                    });
+                    stage.advance(t);
+                    hits += stage.take_hits().len();
+                    deepest = deepest.max(stage.depth_left());
+                })
+            },
+        );
+        eprintln!(
+            "{n} characters: {hits} hits over {k} steps, deepest overlap left {deepest:.3} m"
+        );
     }
     g.finish();
 }

@@ -3,7 +3,8 @@
 //! next to a bare scene of 21 lit boxes measured in the same run, at
 //! 1280x720 and 1920x1080, with the shipped automatic anti-aliasing (one
 //! sample per pixel on a CPU renderer, four on a GPU;
-//! `MARIONETTE_BENCH_SAMPLES=4` to force). `cargo bench --bench render`.
+//! `MARIONETTE_BENCH_SAMPLES=4` to force); and two tinted characters with
+//! both visitors' marks. `cargo bench --bench render`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DQuat, DVec3};
@@ -99,6 +100,57 @@ fn bench(c: &mut Criterion) {
         g.bench_function(format!("{name} {w}x{h} character x{n}"), |b| {
             b.iter(|| full.render(&character).unwrap())
         });
+        // Two characters, tinted, each with its visitor's marks.
+        let mut other = world.clone();
+        for p in &mut other.positions {
+            *p += DVec3::new(0.9, 0.0, -0.3);
+        }
+        let mut both_marks = marks.clone();
+        for f in &mut both_marks.fingers {
+            f.tint = Some([0.62, 0.1, 0.07]);
+        }
+        for t in &mut both_marks.trajectories {
+            t.tint = Some([0.62, 0.1, 0.07]);
+        }
+        let extra: Vec<FingerMark> = [Role::RightHand, Role::LeftFoot]
+            .into_iter()
+            .map(|r| FingerMark {
+                at: cam.project(other.positions[clip.roles.get(r)]).unwrap(),
+                usage: FingerUse::Part(r),
+                tint: Some([0.09, 0.26, 0.55]),
+            })
+            .collect();
+        both_marks.fingers.extend(extra);
+        let held = [Role::RightHand, Role::LeftFoot];
+        let two = scene::compose_bodies(
+            &v,
+            &[
+                scene::Body {
+                    skeleton: &clip.skeleton,
+                    roles: &clip.roles,
+                    world: &world,
+                    held: &held,
+                    tint: Some([0.62, 0.1, 0.07]),
+                },
+                scene::Body {
+                    skeleton: &clip.skeleton,
+                    roles: &clip.roles,
+                    world: &other,
+                    held: &held,
+                    tint: Some([0.09, 0.26, 0.55]),
+                },
+            ],
+            &both_marks,
+        );
+        g.bench_function(format!("{name} {w}x{h} two characters x{n}"), |b| {
+            b.iter(|| full.render(&two).unwrap())
+        });
+        let mut two_bare = two.clone();
+        two_bare.overlay = Default::default();
+        g.bench_function(
+            format!("{name} {w}x{h} two characters x{n} no overlays"),
+            |b| b.iter(|| full.render(&two_bare).unwrap()),
+        );
         // The camera moving: the floor is drawn again every frame.
         let mut turned = character.clone();
         turned.view_proj *= glam::Mat4::from_rotation_y(0.01);

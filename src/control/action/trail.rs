@@ -48,7 +48,7 @@ pub fn match_trail(
         let b = trajectory[j];
         let dx = (a.at.x - p0.at.x) - (b.at.x - q0.at.x);
         let dy = (a.at.y - p0.at.y) - (b.at.y - q0.at.y);
-        dx.hypot(dy) + h * tempo_gap(a.t - p0.t, b.t - q0.t, tempo)
+        (dx * dx + dy * dy).sqrt() + h * tempo_gap(a.t - p0.t, b.t - q0.t, tempo)
     };
     // sum[i][j]: least summed cost of a path from (0, 0) to (i, j);
     // len[i][j]: its number of pairs.
