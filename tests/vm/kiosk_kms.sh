@@ -137,12 +137,18 @@ cmp -s /m.toml.bak /m.orig.toml && echo "backup kept" >> /tmp/rc
 # The service view on: the panel's name, the figures and the finger's
 # trail over the scene.
 { cat /m.orig.toml; echo 'service_view = true'; } > /svc.toml   # [display] is last
-marionette --config /svc.toml run --seconds 16 > /tmp/svc.log 2>&1 &
+marionette --config /svc.toml run --seconds 60 > /tmp/svc.log 2>&1 &
 svc=$!
-sleep 7
+# Under emulation the start takes seconds: drag once the first frame is up.
+i=0
+while ! grep -q "first frame on screen" /tmp/svc.log; do
+    sleep 0.5; i=$((i + 1))
+    if [ $i -gt 60 ] || ! kill -0 $svc 2>/dev/null; then break; fi
+done
+sleep 1
 $m play /drag.evemu --settle-ms 800 2> /tmp/play4.log &
 sleep 2; echo "MARK service"
-wait $!; wait $svc; echo "service rc=$?" >> /tmp/rc
+wait $!; sleep 1; kill -TERM $svc; wait $svc; echo "service rc=$?" >> /tmp/rc
 # A library folder that does not exist: the reason on the display for
 # kiosk.error_screen_s, then exit 78.
 printf '[character]\nlibrary = "/no-such-library"\n[kiosk]\nerror_screen_s = 8\n[display]\nstatus_line = false\n' > /bad.toml
