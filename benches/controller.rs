@@ -91,20 +91,14 @@ fn circle(ch: &Arc<Character>, n: usize) -> Stage {
             let at = glam::DVec3::new(0.35 * a.cos(), 0.0, 0.35 * a.sin());
             // Facing the centre: yaw 0 faces +Z.
             let yaw = (-at.x).atan2(-at.z);
-            Actor {
-                ctl: Controller::standing(
-                    ch.clone(),
-                    Settings::default(),
-                    1280.0,
-                    720.0,
-                    0.0,
-                    at,
-                    yaw,
-                ),
-                tint: None,
-                hits_landed: 0,
-                hits_taken: 0,
-            }
+            Actor::standing(
+                ch.clone(),
+                Settings::default(),
+                (1280.0, 720.0),
+                at,
+                yaw,
+                None,
+            )
         })
         .collect();
     Stage::new(actors, 1280.0, 720.0, 0.0)

@@ -8,7 +8,7 @@ mod common;
 
 use glam::DVec3;
 use marionette::character::roles::Role;
-use marionette::control::controller::{Controller, Settings};
+use marionette::control::controller::Settings;
 use marionette::control::stage::{Actor, Stage};
 use marionette::input::touch::{Phase, ScreenFrame};
 use marionette::screen::ScreenPoint;
@@ -17,19 +17,15 @@ use marionette::screen::ScreenPoint;
 fn duel(spacing: f64) -> Stage {
     let actors = [-1.0, 1.0]
         .into_iter()
-        .map(|side: f64| Actor {
-            ctl: Controller::standing(
+        .map(|side: f64| {
+            Actor::standing(
                 common::character(),
                 Settings::default(),
-                1280.0,
-                720.0,
-                0.0,
+                (1280.0, 720.0),
                 DVec3::new(side * spacing / 2.0, 0.0, 0.0),
                 -side * std::f64::consts::FRAC_PI_2,
-            ),
-            tint: None,
-            hits_landed: 0,
-            hits_taken: 0,
+                None,
+            )
         })
         .collect();
     Stage::new(actors, 1280.0, 720.0, 0.0)

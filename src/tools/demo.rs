@@ -36,7 +36,25 @@ struct Author<'a> {
     time: f64,
 }
 
-impl Author<'_> {
+impl<'a> Author<'a> {
+    /// A panel named `name` over `stage`: its first frame, then a breath.
+    fn start(name: &str, stage: Stage, input: &'a InputConfig, picture: Picture) -> Self {
+        let (width, height) = picture.size();
+        let mut a = Author {
+            synth: Synth::new(panel(name, 10, MAX)),
+            ctl: stage,
+            ticker: Ticker::new(Vec::new(), TICK_HZ),
+            input,
+            picture,
+            width: f64::from(width),
+            height: f64::from(height),
+            time: 0.0,
+        };
+        a.frame();
+        a.wait(0.8);
+        a
+    }
+
     /// Run the controller over what is authored so far.
     fn sync(&mut self) {
         let rec = self.synth.finish();
@@ -220,20 +238,16 @@ pub fn author_demo(
     input: &InputConfig,
     picture: Picture,
 ) -> Synth {
-    let (width, height) = picture.size();
-    let (width, height) = (f64::from(width), f64::from(height));
-    let mut a = Author {
-        synth: Synth::new(panel("marionette demo panel", 10, MAX)),
-        ctl: Stage::single(Controller::new(ch, settings, width, height, 0.0)),
-        ticker: Ticker::new(Vec::new(), TICK_HZ),
-        input,
-        picture,
-        width,
-        height,
-        time: 0.0,
-    };
-    a.frame();
-    a.wait(0.8);
+    let (w, h) = picture.size();
+    let stage = Stage::single(Controller::new(
+        ch,
+        settings,
+        f64::from(w),
+        f64::from(h),
+        0.0,
+    ));
+    let mut a = Author::start("marionette demo panel", stage, input, picture);
+    let (width, height) = (a.width, a.height);
     for name in [
         "punch_left",
         "kick_right",
@@ -342,20 +356,7 @@ pub fn author_demo(
 /// then both at once.
 #[must_use]
 pub fn author_duel(stage: Stage, input: &InputConfig, picture: Picture) -> Synth {
-    let (width, height) = picture.size();
-    let (width, height) = (f64::from(width), f64::from(height));
-    let mut a = Author {
-        synth: Synth::new(panel("marionette duel panel", 10, MAX)),
-        ctl: stage,
-        ticker: Ticker::new(Vec::new(), TICK_HZ),
-        input,
-        picture,
-        width,
-        height,
-        time: 0.0,
-    };
-    a.frame();
-    a.wait(0.8);
+    let mut a = Author::start("marionette duel panel", stage, input, picture);
     // Both characters held at once: each visitor raises a hand.
     let (l, r) = (a.part_of(0, Role::RightHand), a.part_of(1, Role::LeftHand));
     a.down(0, l);

@@ -16,7 +16,6 @@ use super::config::Config;
 use super::frame::{Backend, Flow, Steps};
 use crate::control::action::timeline::ActionEvent;
 use crate::control::character::Character;
-use crate::control::controller::Controller;
 use crate::control::stage::{Actor, Stage};
 use crate::control::ticker::Ticker;
 use crate::input::touch::ScreenFrame;
@@ -383,12 +382,14 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
         .enumerate()
         .map(|(k, ch)| {
             let (x, z, yaw) = places.get(k).copied().unwrap_or((k as f64 * 1.2, 0.0, 0.0));
-            Actor {
-                ctl: Controller::standing(ch, settings, w, h, t, glam::DVec3::new(x, 0.0, z), yaw),
-                tint: tints.get(k).copied().flatten(),
-                hits_landed: 0,
-                hits_taken: 0,
-            }
+            Actor::standing(
+                ch,
+                settings,
+                (w, h),
+                glam::DVec3::new(x, 0.0, z),
+                yaw,
+                tints.get(k).copied().flatten(),
+            )
         })
         .collect();
     Stage::new(actors, w, h, t)

@@ -22,6 +22,17 @@ impl Controller {
             .collect()
     }
 
+    /// Whether each ragdoll segment is the trunk's (pelvis, spine, chest,
+    /// neck, head), in [`Self::capsules`]' order.
+    #[must_use]
+    pub fn trunk_segments(&self) -> Vec<bool> {
+        self.ragdoll
+            .segments()
+            .iter()
+            .map(|s| s.region() == crate::physics::body::Region::Torso)
+            .collect()
+    }
+
     /// Mass of each ragdoll segment (kg), in [`Self::capsules`]' order.
     #[must_use]
     pub fn segment_masses(&self) -> Vec<f64> {

@@ -107,8 +107,46 @@ impl Stage {
             }
         }
         self.touching = touching;
-        self.depth_left = self.separate();
+        // Whole bodies first, then the trunks alone: a limb wrapped round
+        // the other body can keep the first from converging, never the
+        // trunks from parting.
+        self.separate(false);
+        self.separate(true);
+        self.depth_left = self.overlap(false);
+        self.trunk_depth_left = self.overlap(true);
         self.last = self.actors.iter().map(|a| caps(&a.ctl)).collect();
+    }
+
+    /// Each character's capsules: all, or the trunk's alone.
+    fn bodies(&self, trunk_only: bool) -> Vec<Vec<Capsule>> {
+        self.actors
+            .iter()
+            .map(|a| {
+                caps(&a.ctl)
+                    .into_iter()
+                    .zip(a.ctl.trunk_segments())
+                    .filter_map(|(c, trunk)| (trunk || !trunk_only).then_some(c))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Deepest overlap of two characters' bodies (or trunks) (m).
+    fn overlap(&self, trunk_only: bool) -> f64 {
+        let parts = self.bodies(trunk_only);
+        let mut deepest = 0.0f64;
+        for (i, a) in parts.iter().enumerate() {
+            for b in &parts[i + 1..] {
+                for ca in a {
+                    for cb in b {
+                        if let Some((_, _, d)) = ca.overlap(cb) {
+                            deepest = deepest.max(d);
+                        }
+                    }
+                }
+            }
+        }
+        deepest
     }
 
     /// Horizontal direction from character `j` to character `i`.
@@ -123,18 +161,17 @@ impl Stage {
             .unwrap_or(DVec3::X)
     }
 
-    /// Push overlapping characters apart on the floor, half each, a few
-    /// passes; the deepest overlap left (m). Each pass moves a pair by the
+    /// Push overlapping characters (their trunks alone, with `trunk_only`)
+    /// apart on the floor, half each, a few passes. Each pass moves a pair by the
     /// depth of its deepest overlap, along the sum of its overlaps'
     /// directions weighted by their depths (a limb that reaches round the
     /// other body pulls as much as the chest pushes).
-    fn separate(&mut self) -> f64 {
+    fn separate(&mut self, trunk_only: bool) {
         let n = self.actors.len();
-        let mut deepest = 0.0;
         for pass in 0..=SEPARATION_PASSES {
-            let now: Vec<Vec<Capsule>> = self.actors.iter().map(|a| caps(&a.ctl)).collect();
+            let now = self.bodies(trunk_only);
             let mut push = vec![DVec3::ZERO; n];
-            deepest = 0.0f64;
+            let mut deepest = 0.0f64;
             for i in 0..n {
                 for j in i + 1..n {
                     let mut sum = DVec3::ZERO;
@@ -179,6 +216,5 @@ impl Stage {
                 }
             }
         }
-        deepest
     }
 }

@@ -52,6 +52,28 @@ pub struct Actor {
     pub hits_taken: usize,
 }
 
+impl Actor {
+    /// A character of `ch` at rest at floor point `at` facing `yaw`
+    /// (see [`Controller::standing`]), in `tint`, in a picture of
+    /// `width` x `height` pixels.
+    #[must_use]
+    pub fn standing(
+        ch: std::sync::Arc<crate::control::character::Character>,
+        settings: super::controller::Settings,
+        (width, height): (f64, f64),
+        at: DVec3,
+        yaw: f64,
+        tint: Option<[f32; 3]>,
+    ) -> Self {
+        Self {
+            ctl: Controller::standing(ch, settings, width, height, 0.0, at, yaw),
+            tint,
+            hits_landed: 0,
+            hits_taken: 0,
+        }
+    }
+}
+
 /// A blow from one character's body on another's.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Hit {
@@ -100,6 +122,8 @@ pub struct Stage {
     hits: Vec<Hit>,
     /// Deepest overlap left after the last step's separation (m).
     depth_left: f64,
+    /// The same for the trunks alone (m).
+    trunk_depth_left: f64,
     time: f64,
     last_touch: f64,
 }
@@ -134,6 +158,7 @@ impl Stage {
             touching: BTreeSet::new(),
             hits: Vec::new(),
             depth_left: 0.0,
+            trunk_depth_left: 0.0,
             time: t,
             last_touch: t,
         }
@@ -266,6 +291,14 @@ impl Stage {
     #[must_use]
     pub fn depth_left(&self) -> f64 {
         self.depth_left
+    }
+
+    /// Deepest overlap of two characters' trunks (pelvis to head) left
+    /// after the last step (m): limbs can wrap round another body, trunks
+    /// are kept apart.
+    #[must_use]
+    pub fn trunk_depth_left(&self) -> f64 {
+        self.trunk_depth_left
     }
 
     /// Finger marks and trajectories of every character, in its tint, and

@@ -126,6 +126,32 @@ pub(crate) fn camera(angle_deg: f64, at: &Placement, chest_height: f64) -> Camer
     }
 }
 
+/// What a trial needs of a test clip: where its character stands, the
+/// dragged part's true path, and its chest height (for the cameras).
+pub(crate) struct Trial {
+    pub(crate) at: Placement,
+    pub(crate) path: Vec<DVec3>,
+    pub(crate) chest: f64,
+}
+
+impl Trial {
+    pub(crate) fn of(clip: &Clip, role: Role) -> Self {
+        let at = Placement {
+            anchor: Anchor::ClipStart,
+            ..Placement::of(&clip.skeleton, &clip.roles, &clip.frames[0])
+        };
+        let path = clip
+            .frames
+            .iter()
+            .map(|f| forward_kinematics(&clip.skeleton, f).positions[clip.roles.get(role)])
+            .collect();
+        let chest = forward_kinematics(&clip.skeleton, &clip.frames[0]).positions
+            [clip.roles.get(Role::Chest)]
+        .y;
+        Self { at, path, chest }
+    }
+}
+
 /// Which side the trial cameras stand on for a part: -1 for the right
 /// side's parts, 1 otherwise.
 pub(crate) fn side_of(role: Role) -> f64 {
@@ -216,18 +242,7 @@ pub fn eval_with(
     for &(ref name, role, clip) in tests {
         let row = rows.entry(name.clone()).or_default();
         let confused = confusion.entry(name.clone()).or_default();
-        let at = Placement {
-            anchor: Anchor::ClipStart,
-            ..Placement::of(&clip.skeleton, &clip.roles, &clip.frames[0])
-        };
-        let path: Vec<DVec3> = clip
-            .frames
-            .iter()
-            .map(|f| forward_kinematics(&clip.skeleton, f).positions[clip.roles.get(role)])
-            .collect();
-        let chest = forward_kinematics(&clip.skeleton, &clip.frames[0]).positions
-            [clip.roles.get(Role::Chest)]
-        .y;
+        let Trial { at, path, chest } = Trial::of(clip, role);
         // The cameras stand on the side of the primary part, as a visitor
         // looking at the punching arm would: the far side's actions can be
         // along the line of sight, which the start rule excludes by design.

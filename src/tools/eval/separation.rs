@@ -11,10 +11,9 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use super::actions::{camera, side_of};
+use super::actions::{Trial, camera, side_of};
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
-use crate::character::skeleton::forward_kinematics;
 use crate::control::action::model::ActionModel;
 use crate::control::action::trail::{StartRule, TrailPoint, match_trail};
 use crate::control::posing::sample::{Anchor, Placement};
@@ -124,18 +123,7 @@ pub fn separation(
             continue;
         };
         let role = a.def.primary;
-        let at = Placement {
-            anchor: Anchor::ClipStart,
-            ..Placement::of(&clip.skeleton, &clip.roles, &clip.frames[0])
-        };
-        let path: Vec<DVec3> = clip
-            .frames
-            .iter()
-            .map(|f| forward_kinematics(&clip.skeleton, f).positions[clip.roles.get(role)])
-            .collect();
-        let chest = forward_kinematics(&clip.skeleton, &clip.frames[0]).positions
-            [clip.roles.get(Role::Chest)]
-        .y;
+        let Trial { at, path, chest } = Trial::of(clip, role);
         let side = side_of(role);
         for view in [90.0 * side, 45.0 * side] {
             let cam = camera(view, &at, chest);
