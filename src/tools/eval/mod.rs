@@ -9,3 +9,4 @@ pub mod actions;
 pub mod live;
 pub mod posing;
 pub mod separation;
+mod trial;

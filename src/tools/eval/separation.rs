@@ -11,7 +11,7 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use super::actions::{Trial, camera, side_of};
+use super::trial::{Trial, camera, side_of};
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::control::action::model::ActionModel;
