@@ -6,7 +6,7 @@
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
-use super::mesh::{Mesh, Overlay, text_width};
+use super::mesh::{AROUND, CapsulePart, Mesh, Overlay, RINGS, text_width};
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
@@ -24,6 +24,9 @@ const SKIN: [f32; 3] = [0.78, 0.52, 0.36];
 const TROUSERS: [f32; 3] = [0.16, 0.16, 0.19];
 const SHOES: [f32; 3] = [0.06, 0.05, 0.05];
 const HELD: [f32; 3] = [1.0, 0.45, 0.08];
+/// The shadow's coarse capsules: segments around, rings per end.
+const SHADOW_AROUND: usize = 10;
+const SHADOW_RINGS: usize = 2;
 
 /// Where the picture goes: the camera (in picture pixels) and how the
 /// picture is turned on the output.
@@ -97,6 +100,17 @@ struct Segment {
     b: DVec3,
     r: f64,
     color: [f32; 3],
+}
+
+impl Segment {
+    fn part(&self, color: [f32; 4]) -> CapsulePart {
+        CapsulePart {
+            a: self.a.as_vec3(),
+            b: self.b.as_vec3(),
+            r: self.r as f32,
+            color,
+        }
+    }
 }
 
 /// Positions along the joint chain from ancestor `from` down to `to`.
@@ -259,23 +273,26 @@ pub fn body_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose, held: 
 #[must_use]
 pub fn shadow_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> Mesh {
     let mut mesh = Mesh::default();
-    for s in segments(skeleton, roles, world) {
-        mesh.capsule_with(s.a.as_vec3(), s.b.as_vec3(), s.r as f32, [0.0; 4], 10, 2);
-    }
+    shadow_into(&mut mesh, &segments(skeleton, roles, world));
     mesh
 }
 
+/// The coarse capsules that cast a body's shadow.
+fn shadow_into(mesh: &mut Mesh, segments: &[Segment]) {
+    let parts: Vec<CapsulePart> = segments.iter().map(|s| s.part([0.0; 4])).collect();
+    mesh.capsule_union(&parts, SHADOW_AROUND, SHADOW_RINGS);
+}
+
 fn body_into(mesh: &mut Mesh, segments: &[Segment], held: &[Role]) {
-    for s in segments {
-        let glow = highlights(s.part, held);
-        let c = if glow { HELD } else { s.color };
-        mesh.capsule(
-            s.a.as_vec3(),
-            s.b.as_vec3(),
-            s.r as f32,
-            [c[0], c[1], c[2], if glow { 1.0 } else { 0.0 }],
-        );
-    }
+    let parts: Vec<CapsulePart> = segments
+        .iter()
+        .map(|s| {
+            let glow = highlights(s.part, held);
+            let c = if glow { HELD } else { s.color };
+            s.part([c[0], c[1], c[2], if glow { 1.0 } else { 0.0 }])
+        })
+        .collect();
+    mesh.capsule_union(&parts, AROUND, RINGS);
 }
 
 /// A tint brightened for a mark over the picture (the clothes' colours
@@ -410,10 +427,7 @@ pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawLi
             }
         }
         body_into(&mut list.body, &segs, b.held);
-        for s in &segs {
-            list.shadow
-                .capsule_with(s.a.as_vec3(), s.b.as_vec3(), s.r as f32, [0.0; 4], 10, 2);
-        }
+        shadow_into(&mut list.shadow, &segs);
     }
     list.overlay = overlay(marks, view.camera.width);
     list
