@@ -297,3 +297,74 @@ fn single_sampled_frames_match_golden_and_leave_no_trails() {
     compare("two_held_parts_x1", &alone);
     let _ = h.render(&after).unwrap();
 }
+
+#[test]
+fn two_characters_apart_redraw_only_where_they_are_and_were() {
+    // The floor between two characters and around a finger mark stays as
+    // drawn; each frame redraws the tiles its bodies, shadows and marks
+    // touch now and touched last frame. A sequence of frames must equal
+    // each frame drawn afresh, and the frame must hold both tints.
+    let view = View {
+        camera: camera(640.0, 360.0),
+        rotation: Rotation::R0,
+    };
+    let lib = library();
+    let clip = &lib.clips["pose_reach_front_right.bvh"];
+    let world = forward_kinematics(&clip.skeleton, &clip.frames[clip.frames.len() / 2]);
+    let (red, blue) = ([0.62, 0.1, 0.07], [0.09, 0.26, 0.55]);
+    let frame = |apart: f64, hand: f64| {
+        let mut left = world.clone();
+        let mut right = world.clone();
+        for p in &mut left.positions {
+            *p += DVec3::new(-apart, 0.0, 0.0);
+        }
+        for p in &mut right.positions {
+            *p += DVec3::new(apart, 0.0, -0.2);
+        }
+        let at = view
+            .camera
+            .project(left.positions[clip.roles.get(Role::RightHand)])
+            .unwrap();
+        let marks = Marks {
+            fingers: vec![FingerMark {
+                at: ScreenPoint::new(at.x + hand, at.y),
+                usage: FingerUse::Part(Role::RightHand),
+                tint: Some(red),
+            }],
+            status: Some("two visitors".into()),
+            ..Marks::default()
+        };
+        let held = [Role::RightHand];
+        let body = |w, held, tint| scene::Body {
+            skeleton: &clip.skeleton,
+            roles: &clip.roles,
+            world: w,
+            held,
+            tint: Some(tint),
+        };
+        scene::compose_bodies(
+            &view,
+            &[body(&left, &held, red), body(&right, &[], blue)],
+            &marks,
+        )
+    };
+    let frames = [frame(0.8, 0.0), frame(1.1, 30.0), frame(0.6, -20.0)];
+    let mut kept = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1);
+    for (k, f) in frames.iter().enumerate() {
+        let drawn = kept.render(f).unwrap();
+        let mut fresh = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1);
+        assert!(
+            drawn == fresh.render(f).unwrap(),
+            "frame {k} kept traces of the one before"
+        );
+        let tinted = |c: [f32; 3]| {
+            drawn.rgba.chunks(4).any(|p| {
+                let q = |v: u8| f32::from(v) / 255.0;
+                // sRGB of the tint, lit: the hue's order is what counts.
+                (c[0] > c[2]) == (q(p[0]) > q(p[2]) + 0.2)
+                    && (c[2] > c[0]) == (q(p[2]) > q(p[0]) + 0.2)
+            })
+        };
+        assert!(tinted(red) && tinted(blue), "frame {k}: both tints show");
+    }
+}

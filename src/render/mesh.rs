@@ -34,6 +34,18 @@ pub struct CapsulePart {
     pub color: [f32; 4],
 }
 
+/// A capsule as [`Mesh::capsule_union`] tests points against it: the
+/// sphere it lies in, its segment (`inv`: one over the squared length, 0
+/// for a point), and the square of the radius its mesh surely holds.
+struct Holder {
+    centre: Vec3,
+    reach2: f32,
+    a: Vec3,
+    ab: Vec3,
+    inv: f32,
+    holds2: f32,
+}
+
 /// An indexed triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -136,14 +148,32 @@ impl Mesh {
             one.indices.clear();
             one.capsule_with(part.a, part.b, part.r, part.color, around_n, rings_n);
             let (centre, radius) = reach(part);
-            let near: Vec<&CapsulePart> = parts
+            // The capsules that may hold some of this one: where they reach,
+            // their segment, and the square of what their mesh holds.
+            let near: Vec<Holder> = parts
                 .iter()
                 .enumerate()
                 .filter(|&(j, other)| {
                     let (c, r) = reach(other);
                     j != i && c.distance(centre) < r + radius
                 })
-                .map(|(_, other)| other)
+                .take(64)
+                .map(|(_, c)| {
+                    let (centre, r) = reach(c);
+                    let ab = c.b - c.a;
+                    Holder {
+                        centre,
+                        reach2: r * r,
+                        a: c.a,
+                        ab,
+                        inv: if ab.length_squared() > 0.0 {
+                            ab.length_squared().recip()
+                        } else {
+                            0.0
+                        },
+                        holds2: (c.r * holds).powi(2),
+                    }
+                })
                 .collect();
             // Which of the near capsules hold each vertex (a bit each).
             let held_by: Vec<u64> = one
@@ -151,16 +181,17 @@ impl Mesh {
                 .iter()
                 .map(|v| {
                     let p = Vec3::from(v.pos);
-                    near.iter().take(64).enumerate().fold(0, |bits, (k, c)| {
-                        let ab = c.b - c.a;
-                        let t = if ab.length_squared() > 0.0 {
-                            ((p - c.a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
-                        } else {
-                            0.0
-                        };
-                        let inside = p.distance_squared(c.a + ab * t) < (c.r * holds).powi(2);
-                        bits | (u64::from(inside) << k)
-                    })
+                    let mut bits = 0;
+                    for (k, h) in near.iter().enumerate() {
+                        if p.distance_squared(h.centre) >= h.reach2 {
+                            continue;
+                        }
+                        let t = ((p - h.a).dot(h.ab) * h.inv).clamp(0.0, 1.0);
+                        if p.distance_squared(h.a + h.ab * t) < h.holds2 {
+                            bits |= 1 << k;
+                        }
+                    }
+                    bits
                 })
                 .collect();
             let mut remap = vec![u32::MAX; one.vertices.len()];

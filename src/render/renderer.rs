@@ -6,7 +6,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use super::damage::{Rect, damage};
+use super::damage::{Damage, Rect, damage};
 use super::gpu::{Gpu, GrowBuffer};
 use super::mesh::{DrawList, Mesh, Vertex2, Vertex3};
 
@@ -123,7 +123,7 @@ pub struct Renderer {
     floor_cache: Option<FloorCache>,
     /// The target last drawn with the floor cache, and what was drawn over
     /// the floor there.
-    last: Option<(wgpu::Texture, Rect)>,
+    last: Option<(wgpu::Texture, Damage)>,
 }
 
 /// Half-size of the floor square (m).
@@ -330,24 +330,17 @@ impl Renderer {
         target: &wgpu::Texture,
         key: Vec<u8>,
         bg: [f32; 3],
-        damage: Rect,
+        damage: Damage,
     ) -> Rect {
         let size = (target.width(), target.height());
-        let full = Rect {
-            x0: 0,
-            y0: 0,
-            x1: size.0,
-            y1: size.1,
-        };
         // Everything is new when the view or the target changed; else only
-        // where the character and overlays are and were.
-        let same_target = self.last.as_ref().is_some_and(|(t, _)| t == target);
-        let mut region = match (&self.last, same_target) {
-            (Some((_, last)), true) => damage.union(*last),
-            _ => full,
+        // where the characters and overlays are and were.
+        let mut region = match &self.last {
+            Some((t, last)) if t == target => damage.union(last),
+            _ => Damage::all(size),
         };
         if self.floor_cache.as_ref().is_none_or(|c| c.key != key) {
-            region = full;
+            region = Damage::all(size);
             let texture = match self.floor_cache.take() {
                 Some(c) if (c.texture.width(), c.texture.height()) == size => c.texture,
                 _ => gpu.device.create_texture(&wgpu::TextureDescriptor {
@@ -376,11 +369,10 @@ impl Renderer {
             self.floor_cache = Some(FloorCache { key, texture });
         }
         let cache = &self.floor_cache.as_ref().expect("just drawn").texture;
-        let region = region.clamp(size);
-        if !region.is_empty() {
+        for rect in region.rects() {
             let origin = wgpu::Origin3d {
-                x: region.x0,
-                y: region.y0,
+                x: rect.x0,
+                y: rect.y0,
                 z: 0,
             };
             encoder.copy_texture_to_texture(
@@ -393,14 +385,14 @@ impl Renderer {
                     ..target.as_image_copy()
                 },
                 wgpu::Extent3d {
-                    width: region.x1 - region.x0,
-                    height: region.y1 - region.y0,
+                    width: rect.x1 - rect.x0,
+                    height: rect.y1 - rect.y0,
                     depth_or_array_layers: 1,
                 },
             );
         }
         self.last = Some((target.clone(), damage));
-        region
+        region.bounds()
     }
 
     fn draw_floor(&self, pass: &mut wgpu::RenderPass<'_>) {
