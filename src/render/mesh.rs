@@ -197,13 +197,12 @@ impl Mesh {
             let mut remap = vec![u32::MAX; one.vertices.len()];
             for tri in one.indices.chunks_exact(3) {
                 let [x, y, z] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
-                let (px, py, pz) = (
-                    one.vertices[x].pos,
-                    one.vertices[y].pos,
-                    one.vertices[z].pos,
-                );
+                let [px, py, pz] = [x, y, z].map(|k| Vec3::from(one.vertices[k].pos));
+                // A sliver at a pole (its corners there differ by rounding).
+                let sliver =
+                    (py - px).cross(pz - px).length_squared() < (1e-6 * part.r * part.r).powi(2);
                 // Inside one capsule (it is convex) the whole triangle is.
-                if held_by[x] & held_by[y] & held_by[z] != 0 || px == py || py == pz || pz == px {
+                if held_by[x] & held_by[y] & held_by[z] != 0 || sliver {
                     continue;
                 }
                 for k in [x, y, z] {
@@ -215,6 +214,25 @@ impl Mesh {
                 }
             }
         }
+    }
+
+    /// Leave out the triangles (counter-clockwise seen from the front)
+    /// that face away from `towards`, from the triangle `from` on. A
+    /// shadow flattened along the light keeps only those facing it: the
+    /// others would be turned over and culled after the vertex work.
+    pub fn keep_facing(&mut self, towards: Vec3, from: usize) {
+        let v = &self.vertices;
+        let kept: Vec<u32> = self.indices[from * 3..]
+            .chunks_exact(3)
+            .filter(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(v[t[k] as usize].pos));
+                (b - a).cross(c - a).dot(towards) > 0.0
+            })
+            .flatten()
+            .copied()
+            .collect();
+        self.indices.truncate(from * 3);
+        self.indices.extend(kept);
     }
 
     /// A sphere.
@@ -526,6 +544,37 @@ mod tests {
             }
         }
         assert!(hits > 200, "{hits} rays met the arm");
+    }
+
+    #[test]
+    fn keep_facing_leaves_the_half_that_faces_the_light() {
+        let mut m = Mesh::default();
+        m.cuboid(Vec3::ZERO, Vec3::splat(1.0), [1.0; 4]);
+        let before = m.indices.len();
+        m.capsule_union(
+            &[CapsulePart {
+                a: Vec3::ZERO,
+                b: Vec3::X,
+                r: 0.5,
+                color: [1.0; 4],
+            }],
+            AROUND,
+            RINGS,
+        );
+        let n = m.indices.len() / 3;
+        m.keep_facing(Vec3::new(0.3, 1.0, 0.2), before / 3);
+        let kept = m.indices.len() / 3 - before / 3;
+        assert!(kept * 5 > (n - before / 3) * 2 && kept * 5 < (n - before / 3) * 3);
+        // The box before `from` stays whole; what is left faces up, its
+        // outward normals (the vertices') agree.
+        assert_eq!(m.indices.len() - kept * 3, before);
+        for t in m.indices[before..].chunks_exact(3) {
+            let normal: Vec3 = t
+                .iter()
+                .map(|&i| Vec3::from(m.vertices[i as usize].normal))
+                .sum();
+            assert!(normal.dot(Vec3::new(0.3, 1.0, 0.2)) > -0.3, "{normal}");
+        }
     }
 
     #[test]

@@ -280,7 +280,9 @@ pub fn shadow_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> M
 /// The coarse capsules that cast a body's shadow.
 fn shadow_into(mesh: &mut Mesh, segments: &[Segment]) {
     let parts: Vec<CapsulePart> = segments.iter().map(|s| s.part([0.0; 4])).collect();
+    let from = mesh.indices.len() / 3;
     mesh.capsule_union(&parts, SHADOW_AROUND, SHADOW_RINGS);
+    mesh.keep_facing(LIGHT, from);
 }
 
 fn body_into(mesh: &mut Mesh, segments: &[Segment], held: &[Role]) {
