@@ -4,7 +4,17 @@
 //! 1280x720 and 1920x1080, with the shipped automatic anti-aliasing (one
 //! sample per pixel on a CPU renderer, four on a GPU;
 //! `MARIONETTE_BENCH_SAMPLES=4` to force); and two tinted characters with
-//! both visitors' marks. `cargo bench --bench render`.
+//! both visitors' marks. After criterion's runs, the bare scene, one
+//! character and two are drawn in turn, 300 rounds, and the medians and
+//! ratios printed: on a shared machine whose speed drifts, scenes measured
+//! one after the other can be compared only this way.
+//! `cargo bench --bench render`.
+
+#![allow(
+    clippy::print_stderr,
+    clippy::disallowed_methods,
+    reason = "the interleaved medians are timed with the wall clock and printed"
+)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DQuat, DVec3};
@@ -176,6 +186,34 @@ fn bench(c: &mut Criterion) {
         g.bench_function(format!("{name} {w}x{h} character x{n} body only"), |b| {
             b.iter(|| full.render(&no_floor).unwrap())
         });
+        // Bare, one, two in turn (same renderer settings as above).
+        let scenes = [
+            ("bare 21 boxes", &boxes),
+            ("character", &character),
+            ("two characters", &two),
+        ];
+        let mut times = vec![Vec::new(); scenes.len()];
+        for _ in 0..300 {
+            for (k, (_, list)) in scenes.iter().enumerate() {
+                let target = if k == 0 { &mut bare } else { &mut full };
+                let start = std::time::Instant::now();
+                target.render(list).unwrap();
+                times[k].push(start.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        let medians: Vec<f64> = times
+            .iter_mut()
+            .map(|t| {
+                t.sort_by(f64::total_cmp);
+                t[t.len() / 2]
+            })
+            .collect();
+        for ((name, _), m) in scenes.iter().zip(&medians) {
+            eprintln!(
+                "interleaved {w}x{h} {name}: median {m:.2} ms, {:.2}x bare",
+                m / medians[0]
+            );
+        }
         // Composing the scene on the CPU (body mesh, overlays) per frame.
         g.bench_function(format!("{w}x{h} compose"), |b| {
             b.iter(|| {
