@@ -186,7 +186,26 @@ fn bench(c: &mut Criterion) {
         g.bench_function(format!("{name} {w}x{h} character x{n} body only"), |b| {
             b.iter(|| full.render(&no_floor).unwrap())
         });
-        // Bare, one, two in turn (same renderer settings as above).
+        // Composing the scene on the CPU (body mesh, overlays) per frame.
+        g.bench_function(format!("{w}x{h} compose"), |b| {
+            b.iter(|| {
+                scene::compose(
+                    &v,
+                    &clip.skeleton,
+                    &clip.roles,
+                    &world,
+                    &[Role::RightHand],
+                    &marks,
+                )
+            })
+        });
+        // Bare, one, two in turn (same renderer settings as above), unless
+        // a filter given to the bench leaves them out.
+        let filter = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+        let label = format!("interleaved {w}x{h}");
+        if filter.is_some_and(|f| !label.contains(&f)) {
+            continue;
+        }
         let scenes = [
             ("bare 21 boxes", &boxes),
             ("character", &character),
@@ -210,23 +229,10 @@ fn bench(c: &mut Criterion) {
             .collect();
         for ((name, _), m) in scenes.iter().zip(&medians) {
             eprintln!(
-                "interleaved {w}x{h} {name}: median {m:.2} ms, {:.2}x bare",
+                "{label} {name}: median {m:.2} ms, {:.2}x bare",
                 m / medians[0]
             );
         }
-        // Composing the scene on the CPU (body mesh, overlays) per frame.
-        g.bench_function(format!("{w}x{h} compose"), |b| {
-            b.iter(|| {
-                scene::compose(
-                    &v,
-                    &clip.skeleton,
-                    &clip.roles,
-                    &world,
-                    &[Role::RightHand],
-                    &marks,
-                )
-            })
-        });
     }
     g.finish();
 }

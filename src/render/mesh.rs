@@ -39,11 +39,20 @@ pub struct CapsulePart {
 /// for a point), and the square of the radius its mesh surely holds.
 struct Holder {
     centre: Vec3,
+    reach: f32,
     reach2: f32,
     a: Vec3,
     ab: Vec3,
     inv: f32,
     holds2: f32,
+}
+
+impl Holder {
+    /// Squared distance from `p` to the segment.
+    fn to_segment2(&self, p: Vec3) -> f32 {
+        let t = ((p - self.a).dot(self.ab) * self.inv).clamp(0.0, 1.0);
+        p.distance_squared(self.a + self.ab * t)
+    }
 }
 
 /// An indexed triangle mesh.
@@ -141,39 +150,40 @@ impl Mesh {
         let holds = (std::f32::consts::PI / around_n as f32).cos()
             * (std::f32::consts::FRAC_PI_4 / rings_n as f32).cos()
             * 0.995;
-        let reach = |c: &CapsulePart| (0.5 * (c.a + c.b), 0.5 * c.a.distance(c.b) + c.r);
+        let holders: Vec<Holder> = parts
+            .iter()
+            .map(|c| {
+                let ab = c.b - c.a;
+                let reach = 0.5 * ab.length() + c.r * holds;
+                Holder {
+                    centre: 0.5 * (c.a + c.b),
+                    reach,
+                    reach2: reach * reach,
+                    a: c.a,
+                    ab,
+                    inv: if ab.length_squared() > 0.0 {
+                        ab.length_squared().recip()
+                    } else {
+                        0.0
+                    },
+                    holds2: (c.r * holds).powi(2),
+                }
+            })
+            .collect();
         let mut one = Mesh::default();
         for (i, part) in parts.iter().enumerate() {
             one.vertices.clear();
             one.indices.clear();
             one.capsule_with(part.a, part.b, part.r, part.color, around_n, rings_n);
-            let (centre, radius) = reach(part);
-            // The capsules that may hold some of this one: where they reach,
-            // their segment, and the square of what their mesh holds.
-            let near: Vec<Holder> = parts
+            // The capsules that may hold some of this one: this one's
+            // surface comes within their reach.
+            let this = &holders[i];
+            let near: Vec<&Holder> = holders
                 .iter()
                 .enumerate()
-                .filter(|&(j, other)| {
-                    let (c, r) = reach(other);
-                    j != i && c.distance(centre) < r + radius
-                })
+                .filter(|&(j, h)| j != i && this.to_segment2(h.centre) < (h.reach + part.r).powi(2))
+                .map(|(_, h)| h)
                 .take(64)
-                .map(|(_, c)| {
-                    let (centre, r) = reach(c);
-                    let ab = c.b - c.a;
-                    Holder {
-                        centre,
-                        reach2: r * r,
-                        a: c.a,
-                        ab,
-                        inv: if ab.length_squared() > 0.0 {
-                            ab.length_squared().recip()
-                        } else {
-                            0.0
-                        },
-                        holds2: (c.r * holds).powi(2),
-                    }
-                })
                 .collect();
             // Which of the near capsules hold each vertex (a bit each).
             let held_by: Vec<u64> = one
@@ -186,8 +196,7 @@ impl Mesh {
                         if p.distance_squared(h.centre) >= h.reach2 {
                             continue;
                         }
-                        let t = ((p - h.a).dot(h.ab) * h.inv).clamp(0.0, 1.0);
-                        if p.distance_squared(h.a + h.ab * t) < h.holds2 {
+                        if h.to_segment2(p) < h.holds2 {
                             bits |= 1 << k;
                         }
                     }
