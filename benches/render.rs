@@ -5,9 +5,9 @@
 //! sample per pixel on a CPU renderer, four on a GPU;
 //! `MARIONETTE_BENCH_SAMPLES=4` to force); and two tinted characters with
 //! both visitors' marks. After criterion's runs, the bare scene, one
-//! character and two are drawn in turn, 300 rounds, and the medians and
-//! ratios printed: on a shared machine whose speed drifts, scenes measured
-//! one after the other can be compared only this way.
+//! character and two are drawn in turn, 12 frames each, 30 rounds, and the
+//! medians and ratios printed: on a shared machine whose speed drifts,
+//! scenes measured minutes apart compare badly.
 //! `cargo bench --bench render`.
 
 #![allow(
@@ -212,12 +212,18 @@ fn bench(c: &mut Criterion) {
             ("two characters", &two),
         ];
         let mut times = vec![Vec::new(); scenes.len()];
-        for _ in 0..300 {
+        // Blocks of 12 frames of one scene, the first 2 not counted (the
+        // caches warm up again after the other scenes), 30 rounds.
+        for _ in 0..30 {
             for (k, (_, list)) in scenes.iter().enumerate() {
                 let target = if k == 0 { &mut bare } else { &mut full };
-                let start = std::time::Instant::now();
-                target.render(list).unwrap();
-                times[k].push(start.elapsed().as_secs_f64() * 1e3);
+                for i in 0..12 {
+                    let start = std::time::Instant::now();
+                    target.render(list).unwrap();
+                    if i >= 2 {
+                        times[k].push(start.elapsed().as_secs_f64() * 1e3);
+                    }
+                }
             }
         }
         let medians: Vec<f64> = times
