@@ -1,5 +1,5 @@
 //! Rendering with wgpu: the GPU and adapter choice ([`gpu`]), CPU geometry
-//! (`mesh`), composing a frame from the character and the overlays
+//! (`mesh`, and bodies as solids of capsules in `solid`), composing a frame from the character and the overlays
 //! ([`scene`]), the pipelines ([`renderer`], WGSL in `shaders/`) and
 //! offscreen output read back as images ([`headless`]).
 
@@ -10,3 +10,4 @@ pub mod headless;
 pub mod mesh;
 pub mod renderer;
 pub mod scene;
+pub mod solid;

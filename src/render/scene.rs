@@ -6,7 +6,8 @@
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
-use super::mesh::{AROUND, CapsulePart, Mesh, Overlay, RINGS, text_width};
+use super::mesh::{AROUND, Mesh, Overlay, RINGS, text_width};
+use super::solid::CapsulePart;
 use crate::character::camera::Camera;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
