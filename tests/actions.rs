@@ -175,8 +175,8 @@ fn held_out_clips() -> Vec<(String, marionette::character::motion::Clip)> {
             ));
         }
     }
-    assert!(clips.len() >= 12);
-    assert!(clips.len() >= 12);
+    // One variant of each of the 12 actions.
+    assert_eq!(clips.len(), 12);
     clips
 }
 
@@ -200,6 +200,25 @@ fn held_out_variants_are_recognised_and_slow_drags_are_not() {
 }
 
 #[test]
+fn held_out_variants_by_the_template_recogniser() {
+    use marionette::character::motion::Clip;
+    use marionette::control::character::Character;
+    use marionette::tools::eval::actions::eval_templates;
+    let (lib, actions) = setup();
+    let recogniser = Character::calibrated(&lib, &actions);
+    let clips = held_out_clips();
+    let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();
+    let r = eval_templates(&actions, &recogniser, &tests, 1);
+    eprintln!("templates: {:?} {r:?}", recogniser.thresholds);
+    assert_eq!(r.trials, clips.len() * 6);
+    // 0.958 correct, 0.014 wrong, no slow start, decided at 0.324.
+    assert!(r.correct >= 0.95, "{r:?}");
+    assert!(r.wrong_action <= 0.02, "{r:?}");
+    assert!(r.false_trigger_slow <= 0.02, "{r:?}");
+    assert!(r.decided_at > 0.29 && r.decided_at <= 0.36, "{r:?}");
+}
+
+#[test]
 fn held_out_variants_through_the_controller() {
     use marionette::character::motion::Clip;
     use marionette::control::character::Character;
@@ -216,13 +235,18 @@ fn held_out_variants_through_the_controller() {
     });
     eprintln!("through the controller: {r:?}");
     assert_eq!(r.trials, clips.len() * 6);
-    // The targets. decided_at: more than half of the trajectory must have
-    // a partner, which the finger's last point can be while it is still
-    // closer to the middle point than to the one before.
+    // The template recogniser (the default) with the thresholds calibrated
+    // for the library: 0.958 correct, 0.014 wrong (a jump taken for a
+    // squat), no slow drag starting anything, decided at 0.324 of the
+    // drag (the paper's rule decided at 0.489: it needs half the average
+    // trajectory).
     assert!(r.correct >= 0.95, "{r:?}");
-    assert!(r.wrong_action <= 0.05, "{r:?}");
+    assert!(r.wrong_action <= 0.02, "{r:?}");
     assert!(r.false_trigger_slow <= 0.02, "{r:?}");
-    assert!(r.decided_at > 0.45 && r.decided_at <= 0.5, "{r:?}");
+    assert!(r.decided_at > 0.29 && r.decided_at <= 0.36, "{r:?}");
+    // Both views: the per-view rows add up to the whole.
+    assert_eq!(r.views.len(), 2);
+    assert_eq!(r.views.iter().map(|v| v.trials).sum::<usize>(), r.trials);
 }
 
 #[test]

@@ -78,12 +78,10 @@ fn cmu_actions_are_recognised_from_held_out_takes() {
     let tests = tempfile::tempdir().unwrap();
     write_held_out(tests.path());
     // (mode, a floor under the share of correct trials this library
-    // reaches today). Through the controller the share moves by a trial or
-    // three as posing settings move (0.296 to 0.333 as the posing search
-    // looks into 12 to 16 blocks and 16 to 64 cells: the three punch
-    // heights are near ties), so its floor sits two trials under the
-    // lowest.
-    for (mode, floor) in [(&[][..], 0.26), (&["--models-only"][..], 0.15)] {
+    // reaches today with the template recogniser: 0.389 through the
+    // controller, 0.426 alone; the paper's rule reached 0.278 and 0.185).
+    // Each floor sits one trial (0.019) under the figure.
+    for (mode, floor) in [(&[][..], 0.37), (&["--models-only"][..], 0.407)] {
         let r = eval(&library, tests.path(), mode);
         eprintln!("CMU actions {mode:?}: {r}");
         assert_eq!(r["trials"], HELD_OUT.len() * 6);
@@ -92,16 +90,14 @@ fn cmu_actions_are_recognised_from_held_out_takes() {
             (f("correct") + f("wrong_action") + f("missed") - 1.0).abs() < 0.01,
             "{r}"
         );
-        // Slow drags start nothing.
+        // Slow drags start an action in at most one trial of 54.
         assert!(f("false_trigger_slow") <= 0.02, "{r}");
+        assert!(f("wrong_action") <= 0.12, "{r}");
         // One subject's takes do not carry over to everyone's as the
-        // default library's variants do: half the trials are views the
-        // start rule excludes (this subject punches across his hips'
-        // facing, so the side camera sees the punch end-on; a walk seen
-        // from 45° in front is at the rule's 45° edge), and the only jump of
-        // the set is one person's. What is asserted is what this library
-        // reaches today (see the README), so that a change that loses it
-        // shows.
+        // default library's variants do: the only jump of the set is one
+        // person's (24 of the 54 trials), and the three punch heights are
+        // near ties. What is asserted is what this library reaches today
+        // (see the README), so that a change that loses it shows.
         assert!(f("correct") >= floor, "{r}");
     }
 }

@@ -7,6 +7,9 @@
 use std::path::{Path, PathBuf};
 
 use crate::character::library::{Fnv, Library};
+use crate::control::action::calibrate::calibrate;
+use crate::control::action::model::ActionModel;
+use crate::control::action::recogniser::{Recogniser, TemplateRule, Thresholds};
 use crate::control::posing::model::{LearnedModel, posing_samples};
 use crate::control::posing::sample::distance;
 
@@ -110,6 +113,25 @@ pub enum Source {
     },
 }
 
+/// Write a cache file (beside it, then renamed into place; the temporary
+/// file is removed when that fails): how the model was obtained.
+fn store(dir: &Path, path: &Path, bytes: &[u8], reason: String) -> Source {
+    let tmp = path.with_extension("tmp");
+    let written = std::fs::create_dir_all(dir)
+        .and_then(|()| std::fs::write(&tmp, bytes))
+        .and_then(|()| std::fs::rename(&tmp, path));
+    match written {
+        Ok(()) => Source::Baked { reason },
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Source::Uncached {
+                reason,
+                error: format!("cannot write {}: {e}", path.display()),
+            }
+        }
+    }
+}
+
 /// The library's posing model: from the cache in `dir` when it matches the
 /// library, else baked (and the cache rewritten, atomically; a cache that
 /// cannot be written costs a bake at the next start, never the model).
@@ -148,26 +170,119 @@ pub fn posing_model(
         &|a, b| distance(&samples[a], &samples[b]),
         progress,
     );
-    let tmp = path.with_extension("tmp");
-    let written = std::fs::create_dir_all(dir)
-        .and_then(|()| std::fs::write(&tmp, encode(key, &coords)))
-        .and_then(|()| std::fs::rename(&tmp, &path));
-    let source = match written {
-        Ok(()) => Source::Baked { reason },
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Source::Uncached {
-                reason,
-                error: format!("cannot write {}: {e}", path.display()),
-            }
-        }
-    };
+    let source = store(dir, &path, &encode(key, &coords), reason);
     (LearnedModel::with_coords(samples, coords), source)
+}
+
+const RECOGNISER_MAGIC: &[u8; 8] = b"MRNTRECG";
+/// Bumped whenever the template recogniser or its calibration changes.
+const RECOGNISER_FORMAT: u32 = 1;
+
+fn encode_recogniser(key: u64, t: &Thresholds, within_budget: bool) -> Vec<u8> {
+    let mut out = Vec::with_capacity(64);
+    out.extend_from_slice(RECOGNISER_MAGIC);
+    out.extend_from_slice(&RECOGNISER_FORMAT.to_le_bytes());
+    out.extend_from_slice(&key.to_le_bytes());
+    for v in [t.cost_m, t.margin_m, t.coverage, t.max_slow] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.push(u8::from(within_budget));
+    let mut h = Fnv::new();
+    h.write(&out);
+    out.extend_from_slice(&h.finish().to_le_bytes());
+    out
+}
+
+/// The thresholds in a recogniser cache file, or why they cannot be used.
+fn decode_recogniser(bytes: &[u8], key: u64) -> Result<(Thresholds, bool), String> {
+    const LEN: usize = 8 + 4 + 8 + 32 + 1;
+    if bytes.len() != LEN + 8 {
+        return Err(format!("{} bytes, not {}", bytes.len(), LEN + 8));
+    }
+    let (body, sum) = bytes.split_at(LEN);
+    let mut h = Fnv::new();
+    h.write(body);
+    if sum != h.finish().to_le_bytes() {
+        return Err("checksum mismatch (corrupt)".into());
+    }
+    if &body[..8] != RECOGNISER_MAGIC {
+        return Err("not a marionette recogniser cache".into());
+    }
+    let format = u32::from_le_bytes(body[8..12].try_into().expect("4 bytes"));
+    if format != RECOGNISER_FORMAT {
+        return Err(format!(
+            "format {format} (this build writes {RECOGNISER_FORMAT})"
+        ));
+    }
+    if u64::from_le_bytes(body[12..20].try_into().expect("8 bytes")) != key {
+        return Err("made for other library contents (stale)".into());
+    }
+    let f = |i: usize| f64::from_le_bytes(body[20 + i * 8..28 + i * 8].try_into().expect("8"));
+    let t = Thresholds {
+        cost_m: f(0),
+        margin_m: f(1),
+        coverage: f(2),
+        max_slow: f(3),
+    };
+    if ![t.cost_m, t.margin_m, t.coverage, t.max_slow]
+        .iter()
+        .all(|v| v.is_finite() && *v >= 0.0)
+    {
+        return Err("thresholds out of range".into());
+    }
+    Ok((t, body[LEN - 1] != 0))
+}
+
+/// The recogniser of a library: its thresholds from the cache in `dir`
+/// when it matches, else calibrated by leave-one-clip-out on the
+/// library's clips (and the cache rewritten atomically; one that cannot be
+/// written costs a calibration at the next start).
+pub fn recogniser(lib: &Library, actions: &[ActionModel], dir: &Path) -> (Recogniser, Source) {
+    let key = {
+        let mut h = Fnv::new();
+        h.write(&RECOGNISER_FORMAT.to_le_bytes());
+        h.write(&library_key(lib).to_le_bytes());
+        h.finish()
+    };
+    let path = dir.join(format!("recogniser-{key:016x}.bin"));
+    let rule = TemplateRule::default();
+    let reason = match std::fs::read(&path) {
+        Ok(bytes) => match decode_recogniser(&bytes, key) {
+            Ok((thresholds, _)) => {
+                return (Recogniser { rule, thresholds }, Source::Cache(path));
+            }
+            Err(why) => format!("cache {} unusable: {why}", path.display()),
+        },
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            "no cache for this library yet".to_owned()
+        }
+        Err(e) => format!("cannot read cache {}: {e}", path.display()),
+    };
+    let c = calibrate(lib, actions, rule);
+    let bytes = encode_recogniser(key, &c.recogniser.thresholds, c.within_budget);
+    (c.recogniser, store(dir, &path, &bytes, reason))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn recogniser_thresholds_round_trip_and_refusals() {
+        let t = Thresholds {
+            cost_m: 0.05,
+            margin_m: 0.02,
+            coverage: 0.45,
+            max_slow: 1.8,
+        };
+        let bytes = encode_recogniser(7, &t, true);
+        assert_eq!(decode_recogniser(&bytes, 7), Ok((t, true)));
+        assert!(decode_recogniser(&bytes, 8).unwrap_err().contains("stale"));
+        let mut bad = bytes.clone();
+        bad[25] ^= 1;
+        assert!(decode_recogniser(&bad, 7).unwrap_err().contains("corrupt"));
+        assert!(decode_recogniser(&bytes[..30], 7).is_err());
+    }
 
     #[test]
     fn encode_decode_round_trip_and_refusals() {

@@ -61,5 +61,34 @@ pub fn load_models(dir: &Path, force_bake: bool) -> Result<(Library, LearnedMode
 /// The character of the library in `dir`, ready for controllers.
 pub fn load(dir: &Path) -> Result<Arc<Character>, LoadError> {
     let (lib, model) = load_models(dir, false)?;
-    Ok(Arc::new(Character::new(lib, model)))
+    Ok(Arc::new(Character::assemble(lib, model, |lib, actions| {
+        recogniser(lib, actions)
+    })))
+}
+
+/// The library's recogniser: its thresholds from the cache, else
+/// calibrated on the library's own clips (logged either way).
+#[must_use]
+pub fn recogniser(
+    lib: &crate::character::library::Library,
+    actions: &[crate::control::action::model::ActionModel],
+) -> crate::control::action::recogniser::Recogniser {
+    if actions.is_empty() {
+        return crate::control::action::recogniser::Recogniser::default();
+    }
+    let cache_dir = cache::cache_dir();
+    let (r, source) = cache::recogniser(lib, actions, &cache_dir);
+    let t = r.thresholds;
+    match source {
+        Source::Cache(path) => {
+            tracing::info!(cache = %path.display(), cost_m = t.cost_m, margin_m = t.margin_m, coverage = t.coverage, max_slow = t.max_slow, "recogniser thresholds loaded from the cache");
+        }
+        Source::Baked { reason } => {
+            tracing::info!(%reason, cost_m = t.cost_m, margin_m = t.margin_m, coverage = t.coverage, max_slow = t.max_slow, "recogniser calibrated on the library's own clips (`marionette library check` shows what each action's drags start)");
+        }
+        Source::Uncached { reason, error } => {
+            tracing::warn!(%reason, %error, "recogniser calibrated in memory; the cache cannot be written, so the next start calibrates again");
+        }
+    }
+    r
 }

@@ -98,6 +98,10 @@ struct ActionFile {
     /// Also the mirror image: the same action with the other hand or foot.
     #[serde(default)]
     mirror: bool,
+    /// The recogniser's cost threshold for this action (m), instead of the
+    /// one calibrated for the library.
+    #[serde(default)]
+    threshold_m: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -121,6 +125,9 @@ pub struct ActionDef {
     pub clips: Vec<String>,
     pub primary: Role,
     pub segments: Vec<Segment>,
+    /// The recogniser's cost threshold (m), where `library.toml` sets one;
+    /// else the library's calibrated threshold holds.
+    pub threshold_m: Option<f64>,
 }
 
 impl ActionDef {
@@ -347,12 +354,16 @@ impl Library {
                     .into_iter()
                     .map(|p| format!("{label}: {p}")),
             );
+            if let Some(t) = a.threshold_m.filter(|t| !(*t > 0.0 && *t <= 1.0)) {
+                problems.push(format!("{label}: threshold_m = {t} is not a cost in metres: give one above 0 and at most 1 (0.05 to 0.2 is usual), or leave it out to use the calibrated one"));
+            }
             if let Some(primary) = primary {
                 actions.push(ActionDef {
                     name: a.name.clone(),
                     clips: a.clips.clone(),
                     primary,
                     segments: a.segments.clone(),
+                    threshold_m: a.threshold_m,
                 });
             }
         }
@@ -396,6 +407,7 @@ impl Library {
                 clips: names,
                 primary,
                 segments: a.segments.clone(),
+                threshold_m: a.threshold_m,
             });
         }
         actions.extend(mirrored);

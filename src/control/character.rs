@@ -4,7 +4,9 @@
 use crate::character::library::Library;
 use crate::character::roles::RoleMap;
 use crate::character::skeleton::Pose;
+use crate::control::action::calibrate::calibrate;
 use crate::control::action::model::ActionModel;
+use crate::control::action::recogniser::{Recogniser, TemplateRule};
 use crate::control::posing::model::{LearnedModel, posing_samples};
 use crate::control::posing::sample::{Placement, pose_of, samples_of};
 
@@ -16,6 +18,9 @@ pub struct Character {
     pub roles: RoleMap,
     pub posing: LearnedModel,
     pub actions: Vec<ActionModel>,
+    /// The template recogniser with the thresholds calibrated for this
+    /// library.
+    pub recogniser: Recogniser,
 }
 
 impl Character {
@@ -29,13 +34,27 @@ impl Character {
     }
 
     /// Build the action models of `lib`; `posing` is its posing model.
+    /// The recogniser is calibrated here, in memory.
     #[must_use]
     pub fn new(lib: Library, posing: LearnedModel) -> Self {
-        let actions = lib
+        Self::assemble(lib, posing, Self::calibrated)
+    }
+
+    /// Build the action models of `lib`, with its posing model and the
+    /// recogniser `recogniser` gives for the models (the application reads
+    /// it from the model cache).
+    #[must_use]
+    pub fn assemble(
+        lib: Library,
+        posing: LearnedModel,
+        recogniser: impl FnOnce(&Library, &[ActionModel]) -> Recogniser,
+    ) -> Self {
+        let actions: Vec<ActionModel> = lib
             .actions
             .iter()
             .map(|def| ActionModel::build(&lib, def))
             .collect();
+        let recogniser = recogniser(&lib, &actions);
         let roles = lib
             .posing
             .first()
@@ -48,7 +67,41 @@ impl Character {
             roles,
             posing,
             actions,
+            recogniser,
         }
+    }
+
+    /// The template recogniser's thresholds chosen for `lib` by
+    /// leave-one-clip-out on its own clips (logged).
+    #[must_use]
+    pub fn calibrated(lib: &Library, actions: &[ActionModel]) -> Recogniser {
+        if actions.is_empty() {
+            return Recogniser::default();
+        }
+        let c = calibrate(lib, actions, TemplateRule::default());
+        let t = c.recogniser.thresholds;
+        let (drags, right) = c
+            .outcomes
+            .iter()
+            .filter(|o| !o.slow)
+            .fold((0, 0), |(n, r), o| {
+                (
+                    n + 1,
+                    r + usize::from(o.started.as_deref() == Some(o.action.as_str())),
+                )
+            });
+        tracing::info!(
+            cost_m = t.cost_m,
+            margin_m = t.margin_m,
+            coverage = t.coverage,
+            "recogniser calibrated on the library's own clips: {right} of {drags} left-out drags start their action"
+        );
+        if !c.within_budget {
+            tracing::warn!(
+                "no threshold keeps slow posing drags from starting actions in this library; the strictest is used (run `marionette library check` to see which actions)"
+            );
+        }
+        c.recogniser
     }
 
     /// The rest posture: the first frame of the first posing clip, standing

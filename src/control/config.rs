@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use serde::Deserialize;
 
-use super::controller::Settings;
+use super::controller::{RecogniserKind, Settings};
 use crate::control::action::trail::StartRule;
 
 /// `[tracking]`: how the shown motion follows the synthesised one (the
@@ -207,6 +207,10 @@ impl<'de> Deserialize<'de> for Characters {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ActionConfig {
+    /// Which recogniser: `"templates"` (each clip's own path, thresholds
+    /// calibrated for the library) or `"paper"` (the average trajectory
+    /// and the start rule below, for comparison).
+    pub recogniser: RecogniserKind,
     /// Weight of time against position in the trail match (px per second).
     pub h: f64,
     /// A drag may run this many times faster or slower than the action
@@ -229,6 +233,7 @@ impl Default for ActionConfig {
     fn default() -> Self {
         let r = StartRule::default();
         Self {
+            recogniser: RecogniserKind::default(),
             h: r.h,
             tempo_tolerance: r.tempo,
             threshold_px: r.base_threshold_px,
@@ -266,6 +271,7 @@ impl Settings {
     ) -> Self {
         Self {
             rule: action.rule(),
+            recogniser: action.recogniser,
             pick_radius_px: character.pick_radius_px,
             home_after_s: character.camera_home_after_s,
             settle_s: tracking.settle_s,

@@ -5,7 +5,8 @@
 //!
 //! - [`eval`]: posing and action control measured on held-out clips.
 //! - [`author`]: the default library's scores compiled into BVH;
-//!   [`init`]: a library planned from a folder of an exhibit's takes.
+//!   [`init`]: a library planned from a folder of an exhibit's takes;
+//!   [`libcheck`]: what a drag can start in a library, told to its builder.
 //! - [`synth`]: recordings authored from gestures; [`demo`]: the demo
 //!   recording, authored against the character.
 //! - `sheet`, [`checks`], `metrics`: stick-figure sheets, foot sliding
@@ -21,6 +22,7 @@ pub mod checks;
 pub mod demo;
 pub mod eval;
 pub mod init;
+pub mod libcheck;
 pub(crate) mod metrics;
 pub(crate) mod sheet;
 pub mod synth;

@@ -299,4 +299,17 @@ pub enum LibraryCommand {
         #[arg(long)]
         force: bool,
     },
+    /// Leave each clip of a library out in turn and replay it as drags
+    /// from two views against the others: how often each action's drags
+    /// start it, start nothing or start another action, and what to do
+    /// about it (record more takes, merge actions a drag cannot tell
+    /// apart). Exit 0 whatever it finds; 65 for a library that does not
+    /// load
+    Check {
+        /// Library folder (with library.toml)
+        dir: PathBuf,
+        /// Print JSON instead of a table
+        #[arg(long)]
+        json: bool,
+    },
 }

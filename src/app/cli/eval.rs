@@ -55,7 +55,15 @@ pub(super) fn eval_actions(
     let tests: Vec<(String, &crate::character::motion::Clip)> =
         clips.iter().map(|(a, c)| (a.clone(), c)).collect();
     let mut result = if models_only {
-        eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
+        match config.action.recogniser {
+            crate::control::controller::RecogniserKind::Paper => {
+                eval::eval_actions(&actions, &tests, &config.action.rule(), seed)
+            }
+            crate::control::controller::RecogniserKind::Templates => {
+                let recogniser = crate::app::character::recogniser(&lib, &actions);
+                eval::eval_templates(&actions, &recogniser, &tests, seed)
+            }
+        }
     } else {
         let ch = crate::app::character::load(library)?;
         let settings = config.control_settings();

@@ -177,6 +177,9 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
         Command::Library {
             what: LibraryCommand::Init { src, out, force },
         } => motion::library_init(&src, &out, force),
+        Command::Library {
+            what: LibraryCommand::Check { dir, json },
+        } => motion::library_check(&dir, json),
         Command::Eval {
             what:
                 EvalCommand::Actions {

@@ -88,13 +88,23 @@ pub(super) fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> R
 pub(super) fn bake(library: &Path, force: bool) -> Result<(), Failure> {
     let started = std::time::Instant::now();
     let (lib, model) = crate::app::character::load_models(library, force)?;
+    let actions: Vec<crate::control::action::model::ActionModel> = lib
+        .actions
+        .iter()
+        .map(|a| crate::control::action::model::ActionModel::build(&lib, a))
+        .collect();
+    let r = crate::app::character::recogniser(&lib, &actions);
     writeln!(
         std::io::stdout(),
-        "{}: posing model of {} samples from {} clips in {} cells ({:.1} s)",
+        "{}: posing model of {} samples from {} clips in {} cells; recogniser of {} actions (cost under {:.2} m, {:.3} m ahead of the next, {:.0}% covered) ({:.1} s)",
         lib.dir.display(),
         model.samples.len(),
         lib.clips.len(),
         model.cells.len(),
+        actions.len(),
+        r.thresholds.cost_m,
+        r.thresholds.margin_m,
+        r.thresholds.coverage * 100.0,
         started.elapsed().as_secs_f64()
     )
     .map_err(stdout_error)
@@ -212,4 +222,34 @@ pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Fa
         lib.actions.len()
     )
     .map_err(stdout_error)
+}
+
+pub(super) fn library_check(dir: &Path, json: bool) -> Result<(), Failure> {
+    use crate::character::library::Library;
+    use crate::control::action::model::ActionModel;
+    let lib = Library::load(dir).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let actions: Vec<ActionModel> = lib
+        .actions
+        .iter()
+        .map(|a| ActionModel::build(&lib, a))
+        .collect();
+    let mut stdout = std::io::stdout();
+    if actions.is_empty() {
+        return writeln!(
+            stdout,
+            "{}: no actions: a drag starts nothing here (name takes <action>_*.bvh and run `marionette library init`)",
+            dir.display()
+        )
+        .map_err(stdout_error);
+    }
+    // The kiosk's default view of a lone character, at 1280x720.
+    let camera = crate::control::rig::Rig::new(1280.0, 720.0).camera();
+    let report = crate::tools::libcheck::check(&lib, &actions, &camera);
+    if json {
+        return super::print_json(&report);
+    }
+    for line in report.to_text() {
+        writeln!(stdout, "{line}").map_err(stdout_error)?;
+    }
+    Ok(())
 }

@@ -8,9 +8,20 @@
 //!   direction, duration) and recognition among them.
 //! - [`player`]: playing an action under the fingers.
 //! - [`trail`]: matching a finger's trail against an action's projected
-//!   trajectory by dynamic programming (eq. 1), and the start conditions.
+//!   trajectory by dynamic programming (eq. 1), and the paper's start
+//!   conditions.
+//! - [`recogniser`]: the default recogniser: one template per clip, costs
+//!   in metres at the character, an action started once it leads the
+//!   others by a margin.
+//! - [`calibrate`]: that recogniser's thresholds chosen per library by
+//!   leave-one-clip-out on its own clips.
+//! - [`trials`]: the drags a recogniser is judged by (held-out capture or
+//!   the library's own clips left out in turn).
 
+pub mod calibrate;
 pub mod model;
 pub mod player;
+pub mod recogniser;
 pub mod timeline;
 pub mod trail;
+pub mod trials;

@@ -29,7 +29,62 @@ pub struct ActionModel {
     pub direction: DVec3,
     /// Mean length of the clips (s).
     pub duration: f64,
+    /// Each clip's own path of the primary part, as the template
+    /// recogniser matches drags against (one per clip, in `def.clips`
+    /// order; clips missing from the library are left out).
+    pub templates: Vec<ClipPath>,
 }
+
+/// One clip's path of its action's primary part: positions in the
+/// character's frame relative to the clip start, `dt` seconds apart.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClipPath {
+    pub clip: String,
+    pub points: Vec<DVec3>,
+    pub dt: f64,
+    /// The still lead-in: the part starts its movement at this point
+    /// (where it last moved slowly before first passing a quarter of its
+    /// peak speed).
+    pub lead_in: usize,
+    /// The part's peak speed (m/s, over three points).
+    pub peak_speed: f64,
+}
+
+/// Speeds along a path (m per point), each over three points so that one
+/// noisy sample does not count.
+fn speeds(points: &[DVec3]) -> Vec<f64> {
+    (0..points.len())
+        .map(|k| {
+            let (a, b) = (k.saturating_sub(1), (k + 1).min(points.len() - 1));
+            if b > a {
+                points[a].distance(points[b]) / (b - a) as f64
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Where a path's still lead-in ends: the last point under a tenth of
+/// the peak speed before the speed first passes a quarter of it.
+#[must_use]
+pub fn lead_in(points: &[DVec3]) -> usize {
+    let speed = speeds(points);
+    let peak = speed.iter().copied().fold(0.0, f64::max);
+    if peak <= 0.0 {
+        return 0;
+    }
+    let Some(first) = speed.iter().position(|v| *v > 0.25 * peak) else {
+        return 0;
+    };
+    speed[..first]
+        .iter()
+        .rposition(|v| *v < 0.1 * peak)
+        .unwrap_or(0)
+}
+
+/// Templates keep at most this many points per second of their clip.
+const TEMPLATE_HZ: f64 = 30.0;
 
 impl ActionModel {
     /// Build the model of `def` from the library's clips.
@@ -38,6 +93,7 @@ impl ActionModel {
         let mut samples: Vec<Sample> = Vec::new();
         let mut paths: Vec<Vec<DVec3>> = Vec::new();
         let mut durations = Vec::new();
+        let mut templates = Vec::new();
         for (ci, name) in def.clips.iter().enumerate() {
             let Some(clip) = lib.clips.get(name) else {
                 continue;
@@ -55,6 +111,20 @@ impl ActionModel {
                     })
                     .collect(),
             );
+            let step = ((1.0 / TEMPLATE_HZ / clip.frame_time).round() as usize).max(1);
+            let points: Vec<DVec3> = all
+                .iter()
+                .step_by(step)
+                .map(|s| s.placed[primary])
+                .collect();
+            let dt = clip.frame_time * step as f64;
+            templates.push(ClipPath {
+                clip: name.clone(),
+                lead_in: lead_in(&points),
+                peak_speed: speeds(&points).into_iter().fold(0.0, f64::max) / dt,
+                points,
+                dt,
+            });
             let stride = sample_stride(clip.frame_time);
             samples.extend(all.into_iter().step_by(stride));
         }
@@ -85,6 +155,7 @@ impl ActionModel {
             trajectory,
             direction,
             duration: durations.iter().sum::<f64>() / durations.len().max(1) as f64,
+            templates,
         }
     }
 

@@ -174,6 +174,7 @@ mod tests {
             name: "punch".into(),
             clips: vec![],
             primary: Role::RightHand,
+            threshold_m: None,
             segments: vec![
                 Segment {
                     until: 0.3,

@@ -93,7 +93,7 @@ pub fn match_trail(
 /// How far (s) the action's time `action_t` lies outside the band
 /// `[input_t / tempo, input_t * tempo]`: the drag may run up to `tempo`
 /// times faster or slower than the action at no cost.
-fn tempo_gap(input_t: f64, action_t: f64, tempo: f64) -> f64 {
+pub(crate) fn tempo_gap(input_t: f64, action_t: f64, tempo: f64) -> f64 {
     let (lo, hi) = (input_t / tempo, input_t * tempo);
     if action_t > hi {
         action_t - hi

@@ -1,9 +1,10 @@
 //! Drags judged against the actions' trajectories (the paper's section 5),
 //! and the marks drawn for the fingers and the trajectories.
 
-use super::{Controller, Grab, Mode};
+use super::{Controller, Grab, Matching, Mode, RecogniserKind};
 use crate::control::action::model::recognize;
 use crate::control::action::player::ActionPlayer;
+use crate::control::action::recogniser::{Decision, DragMatch};
 use crate::control::action::trail::{TrailPoint, view_angle_deg};
 use crate::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
 
@@ -30,6 +31,29 @@ impl Controller {
         camera: &crate::character::camera::Camera,
         t: f64,
     ) -> Option<ActionPlayer> {
+        let (action, start_at) = match self.settings.recogniser {
+            RecogniserKind::Paper => {
+                let found = self.recognise_paper(camera)?;
+                (found.action, found.matched.coverage)
+            }
+            RecogniserKind::Templates => {
+                let d = self.recognise_templates(camera)?;
+                (d.action, d.generalized)
+            }
+        };
+        let at = self.placement_now();
+        let player =
+            ActionPlayer::start(&self.ch.actions, action, start_at, at, t, &mut self.events);
+        self.reset_trails(t);
+        self.matching.clear();
+        Some(player)
+    }
+
+    /// The paper's rule: the average trajectory, eq. 1 and its thresholds.
+    fn recognise_paper(
+        &self,
+        camera: &crate::character::camera::Camera,
+    ) -> Option<crate::control::action::model::Recognition> {
         let at = self.placement_now();
         let found = self.grabs.values().find_map(|g| match g {
             Grab::Part {
@@ -54,16 +78,74 @@ impl Controller {
             coverage = found.matched.coverage,
             "drag recognised"
         );
-        let player = ActionPlayer::start(
-            &self.ch.actions,
-            found.action,
-            found.matched.coverage,
-            at,
-            t,
-            &mut self.events,
+        Some(found)
+    }
+
+    /// The template recogniser: each held part's trail is fed to its
+    /// match as it grows (a new match where the trail began anew).
+    fn recognise_templates(
+        &mut self,
+        camera: &crate::character::camera::Camera,
+    ) -> Option<Decision> {
+        let at = self.placement_now();
+        self.matching.retain(|id, _| self.grabs.contains_key(id));
+        let mut found = None;
+        for (id, g) in &self.grabs {
+            let Grab::Part {
+                role,
+                trail,
+                trail_start,
+                moved,
+                ..
+            } = g
+            else {
+                continue;
+            };
+            let fresh = || Matching {
+                start: *trail_start,
+                fed: 0,
+                drag: DragMatch::new(
+                    &self.ch.recogniser,
+                    &self.ch.actions,
+                    *role,
+                    camera,
+                    &at,
+                    None,
+                ),
+            };
+            let m = self.matching.entry(*id).or_insert_with(fresh);
+            if m.start != *trail_start || m.fed > trail.len() {
+                // The trail began anew (a rest, an action's end, or its
+                // oldest points dropped): so does the match.
+                *m = fresh();
+            }
+            for p in &trail[m.fed..] {
+                m.drag.push(*p);
+            }
+            m.fed = trail.len();
+            if !*moved || trail.len() < 2 || found.is_some() {
+                continue;
+            }
+            found = m
+                .drag
+                .decide(&self.ch.actions, &self.ch.recogniser.thresholds);
+        }
+        let d = found?;
+        tracing::info!(
+            action = %self.ch.actions[d.action].def.name,
+            "drag recognised"
         );
-        self.reset_trails(t);
-        Some(player)
+        tracing::debug!(
+            action = %self.ch.actions[d.action].def.name,
+            clip = %d.clip,
+            cost_m = d.cost_m,
+            margin_m = d.margin_m,
+            coverage = d.coverage,
+            tempo = d.tempo,
+            generalized = d.generalized,
+            "why: the best template, its cost, the lead over the next action, how much of its path is covered, and the drag's tempo against it"
+        );
+        Some(d)
     }
 
     /// Finger marks and, while a part is held in posing, the trajectories
@@ -90,12 +172,30 @@ impl Controller {
             let at = self.placement_now();
             let eye = camera.eye_vector();
             for role in self.held() {
-                for a in self.ch.actions.iter().filter(|a| a.def.primary == role) {
+                // Which actions a drag can start from this view: for the
+                // templates, those with a clip that can be drawn from here.
+                let drawable = match self.settings.recogniser {
+                    RecogniserKind::Templates => Some(DragMatch::new(
+                        &self.ch.recogniser,
+                        &self.ch.actions,
+                        role,
+                        &camera,
+                        &at,
+                        None,
+                    )),
+                    RecogniserKind::Paper => None,
+                };
+                for (i, a) in self.ch.actions.iter().enumerate() {
+                    if a.def.primary != role {
+                        continue;
+                    }
                     let dir = glam::DQuat::from_rotation_y(at.yaw) * a.direction;
                     marks.trajectories.push(TrajectoryMark {
                         points: a.projected(&camera, &at).iter().map(|p| p.at).collect(),
-                        executable: view_angle_deg(dir, eye)
-                            > self.settings.rule.min_view_angle_deg,
+                        executable: drawable.as_ref().map_or_else(
+                            || view_angle_deg(dir, eye) > self.settings.rule.min_view_angle_deg,
+                            |m| m.drawable(i) > 0,
+                        ),
                         tint: None,
                     });
                 }

@@ -22,6 +22,7 @@ use super::rig::Rig;
 use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
 use crate::control::action::player::ActionPlayer;
+use crate::control::action::recogniser::DragMatch;
 use crate::control::action::timeline::{ActionEvent, Status};
 use crate::control::action::trail::{StartRule, TrailPoint};
 use crate::control::posing::constraint::{Constraint, SynthOptions, Target};
@@ -39,6 +40,9 @@ use crate::screen::ScreenPoint;
 /// configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
+    /// Which recogniser starts actions.
+    pub recogniser: RecogniserKind,
+    /// The paper's start rule (for [`RecogniserKind::Paper`]).
     pub rule: StartRule,
     /// A finger within this distance of a body part grabs it (px).
     pub pick_radius_px: f64,
@@ -59,6 +63,7 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Self {
+            recogniser: RecogniserKind::default(),
             rule: StartRule::default(),
             pick_radius_px: 45.0,
             home_after_s: 8.0,
@@ -68,6 +73,27 @@ impl Default for Settings {
             attenuation: Attenuation::default(),
         }
     }
+}
+
+/// Which recogniser starts actions from drags.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RecogniserKind {
+    /// One template per clip, thresholds calibrated for the library
+    /// ([`crate::control::action::recogniser`]).
+    #[default]
+    Templates,
+    /// The paper's: the average trajectory and the configured start rule.
+    Paper,
+}
+
+/// A drag's match against the templates, kept between steps: the trail it
+/// was fed (from `start`, `fed` points).
+#[derive(Clone, Debug)]
+struct Matching {
+    start: f64,
+    fed: usize,
+    drag: DragMatch,
 }
 
 /// What a finger holds.
@@ -99,7 +125,7 @@ struct FootHold {
 #[derive(Clone, Debug)]
 pub enum Mode {
     Posing,
-    Action(ActionPlayer),
+    Action(Box<ActionPlayer>),
 }
 
 /// The controller's state between frames.
@@ -135,6 +161,8 @@ pub struct Controller {
     time: f64,
     last_touch: f64,
     events: Vec<ActionEvent>,
+    /// Each held part's drag matched against the templates so far.
+    matching: BTreeMap<ContactId, Matching>,
     /// How far another character's body pushed this one (m, on the
     /// floor): added to the pelvis, fading as the body recovers.
     shove: DVec3,
@@ -215,6 +243,7 @@ impl Controller {
             time: t,
             last_touch: t,
             events: Vec::new(),
+            matching: BTreeMap::new(),
             shove: DVec3::ZERO,
             ch,
         }
@@ -474,7 +503,7 @@ impl Controller {
         match &mut self.mode {
             Mode::Posing => {
                 if let Some(player) = self.recognise(&camera, t) {
-                    self.mode = Mode::Action(player);
+                    self.mode = Mode::Action(Box::new(player));
                     self.switched = true;
                 } else if !constraints.is_empty() {
                     self.target = synthesize(

@@ -12,14 +12,15 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use super::trial::{Trial, camera, side_of};
 use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::control::action::model::{ActionModel, recognize};
+use crate::control::action::recogniser::{DragMatch, Recogniser};
 use crate::control::action::trail::{StartRule, TrailPoint};
+pub use crate::control::action::trials::Drag;
+use crate::control::action::trials::each_drag;
 use crate::control::posing::sample::Placement;
-use crate::screen::ScreenPoint;
 
 /// What `eval actions` prints.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -35,6 +36,9 @@ pub struct ActionEval {
     pub decided_at: f64,
     /// The same figures for each action tested, in name order.
     pub actions: Vec<ActionRow>,
+    /// The same figures for each trial view (`"action"` names it: `90°`
+    /// from the side, `45°` front-side).
+    pub views: Vec<ActionRow>,
     /// For each action tested, how many of its drags started each action
     /// (`"none"`: nothing started).
     pub confusion: BTreeMap<String, BTreeMap<String, usize>>,
@@ -95,22 +99,6 @@ impl Tally {
     }
 }
 
-/// A small deterministic generator for the noise.
-struct Lcg(u64);
-
-impl Lcg {
-    fn unit(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn noise(&mut self, px: f64) -> f64 {
-        (self.unit() * 2.0 - 1.0) * px
-    }
-}
-
 /// Feed a trail point by point; the first recognition decides.
 fn first_recognition(
     actions: &[ActionModel],
@@ -125,7 +113,8 @@ fn first_recognition(
 }
 
 /// The fraction of a trail's duration that its first `n` points span.
-fn seen_fraction(trail: &[TrailPoint], n: usize) -> f64 {
+#[must_use]
+pub fn seen_fraction(trail: &[TrailPoint], n: usize) -> f64 {
     match (
         trail.first(),
         trail.last(),
@@ -134,17 +123,6 @@ fn seen_fraction(trail: &[TrailPoint], n: usize) -> f64 {
         (Some(a), Some(b), Some(c)) if b.t > a.t => ((c.t - a.t) / (b.t - a.t)).clamp(0.0, 1.0),
         _ => 1.0,
     }
-}
-
-/// One drag to judge: the dragged part, the finger's trail on the screen
-/// of `camera` (which looks at the clip's character from `angle_deg`
-/// around it, at placement `at`).
-pub struct Drag<'a> {
-    pub role: Role,
-    pub trail: &'a [TrailPoint],
-    pub camera: &'a Camera,
-    pub at: &'a Placement,
-    pub angle_deg: f64,
 }
 
 /// Run the evaluation on the action models alone: each trail is fed point
@@ -159,6 +137,26 @@ pub fn eval_actions(
     let mut judge = |d: &Drag<'_>| {
         first_recognition(actions, d.role, d.trail, d.camera, d.at, rule)
             .map(|(a, n)| (actions[a].def.name.clone(), n))
+    };
+    eval_with(&with_primary(actions, tests), seed, &mut judge)
+}
+
+/// Run the evaluation on the template recogniser alone: each trail is fed
+/// point by point to a [`DragMatch`].
+#[must_use]
+pub fn eval_templates(
+    actions: &[ActionModel],
+    recogniser: &Recogniser,
+    tests: &[(String, &Clip)],
+    seed: u64,
+) -> ActionEval {
+    let mut judge = |d: &Drag<'_>| {
+        let mut m = DragMatch::new(recogniser, actions, d.role, d.camera, d.at, None);
+        d.trail.iter().enumerate().find_map(|(k, p)| {
+            m.push(*p);
+            m.decide(actions, &recogniser.thresholds)
+                .map(|r| (actions[r.action].def.name.clone(), k + 1))
+        })
     };
     eval_with(&with_primary(actions, tests), seed, &mut judge)
 }
@@ -185,95 +183,45 @@ pub fn eval_with(
     seed: u64,
     judge: &mut dyn FnMut(&Drag<'_>) -> Option<(String, usize)>,
 ) -> ActionEval {
-    let mut rng = Lcg(seed ^ 0x9e37_79b9_7f4a_7c15);
     let mut all = Tally::default();
     let mut rows: BTreeMap<String, Tally> = BTreeMap::new();
+    let mut views: BTreeMap<i64, Tally> = BTreeMap::new();
     let mut confusion: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
-    for &(ref name, role, clip) in tests {
+    let drags: Vec<(Role, &Clip)> = tests.iter().map(|(_, r, c)| (*r, *c)).collect();
+    each_drag(&drags, seed, &mut |d| {
+        let name = &tests[d.test].0;
+        let started = judge(d);
         let row = rows.entry(name.clone()).or_default();
-        let confused = confusion.entry(name.clone()).or_default();
-        let Trial { at, path, chest } = Trial::of(clip, role);
-        // The cameras stand on the side of the primary part, as a visitor
-        // looking at the punching arm would: the far side's actions can be
-        // along the line of sight, which the start rule excludes by design.
-        let side = side_of(role);
-        for angle in [90.0 * side, 45.0 * side] {
-            let cam = camera(angle, &at, chest);
-            for speed in [0.7, 1.0, 1.5] {
-                let trail: Vec<TrailPoint> = path
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(k, p)| {
-                        cam.project(*p).map(|s| TrailPoint {
-                            at: ScreenPoint::new(s.x + rng.noise(2.0), s.y + rng.noise(2.0)),
-                            t: k as f64 * clip.frame_time / speed,
-                        })
-                    })
-                    .collect();
-                all.trials += 1;
-                row.trials += 1;
-                let drag = Drag {
-                    role,
-                    trail: &trail,
-                    camera: &cam,
-                    at: &at,
-                    angle_deg: angle,
-                };
-                let started = judge(&drag);
-                *confused
-                    .entry(
-                        started
-                            .as_ref()
-                            .map_or_else(|| "none".to_owned(), |(a, _)| a.clone()),
-                    )
-                    .or_default() += 1;
-                for t in [&mut all, &mut *row] {
-                    match &started {
-                        Some((a, n)) if a == name => {
-                            t.correct += 1;
-                            t.decided.push(seen_fraction(&trail, *n));
-                        }
-                        Some(_) => t.wrong += 1,
-                        None => t.missed += 1,
-                    }
+        // Both sides' views count as one: 90° and 45° from the part's side.
+        let view = views.entry(d.angle_deg.abs().round() as i64).or_default();
+        if d.slow {
+            for t in [&mut all, &mut *row, &mut *view] {
+                t.slow_trials += 1;
+                t.slow_triggers += usize::from(started.is_some());
+            }
+            return;
+        }
+        *confusion
+            .entry(name.clone())
+            .or_default()
+            .entry(
+                started
+                    .as_ref()
+                    .map_or_else(|| "none".to_owned(), |(a, _)| a.clone()),
+            )
+            .or_default() += 1;
+        for t in [&mut all, &mut *row, &mut *view] {
+            t.trials += 1;
+            match &started {
+                Some((a, n)) if a == name => {
+                    t.correct += 1;
+                    t.decided.push(seen_fraction(d.trail, *n));
                 }
-                // A slow posing drag of the same part: as long, in a random
-                // direction, at under a third of the speed.
-                // (The length of the true path: the noise is not the
-                // action's movement.)
-                let truth: Vec<ScreenPoint> = path.iter().filter_map(|p| cam.project(*p)).collect();
-                let len: f64 = truth.windows(2).map(|w| w[0].distance(w[1])).sum();
-                let dir = rng.unit() * std::f64::consts::TAU;
-                let duration = trail.last().map_or(1.0, |p| p.t) * (3.0 + rng.unit() * 2.0);
-                let start = trail
-                    .first()
-                    .map_or(ScreenPoint::new(640.0, 360.0), |p| p.at);
-                let steps = (duration / clip.frame_time).ceil().max(2.0) as usize;
-                let slow: Vec<TrailPoint> = (0..=steps)
-                    .map(|k| {
-                        let s = k as f64 / steps as f64;
-                        let wobble = (s * std::f64::consts::PI * 2.0).sin() * 0.15 * len;
-                        TrailPoint {
-                            at: ScreenPoint::new(
-                                start.x + dir.cos() * len * s - dir.sin() * wobble + rng.noise(2.0),
-                                start.y + dir.sin() * len * s + dir.cos() * wobble + rng.noise(2.0),
-                            ),
-                            t: s * duration,
-                        }
-                    })
-                    .collect();
-                let drag = Drag {
-                    trail: &slow,
-                    ..drag
-                };
-                let triggered = judge(&drag).is_some();
-                for t in [&mut all, &mut *row] {
-                    t.slow_trials += 1;
-                    t.slow_triggers += usize::from(triggered);
-                }
+                Some(_) => t.wrong += 1,
+                None => t.missed += 1,
             }
         }
-    }
+    });
     let total = all.row(String::new());
     ActionEval {
         trials: total.trials,
@@ -283,6 +231,10 @@ pub fn eval_with(
         false_trigger_slow: total.false_trigger_slow,
         decided_at: total.decided_at,
         actions: rows.into_iter().map(|(name, t)| t.row(name)).collect(),
+        views: views
+            .into_iter()
+            .map(|(deg, t)| t.row(format!("{deg}°")))
+            .collect(),
         confusion,
         separation: None,
     }

@@ -9,4 +9,3 @@ pub mod actions;
 pub mod live;
 pub mod posing;
 pub mod separation;
-mod trial;

@@ -11,11 +11,11 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use super::trial::{Trial, camera, side_of};
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::control::action::model::ActionModel;
 use crate::control::action::trail::{StartRule, TrailPoint, match_trail};
+use crate::control::action::trials::{Trial, camera, side_of};
 use crate::control::posing::sample::{Anchor, Placement};
 
 /// What `eval actions` adds under `separation`.

@@ -1,0 +1,305 @@
+//! `marionette library check`: what a drag can start in a library, told to
+//! the person who recorded it. Each clip in turn is left out and replayed
+//! as drags from the two trial views (the calibration of the template
+//! recogniser, [`crate::control::action::calibrate`]); the report says,
+//! for each action, how often its drags start it, start nothing or start
+//! another action, and what to do about it: record more takes of an action
+//! that has one, merge two actions a drag cannot tell apart from a view (or
+//! lead one with another part), and which actions the default camera cannot
+//! see drawn.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::character::camera::Camera;
+use crate::character::library::Library;
+use crate::control::action::calibrate::{Calibration, SLOW_BUDGET, calibrate};
+use crate::control::action::model::ActionModel;
+use crate::control::action::recogniser::{DragMatch, Recogniser, TemplateRule, Thresholds};
+use crate::control::posing::sample::{Anchor, Placement};
+
+/// A drag from one view confused with another action this often is a pair
+/// the builder should hear about.
+const CONFUSED_SHARE: f64 = 0.25;
+
+/// The whole report.
+#[derive(Clone, Debug, Serialize)]
+pub struct LibraryReport {
+    /// The thresholds calibrated for the library.
+    pub thresholds: Thresholds,
+    /// Whether slow posing drags stay within half the budget.
+    pub within_budget: bool,
+    pub drags: usize,
+    pub correct: f64,
+    pub wrong_action: f64,
+    pub missed: f64,
+    pub false_trigger_slow: f64,
+    pub decided_at: f64,
+    pub actions: Vec<ActionReport>,
+    /// What to do, one line each.
+    pub advice: Vec<String>,
+}
+
+/// One action's rows.
+#[derive(Clone, Debug, Serialize)]
+pub struct ActionReport {
+    pub action: String,
+    pub primary: String,
+    /// Source files its clips come from (cuts and mirror images of one take
+    /// count once).
+    pub takes: usize,
+    pub clips: usize,
+    pub views: Vec<ViewReport>,
+    pub false_trigger_slow: f64,
+    /// Clips whose drag can be drawn from the default camera.
+    pub drawable_from_default_camera: usize,
+}
+
+/// One action's left-out drags from one view.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewReport {
+    pub view_deg: f64,
+    pub drags: usize,
+    pub correct: f64,
+    pub missed: f64,
+    pub wrong_action: f64,
+    /// The actions its drags started instead, with how many.
+    pub confused_with: BTreeMap<String, usize>,
+}
+
+fn share(a: usize, b: usize) -> f64 {
+    if b == 0 {
+        0.0
+    } else {
+        (a as f64 / b as f64 * 1000.0).round() / 1000.0
+    }
+}
+
+/// The take a clip comes from: its file, without a frame range or mirror
+/// mark.
+fn take_of(clip: &str) -> &str {
+    let end = clip.find(['#', '~']).unwrap_or(clip.len());
+    &clip[..end]
+}
+
+/// Check `lib`: calibrate its recogniser and report on the left-out drags.
+/// `camera` is the kiosk's default view of a character at the origin.
+#[must_use]
+pub fn check(lib: &Library, actions: &[ActionModel], camera: &Camera) -> LibraryReport {
+    let c = calibrate(lib, actions, TemplateRule::default());
+    report(actions, &c, camera)
+}
+
+fn report(actions: &[ActionModel], c: &Calibration, camera: &Camera) -> LibraryReport {
+    let origin = Placement {
+        position: glam::DVec3::ZERO,
+        yaw: 0.0,
+        anchor: Anchor::ClipStart,
+    };
+    let mut rows = Vec::new();
+    let mut advice = Vec::new();
+    for (ai, a) in actions.iter().enumerate() {
+        let name = &a.def.name;
+        let mine: Vec<_> = c.outcomes.iter().filter(|o| &o.action == name).collect();
+        let mut views: BTreeMap<i64, (usize, usize, usize, BTreeMap<String, usize>)> =
+            BTreeMap::new();
+        let (mut slow, mut slow_n) = (0, 0);
+        for o in &mine {
+            if o.slow {
+                slow_n += 1;
+                slow += usize::from(o.started.is_some());
+                continue;
+            }
+            let v = views.entry(o.view_deg.round() as i64).or_default();
+            v.0 += 1;
+            match &o.started {
+                Some(s) if s == name => v.1 += 1,
+                Some(s) => *v.3.entry(s.clone()).or_default() += 1,
+                None => v.2 += 1,
+            }
+        }
+        let takes: std::collections::BTreeSet<&str> =
+            a.templates.iter().map(|t| take_of(&t.clip)).collect();
+        let drawable = DragMatch::new(
+            &Recogniser::default(),
+            actions,
+            a.def.primary,
+            camera,
+            &origin,
+            None,
+        )
+        .drawable(ai);
+        if takes.len() == 1 {
+            advice.push(format!(
+                "`{name}` has one take ({}): a drag by another performer is judged against that one alone; record two or three more takes",
+                takes.iter().next().copied().unwrap_or("")
+            ));
+        }
+        if drawable == 0 {
+            advice.push(format!(
+                "`{name}`: from the default camera its {} moves too little on the screen (or straight towards the camera) to be drawn; a visitor must turn the view, or lead it with another part",
+                a.def.primary.name()
+            ));
+        }
+        let views: Vec<ViewReport> = views
+            .into_iter()
+            .map(|(deg, (n, right, missed, confused))| {
+                for (other, k) in &confused {
+                    if share(*k, n) >= CONFUSED_SHARE {
+                        advice.push(format!(
+                            "`{name}` drags from the {deg}° view start `{other}` ({k} of {n}): from there the two start alike; merge them, or give one another primary part"
+                        ));
+                    }
+                }
+                ViewReport {
+                    view_deg: deg as f64,
+                    drags: n,
+                    correct: share(right, n),
+                    missed: share(missed, n),
+                    wrong_action: share(n - right - missed, n),
+                    confused_with: confused,
+                }
+            })
+            .collect();
+        if slow > 1 && share(slow, slow_n) > 2.0 * SLOW_BUDGET {
+            advice.push(format!(
+                "slow posing drags of the {} start `{name}` ({slow} of {slow_n}): its start is slow and small, so posing that part can start it",
+                a.def.primary.name()
+            ));
+        }
+        rows.push(ActionReport {
+            action: name.clone(),
+            primary: a.def.primary.name().to_owned(),
+            takes: takes.len(),
+            clips: a.templates.len(),
+            views,
+            false_trigger_slow: share(slow, slow_n),
+            drawable_from_default_camera: drawable,
+        });
+    }
+    if !c.within_budget {
+        advice.push(format!(
+            "no threshold keeps slow posing drags under {:.0}% of trials: the strictest is used, and fewer drags start their action",
+            SLOW_BUDGET / 2.0 * 100.0
+        ));
+    }
+    let drags: Vec<_> = c.outcomes.iter().filter(|o| !o.slow).collect();
+    let n = drags.len();
+    let right: Vec<f64> = drags
+        .iter()
+        .filter(|o| o.started.as_deref() == Some(o.action.as_str()))
+        .filter_map(|o| o.decided_at)
+        .collect();
+    let wrong = drags
+        .iter()
+        .filter(|o| o.started.as_ref().is_some_and(|s| s != &o.action))
+        .count();
+    let slow: Vec<_> = c.outcomes.iter().filter(|o| o.slow).collect();
+    LibraryReport {
+        thresholds: c.recogniser.thresholds,
+        within_budget: c.within_budget,
+        drags: n,
+        correct: share(right.len(), n),
+        wrong_action: share(wrong, n),
+        missed: share(n - right.len() - wrong, n),
+        false_trigger_slow: share(
+            slow.iter().filter(|o| o.started.is_some()).count(),
+            slow.len(),
+        ),
+        decided_at: if right.is_empty() {
+            0.0
+        } else {
+            (right.iter().sum::<f64>() / right.len() as f64 * 1000.0).round() / 1000.0
+        },
+        actions: rows,
+        advice,
+    }
+}
+
+impl LibraryReport {
+    /// The report as lines of text: a table, then the advice.
+    #[must_use]
+    pub fn to_text(&self) -> Vec<String> {
+        let t = self.thresholds;
+        let mut out = vec![
+            format!(
+                "recogniser calibrated on the library's own clips: cost under {:.2} m, {:.3} m ahead of the next action, {:.0}% of the path covered, at most {:.1} times slower",
+                t.cost_m,
+                t.margin_m,
+                t.coverage * 100.0,
+                t.max_slow
+            ),
+            format!(
+                "each clip left out in turn, {} drags from two views: correct {:.3}, wrong {:.3}, missed {:.3}, slow drags starting an action {:.3}, decided at {:.2} of the drag",
+                self.drags,
+                self.correct,
+                self.wrong_action,
+                self.missed,
+                self.false_trigger_slow,
+                self.decided_at
+            ),
+            String::new(),
+            format!(
+                "{:<28} {:<11} {:>5} {:>5}  {:>5} {:>8} {:>7} {:>7}  {}",
+                "action",
+                "primary",
+                "takes",
+                "view",
+                "drags",
+                "correct",
+                "missed",
+                "wrong",
+                "started instead"
+            ),
+        ];
+        for a in &self.actions {
+            for (k, v) in a.views.iter().enumerate() {
+                let (name, primary, takes) = if k == 0 {
+                    (a.action.as_str(), a.primary.as_str(), a.takes.to_string())
+                } else {
+                    ("", "", String::new())
+                };
+                let instead: Vec<String> = v
+                    .confused_with
+                    .iter()
+                    .map(|(o, n)| format!("{o} {n}"))
+                    .collect();
+                out.push(format!(
+                    "{:<28} {:<11} {:>5} {:>4}°  {:>5} {:>8.2} {:>7.2} {:>7.2}  {}",
+                    name,
+                    primary,
+                    takes,
+                    v.view_deg,
+                    v.drags,
+                    v.correct,
+                    v.missed,
+                    v.wrong_action,
+                    instead.join(", ")
+                ));
+            }
+        }
+        out.push(String::new());
+        if self.advice.is_empty() {
+            out.push("nothing to improve that a drag shows".to_owned());
+        } else {
+            out.extend(self.advice.iter().map(|a| format!("- {a}")));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn takes_are_files_without_cuts_or_mirrors() {
+        assert_eq!(
+            take_of("punch_normal_001.bvh#48-89~mirror"),
+            "punch_normal_001.bvh"
+        );
+        assert_eq!(take_of("bow.bvh~mirror"), "bow.bvh");
+        assert_eq!(take_of("bow.bvh"), "bow.bvh");
+    }
+}
