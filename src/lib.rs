@@ -40,6 +40,7 @@ pub mod character;
 pub mod control;
 pub(crate) mod display;
 pub mod input;
+pub mod output;
 pub mod physics;
 pub(crate) mod platform;
 pub mod render;

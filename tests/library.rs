@@ -368,3 +368,39 @@ fn mirror_names_swap_the_side_or_say_mirror() {
     assert_eq!(mirrored_name("leftover"), "leftover_mirror");
     assert_eq!(mirrored_name("wave"), "wave_mirror");
 }
+
+#[test]
+fn clip_names_that_leave_the_clips_folder_are_refused_unread() {
+    // A library from another studio naming files outside its folder: the
+    // entry is named, the file is never read, and nothing of it shows.
+    let dir = tempfile::tempdir().unwrap();
+    let secret = dir.path().join("secret.bvh");
+    std::fs::write(&secret, "HIERARCHY top secret line\n").unwrap();
+    let lib = dir.path().join("lib");
+    std::fs::create_dir(&lib).unwrap();
+    std::fs::write(
+        lib.join("library.toml"),
+        format!(
+            "[posing]\nclips = [\"../secret.bvh\", \"../../../../etc/passwd\", {:?}, \"sub/../../secret.bvh#1-5\"]\n",
+            secret.display().to_string()
+        ),
+    )
+    .unwrap();
+    let err = Library::load(&lib).unwrap_err().to_string();
+    eprintln!("{err}");
+    for name in [
+        "../secret.bvh",
+        "../../../../etc/passwd",
+        "sub/../../secret.bvh",
+    ] {
+        assert!(
+            err.contains(&format!("`{name}` is outside the library's clips folder")),
+            "{err}"
+        );
+    }
+    assert!(err.contains(&secret.display().to_string()), "{err}");
+    assert!(
+        !err.contains("top secret") && !err.contains("root:"),
+        "{err}"
+    );
+}

@@ -38,6 +38,7 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::bvh;
+pub use super::clip_ref::{ClipRef, ClipRefError};
 use super::motion::{Clip, ImportSettings};
 use super::roles::Role;
 use super::skeleton::Skeleton;
@@ -175,13 +176,18 @@ impl Library {
 
     /// Load and validate `dir/library.toml` and its clips.
     pub fn load(dir: &Path) -> Result<Self, LibraryError> {
+        Self::load_as(dir, &dir.join("library.toml"))
+    }
+
+    /// Load the library of folder `dir` described by `toml_path` (a
+    /// `library.toml` about to replace the folder's, checked first).
+    pub fn load_as(dir: &Path, toml_path: &Path) -> Result<Self, LibraryError> {
         let mut problems = Vec::new();
         let fail = |problems: Vec<String>| LibraryError {
             dir: dir.to_owned(),
             problems,
         };
-        let toml_path = dir.join("library.toml");
-        let text = std::fs::read_to_string(&toml_path)
+        let text = std::fs::read_to_string(toml_path)
             .map_err(|e| fail(vec![format!("cannot read {}: {e}", toml_path.display())]))?;
         let file: LibraryFile = toml::from_str(&text).map_err(|e| {
             fail(vec![format!(
@@ -501,54 +507,6 @@ impl Fnv {
 impl Default for Fnv {
     fn default() -> Self {
         Self::new()
-    }
-}
-
-/// A clip named in `library.toml`: a BVH file, or frames of one
-/// (`take.bvh#120-185`, both ends included, counted from 0).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ClipRef<'a> {
-    pub file: &'a str,
-    pub frames: Option<(usize, usize)>,
-}
-
-/// Why a clip name's frame range cannot be read.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum ClipRefError {
-    #[error("`#{range}` is not a frame range; write it as FIRST-LAST, e.g. `{file}#120-185`")]
-    NotARange { file: String, range: String },
-    #[error("the frame range {first}-{last} must end after it begins")]
-    Backwards { first: usize, last: usize },
-    #[error("names no file before `#`")]
-    NoFile,
-}
-
-impl<'a> ClipRef<'a> {
-    /// Split a clip name into its file and frame range.
-    pub fn parse(name: &'a str) -> Result<Self, ClipRefError> {
-        let Some((file, range)) = name.rsplit_once('#') else {
-            return Ok(Self {
-                file: name,
-                frames: None,
-            });
-        };
-        let bad = || ClipRefError::NotARange {
-            file: file.to_owned(),
-            range: range.to_owned(),
-        };
-        let (a, b) = range.split_once('-').ok_or_else(bad)?;
-        let a: usize = a.trim().parse().map_err(|_| bad())?;
-        let b: usize = b.trim().parse().map_err(|_| bad())?;
-        if b <= a {
-            return Err(ClipRefError::Backwards { first: a, last: b });
-        }
-        if file.is_empty() {
-            return Err(ClipRefError::NoFile);
-        }
-        Ok(Self {
-            file,
-            frames: Some((a, b)),
-        })
     }
 }
 

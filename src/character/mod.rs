@@ -6,11 +6,13 @@
 //! - [`bvh`]: BVH files in and out.
 //! - [`motion`]: a clip in metres, with units and T-pose frame resolved.
 //! - [`roles`]: which joint is the head, a hand, a foot...
-//! - [`library`]: a folder of clips and its `library.toml`.
+//! - [`library`]: a folder of clips and its `library.toml`; [`clip_ref`]:
+//!   the clip names in it, kept inside the clips folder.
 //! - [`camera`]: projection to screen pixels and rays back from them.
 
 pub mod bvh;
 pub mod camera;
+pub mod clip_ref;
 pub mod library;
 pub mod mirror;
 pub mod motion;

@@ -202,6 +202,49 @@ pub enum ClipError {
     NoFrames,
     #[error("scale_to_m must be a positive number, found {0}")]
     BadScale(f64),
+    #[error(
+        "the character would be {height_m:.3} m tall at {scale} m per file unit: a person is {MIN_STATURE_M} to {MAX_STATURE_M} m; set scale_to_m (metres per file unit) to the file's unit"
+    )]
+    Stature { height_m: f64, scale: f64 },
+    #[error(
+        "{what} is out of range ({value:e} m): positions must lie within {MAX_REACH_M} m of the origin"
+    )]
+    OutOfRange { what: String, value: f64 },
+}
+
+/// The shortest and tallest character a clip may show (m).
+pub const MIN_STATURE_M: f64 = 0.3;
+pub const MAX_STATURE_M: f64 = 10.0;
+/// Bones and positions further than this from the origin are no capture
+/// (m).
+pub const MAX_REACH_M: f64 = 1000.0;
+
+/// The first bone offset, translation or rotation of `skeleton` and
+/// `frames` (in metres) that is not finite or lies beyond
+/// [`MAX_REACH_M`].
+fn out_of_range(skeleton: &Skeleton, frames: &[Pose]) -> Option<ClipError> {
+    let bad = |v: f64| !v.is_finite() || v.abs() > MAX_REACH_M;
+    for j in &skeleton.joints {
+        let o = j.offset;
+        if bad(o.length()) {
+            return Some(ClipError::OutOfRange {
+                what: format!("the bone to joint {}", j.name),
+                value: o.length(),
+            });
+        }
+    }
+    for (k, f) in frames.iter().enumerate() {
+        for (j, t) in f.translations.iter().enumerate() {
+            let r = f.rotations[j];
+            if bad(t.length()) || !r.is_finite() {
+                return Some(ClipError::OutOfRange {
+                    what: format!("frame {k}, joint {}", skeleton.joints[j].name),
+                    value: t.length(),
+                });
+            }
+        }
+    }
+    None
 }
 
 impl Clip {
@@ -251,6 +294,13 @@ impl Clip {
                 *t *= scale;
             }
         }
+        let height_m = stature_units * scale;
+        if !(MIN_STATURE_M..=MAX_STATURE_M).contains(&height_m) {
+            return Err(ClipError::Stature { height_m, scale });
+        }
+        if let Some(e) = out_of_range(&skeleton, &frames) {
+            return Err(e);
+        }
         Ok(Self {
             translates: channels
                 .iter()
@@ -271,7 +321,7 @@ impl Clip {
             scale_to_m: scale,
             dropped_tpose,
             roles,
-            height_m: stature_units * scale,
+            height_m,
             first_frame_height_m: first_frame_units * scale,
         })
     }

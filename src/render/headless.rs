@@ -68,12 +68,11 @@ impl Image {
         Ok(out)
     }
 
-    /// Write as a PNG file, through a temporary file renamed into place.
+    /// Write as a PNG file, whole or not at all, over a regular file only
+    /// ([`crate::output::replace_file`]).
     pub fn write_png(&self, path: &Path) -> std::io::Result<()> {
         let bytes = self.to_png().map_err(std::io::Error::other)?;
-        let tmp = path.with_extension("png.tmp");
-        std::fs::write(&tmp, bytes)?;
-        std::fs::rename(&tmp, path)
+        crate::output::replace_file(path, &bytes)
     }
 
     /// Read a PNG file (8-bit RGB or RGBA).

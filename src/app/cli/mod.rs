@@ -261,17 +261,13 @@ fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
-/// Write `text` to `out` through a temporary file renamed into place.
+/// Write `text` to `out` whole, over a regular file only
+/// ([`crate::output::replace_file`]).
 fn write_atomically(out: &Path, text: &str) -> Result<(), Failure> {
-    let mut tmp = out.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, text)
-        .and_then(|()| std::fs::rename(&tmp, out))
-        .map_err(|e| {
-            Failure::new(
-                exit::CANTCREAT,
-                format!("cannot write {}: {e}", out.display()),
-            )
-        })
+    crate::output::replace_file(out, text.as_bytes()).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", out.display()),
+        )
+    })
 }

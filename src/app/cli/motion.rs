@@ -63,12 +63,8 @@ pub(super) fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> R
         &clip.frames,
         clip.frame_time,
     );
-    std::fs::write(out, text).map_err(|e| {
-        Failure::new(
-            exit::CANTCREAT,
-            format!("cannot write {}: {e}", out.display()),
-        )
-    })?;
+    // Whole or not at all: a good file is never left truncated.
+    super::write_atomically(out, &text)?;
     writeln!(
         std::io::stdout(),
         "wrote {} ({} frames, {} joints, unit {} m{})",
@@ -195,24 +191,27 @@ pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Fa
         )
     };
     std::fs::create_dir_all(out).map_err(cant)?;
-    // Written beside and renamed: an existing library is replaced whole or
-    // not at all.
+    // Written beside, loaded from there, and renamed into place only once
+    // it loads: an existing library is replaced by a working one or kept.
     let tmp = out.join(".library.toml.new");
-    std::fs::write(&tmp, plan.to_toml(out)).map_err(cant)?;
-    std::fs::rename(&tmp, &target).map_err(cant)?;
-    let mut stdout = std::io::stdout();
-    for line in plan.report() {
-        writeln!(stdout, "{line}").map_err(stdout_error)?;
-    }
-    let lib = Library::load(out).map_err(|e| {
+    let text = plan.to_toml(out);
+    crate::output::replace_file(&tmp, text.as_bytes()).map_err(cant)?;
+    let lib = Library::load_as(out, &tmp).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
         Failure::new(
             exit::SOFTWARE,
             format!(
-                "the library written to {} does not load (kept for a look): {e}",
+                "the library planned for {} does not load, so nothing was written there: {e}",
                 target.display()
             ),
         )
     })?;
+    let _ = std::fs::remove_file(&tmp);
+    crate::output::replace_file(&target, text.as_bytes()).map_err(cant)?;
+    let mut stdout = std::io::stdout();
+    for line in plan.report() {
+        writeln!(stdout, "{line}").map_err(stdout_error)?;
+    }
     tracing::info!(library = %target.display(), clips = lib.clips.len(), actions = lib.actions.len(), "library written");
     writeln!(
         stdout,

@@ -232,18 +232,10 @@ pub fn starts_before(text: &str) -> u64 {
         .map_or(0, |v| v.max(0.0) as u64)
 }
 
-/// Write `text` to `path` whole: into a temporary file beside it, then
-/// renamed over it.
+/// Write `text` to `path` whole, over a regular file only
+/// ([`crate::output::replace_file`]).
 pub fn write_atomically(path: &Path, text: &str) -> io::Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp"));
-    std::fs::write(&tmp, text)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
+    crate::output::replace_file(path, text.as_bytes())
 }
 
 #[cfg(test)]

@@ -11,10 +11,9 @@
 //! `Xposition Yposition Zposition` where the source had translation channels,
 //! and `Zrotation Yrotation Xrotation` everywhere, in metres and degrees.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use glam::{DQuat, DVec3, EulerRot};
+use glam::{DQuat, DVec3};
 use thiserror::Error;
 
 use super::skeleton::{Joint, Pose, Skeleton, forward_kinematics};
@@ -23,6 +22,27 @@ use super::skeleton::{Joint, Pose, Skeleton, forward_kinematics};
 pub const MAX_JOINTS: usize = 1024;
 /// Most channel values a file may hold (frames × channels).
 pub const MAX_VALUES: usize = 400_000_000;
+
+/// The shortest and longest frame time read (s): capture runs at 1 to
+/// 1000 frames per second.
+pub const MIN_FRAME_TIME_S: f64 = 0.001;
+pub const MAX_FRAME_TIME_S: f64 = 1.0;
+
+/// Input quoted in an error: escaped (no control character reaches a
+/// terminal or the screen) and cut to [`QUOTE_CHARS`] characters.
+#[must_use]
+pub fn quote(input: &str) -> String {
+    let escaped: String = input.escape_debug().collect();
+    if escaped.chars().count() <= QUOTE_CHARS {
+        format!("`{escaped}`")
+    } else {
+        let cut: String = escaped.chars().take(QUOTE_CHARS).collect();
+        format!("`{cut}…` ({} characters)", input.chars().count())
+    }
+}
+
+/// The most characters of input an error message quotes.
+pub const QUOTE_CHARS: usize = 120;
 
 /// Errors reading a BVH file.
 #[derive(Debug, Error)]
@@ -160,7 +180,7 @@ impl<'a> Tokens<'a> {
             Err(BvhError::Syntax {
                 path: self.path.to_owned(),
                 line,
-                message: format!("expected `{word}`, found `{t}`"),
+                message: format!("expected `{word}`, found {}", quote(t)),
             })
         }
     }
@@ -173,7 +193,7 @@ impl<'a> Tokens<'a> {
             _ => Err(BvhError::Syntax {
                 path: self.path.to_owned(),
                 line,
-                message: format!("expected {what} (a finite number), found `{t}`"),
+                message: format!("expected {what} (a finite number), found {}", quote(t)),
             }),
         }
     }
@@ -205,7 +225,7 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
     let kw = t.next("`ROOT`")?;
     if !kw.eq_ignore_ascii_case("ROOT") {
         t.pos -= 1;
-        return Err(t.err(format!("expected `ROOT`, found `{kw}`")));
+        return Err(t.err(format!("expected `ROOT`, found {}", quote(kw))));
     }
     parse_joint(&mut t, &mut skeleton, &mut channels, None)?;
     if let Some(w) = t.peek() {
@@ -228,12 +248,12 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
     t.expect("Time:")?;
     let line = t.line();
     let frame_time = t.number("the frame time in seconds")?;
-    if frame_time <= 0.0 || frame_time > 10.0 {
+    if !(MIN_FRAME_TIME_S..=MAX_FRAME_TIME_S).contains(&frame_time) {
         return Err(BvhError::Syntax {
             path: path.to_owned(),
             line,
             message: format!(
-                "frame time must be above 0 and at most 10 seconds, found {frame_time}"
+                "frame time must be between {MIN_FRAME_TIME_S} and {MAX_FRAME_TIME_S} seconds (1000 to 1 frames per second), found {frame_time}"
             ),
         });
     }
@@ -421,7 +441,7 @@ fn parse_joint(
                     let ch = Channel::parse(c).ok_or_else(|| BvhError::Syntax {
                         path: t.path.to_owned(),
                         line: cline,
-                        message: format!("expected a channel (Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation), found `{c}`"),
+                        message: format!("expected a channel (Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation), found {}", quote(c)),
                     })?;
                     if list.contains(&ch) {
                         return Err(BvhError::Syntax {
@@ -451,7 +471,8 @@ fn parse_joint(
                     path: t.path.to_owned(),
                     line,
                     message: format!(
-                        "expected `OFFSET`, `CHANNELS`, `JOINT`, `End Site` or `}}`, found `{word}`"
+                        "expected `OFFSET`, `CHANNELS`, `JOINT`, `End Site` or `}}`, found {}",
+                        quote(word)
                     ),
                 });
             }
@@ -468,73 +489,8 @@ pub fn read_file(path: &Path) -> Result<BvhFile, BvhError> {
     parse(&String::from_utf8_lossy(&bytes), path)
 }
 
-/// Write a skeleton and postures (metres) as BVH. Joints whose
-/// `translates[j]` is set get translation channels (the root always does).
-#[must_use]
-pub fn write(skeleton: &Skeleton, translates: &[bool], frames: &[Pose], frame_time: f64) -> String {
-    let mut s = String::from("HIERARCHY\n");
-    write_joint(&mut s, skeleton, translates, 0, 0);
-    let _ = writeln!(
-        s,
-        "MOTION\nFrames: {}\nFrame Time: {:.8}",
-        frames.len(),
-        frame_time
-    );
-    for pose in frames {
-        let mut first = true;
-        for (j, _) in skeleton.joints.iter().enumerate() {
-            let mut push = |v: f64| {
-                if !first {
-                    s.push(' ');
-                }
-                first = false;
-                // Avoid "-0.000000".
-                let v = if v.abs() < 5e-10 { 0.0 } else { v };
-                let _ = write!(s, "{v:.6}");
-            };
-            if j == 0 || translates.get(j).copied().unwrap_or(false) {
-                let p = pose.translations[j];
-                push(p.x);
-                push(p.y);
-                push(p.z);
-            }
-            let (z, y, x) = pose.rotations[j].to_euler(EulerRot::ZYX);
-            push(z.to_degrees());
-            push(y.to_degrees());
-            push(x.to_degrees());
-        }
-        s.push('\n');
-    }
-    s
-}
-
-fn write_joint(s: &mut String, skeleton: &Skeleton, translates: &[bool], j: usize, depth: usize) {
-    let ind = "\t".repeat(depth);
-    let joint = &skeleton.joints[j];
-    let kw = if j == 0 { "ROOT" } else { "JOINT" };
-    let _ = writeln!(s, "{ind}{kw} {}\n{ind}{{", joint.name);
-    let o = joint.offset;
-    let _ = writeln!(s, "{ind}\tOFFSET {:.6} {:.6} {:.6}", o.x, o.y, o.z);
-    if j == 0 || translates.get(j).copied().unwrap_or(false) {
-        let _ = writeln!(
-            s,
-            "{ind}\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation"
-        );
-    } else {
-        let _ = writeln!(s, "{ind}\tCHANNELS 3 Zrotation Yrotation Xrotation");
-    }
-    for c in skeleton.children(j).collect::<Vec<_>>() {
-        write_joint(s, skeleton, translates, c, depth + 1);
-    }
-    if let Some(e) = joint.end_site {
-        let _ = writeln!(
-            s,
-            "{ind}\tEnd Site\n{ind}\t{{\n{ind}\t\tOFFSET {:.6} {:.6} {:.6}\n{ind}\t}}",
-            e.x, e.y, e.z
-        );
-    }
-    let _ = writeln!(s, "{ind}}}");
-}
+mod write;
+pub use write::write;
 
 #[cfg(test)]
 mod tests {

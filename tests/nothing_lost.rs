@@ -1,0 +1,196 @@
+//! Inputs an operator gets wrong or a stranger's files carry, and outputs
+//! over the wrong thing: each is refused with a clear error and an exit
+//! code, and no file is destroyed (regressions of what a careless or
+//! hostile operator found).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::marionette;
+
+/// A real capture file (Bandai, centimetres, 30 fps).
+fn bandai(name: &str) -> PathBuf {
+    common::shared_dir().join("mocap/bandai").join(name)
+}
+
+/// `text` with its first motion frame's first value replaced by `value`.
+fn with_first_value(text: &str, value: &str) -> String {
+    let motion = text.find("Frame Time:").unwrap();
+    let line_end = motion + text[motion..].find('\n').unwrap() + 1;
+    let rest = &text[line_end..];
+    let first_end = rest.find(char::is_whitespace).unwrap();
+    format!("{}{value}{}", &text[..line_end], &rest[first_end..])
+}
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn a_position_of_1e308_is_refused_naming_the_joint_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(bandai("d1_bow_active_001.bvh")).unwrap();
+    let bad = dir.path().join("far.bvh");
+    std::fs::write(&bad, with_first_value(&text, "1e308")).unwrap();
+    let out = marionette(&["inspect", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65), "{}", stderr(&out));
+    assert!(stderr(&out).contains("frame 0, joint"), "{}", stderr(&out));
+    // Through the posing evaluation that used to panic in the IK, with a
+    // library of the same rig.
+    let takes = dir.path().join("takes");
+    std::fs::create_dir(&takes).unwrap();
+    for style in ["angry", "happy"] {
+        std::os::unix::fs::symlink(
+            bandai(&format!("d1_bow_{style}_001.bvh")),
+            takes.join(format!("pose_{style}.bvh")),
+        )
+        .unwrap();
+    }
+    let lib = dir.path().join("lib");
+    let out = marionette(&[
+        "library",
+        "init",
+        takes.to_str().unwrap(),
+        "--out",
+        lib.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args(["eval", "pose", "--library"])
+        .arg(&lib)
+        .arg("--test")
+        .arg(&bad)
+        .env("CACHE_DIRECTORY", dir.path().join("cache"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(65), "{}", stderr(&out));
+    assert!(stderr(&out).contains("frame 0, joint"), "{}", stderr(&out));
+}
+
+#[test]
+fn frame_times_and_sizes_no_capture_has_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(bandai("d1_bow_active_001.bvh")).unwrap();
+    let quick = dir.path().join("quick.bvh");
+    let frame_time = text[text.find("Frame Time:").unwrap()..]
+        .lines()
+        .next()
+        .unwrap()
+        .to_owned();
+    std::fs::write(&quick, text.replace(&frame_time, "Frame Time: 1e-300")).unwrap();
+    let out = marionette(&["inspect", quick.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("frame time must be between 0.001 and 1 seconds"),
+        "{}",
+        stderr(&out)
+    );
+    // Metres taken for centimetres: a character of 1.6 km.
+    let out = marionette(&[
+        "convert-bvh",
+        bandai("d1_bow_active_001.bvh").to_str().unwrap(),
+        "--out",
+        dir.path().join("big.bvh").to_str().unwrap(),
+        "--scale-to-m",
+        "10",
+    ]);
+    assert_eq!(out.status.code(), Some(65), "{}", stderr(&out));
+    assert!(stderr(&out).contains("m tall"), "{}", stderr(&out));
+    assert!(!dir.path().join("big.bvh").exists());
+}
+
+#[test]
+fn an_error_quotes_at_most_120_characters_of_the_input_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("long.bvh");
+    let token = format!("{}\u{7}{}", "X".repeat(100_000), "Y".repeat(10));
+    std::fs::write(&bad, format!("HIERARCHY\n{token}\n")).unwrap();
+    let out = marionette(&["inspect", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(65), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.len() < 1000, "{} bytes", err.len());
+    assert!(err.contains("(100011 characters)"), "{err}");
+    assert!(!err.contains('\u{7}'));
+}
+
+#[test]
+fn outputs_over_links_devices_and_folders_are_refused_and_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let precious = dir.path().join("precious.bvh");
+    std::fs::write(&precious, "keep me").unwrap();
+    let link = dir.path().join("link.bvh");
+    std::os::unix::fs::symlink(&precious, &link).unwrap();
+    let src = bandai("d1_bow_active_001.bvh");
+    for target in [link.as_path(), Path::new("/dev/null"), dir.path()] {
+        let out = marionette(&[
+            "convert-bvh",
+            src.to_str().unwrap(),
+            "--out",
+            target.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(73), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains("not a regular file"),
+            "{}",
+            stderr(&out)
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&precious).unwrap(), "keep me");
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    // Nothing was left beside them.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    // A regular file is replaced whole.
+    let out_file = dir.path().join("out.bvh");
+    std::fs::write(&out_file, "old").unwrap();
+    let out = marionette(&[
+        "convert-bvh",
+        src.to_str().unwrap(),
+        "--out",
+        out_file.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        std::fs::read_to_string(&out_file)
+            .unwrap()
+            .starts_with("HIERARCHY")
+    );
+}
+
+#[test]
+fn a_take_named_with_a_newline_makes_a_library_that_loads() {
+    // The name used to end a comment of library.toml: `--force` then
+    // replaced a working library with one that did not load.
+    let dir = tempfile::tempdir().unwrap();
+    let takes = dir.path().join("takes");
+    std::fs::create_dir(&takes).unwrap();
+    for (src, name) in [
+        ("d1_bow_active_001.bvh", "bow_a\nb_001.bvh"),
+        ("d1_bow_angry_001.bvh", "bow_angry_001.bvh"),
+    ] {
+        std::os::unix::fs::symlink(bandai(src), takes.join(name)).unwrap();
+    }
+    let lib = dir.path().join("lib");
+    std::fs::create_dir(&lib).unwrap();
+    std::fs::write(lib.join("library.toml"), "# the working library\n").unwrap();
+    let out = marionette(&[
+        "library",
+        "init",
+        takes.to_str().unwrap(),
+        "--out",
+        lib.to_str().unwrap(),
+        "--force",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let lib = marionette::character::library::Library::load(&lib).unwrap();
+    assert_eq!(lib.posing.len(), 2);
+    assert_eq!(
+        std::fs::read_dir(dir.path().join("lib")).unwrap().count(),
+        1
+    );
+}
