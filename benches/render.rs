@@ -100,12 +100,12 @@ fn bench(c: &mut Criterion) {
         let boxes = scene::boxes(&v, 21);
         let gpu = Gpu::new(AdapterChoice::Auto).expect("a Vulkan adapter");
         let name = gpu.info.name.clone();
-        let mut bare = Headless::new(gpu, w, h, 1);
+        let mut bare = Headless::new(gpu, w, h, 1).unwrap();
         g.bench_function(format!("{name} {w}x{h} bare 21 boxes"), |b| {
             b.iter(|| bare.render(&boxes).unwrap())
         });
         let gpu = Gpu::new(AdapterChoice::Auto).unwrap();
-        let mut full = Headless::new(gpu, w, h, samples);
+        let mut full = Headless::new(gpu, w, h, samples).unwrap();
         let n = full.renderer.samples();
         g.bench_function(format!("{name} {w}x{h} character x{n}"), |b| {
             b.iter(|| full.render(&character).unwrap())

@@ -194,3 +194,81 @@ fn a_take_named_with_a_newline_makes_a_library_that_loads() {
         1
     );
 }
+
+#[test]
+fn a_picture_larger_than_the_adapter_renders_is_a_configuration_error() {
+    // Inside the documented range of display.width and display.height, but
+    // over what the adapter allocates: wgpu used to panic (exit 101).
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("big.toml");
+    std::fs::write(&config, "[display]\nwidth = 16384\nheight = 8192\n").unwrap();
+    let out = marionette(&[
+        "--config",
+        config.to_str().unwrap(),
+        "demo",
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(78), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("lower display.width and display.height"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn usage_errors_name_the_flag_and_exit_2() {
+    let bow = bandai("d1_bow_active_001.bvh");
+    for scale in ["0", "nan", "inf", "-1"] {
+        let out = marionette(&[
+            "convert-bvh",
+            bow.to_str().unwrap(),
+            "--out",
+            "/tmp/never-written.bvh",
+            &format!("--scale-to-m={scale}"),
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{scale}: {}", stderr(&out));
+        assert!(stderr(&out).contains("--scale-to-m"), "{}", stderr(&out));
+    }
+    let out = marionette(&[
+        "eval",
+        "pose",
+        "--library",
+        "assets/library",
+        "--leave-one-out",
+        "--frames",
+        "0",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--frames"), "{}", stderr(&out));
+}
+
+#[test]
+fn eval_actions_without_test_clips_says_so_and_a_folder_is_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = marionette(&[
+        "eval",
+        "actions",
+        "--library",
+        "assets/library",
+        "--test",
+        dir.path().to_str().unwrap(),
+        "--models-only",
+    ]);
+    assert_eq!(out.status.code(), Some(66), "{}", stderr(&out));
+    assert!(stderr(&out).contains("no test clips"), "{}", stderr(&out));
+    // A folder where a file is expected: 66, as the README's table says.
+    for args in [
+        vec!["inspect", dir.path().to_str().unwrap()],
+        vec![
+            "convert-bvh",
+            dir.path().to_str().unwrap(),
+            "--out",
+            "/tmp/never-written.bvh",
+        ],
+    ] {
+        let out = marionette(&args);
+        assert_eq!(out.status.code(), Some(66), "{args:?}: {}", stderr(&out));
+    }
+}

@@ -40,7 +40,7 @@ fn camera(w: f64, h: f64) -> Camera {
 fn headless(w: u32, h: u32) -> Headless {
     let gpu = Gpu::new(AdapterChoice::Cpu)
         .expect("a CPU Vulkan adapter (lavapipe): apt-get install mesa-vulkan-drivers");
-    Headless::new(gpu, w, h, 4)
+    Headless::new(gpu, w, h, 4).unwrap()
 }
 
 /// Per-pixel comparison: a pixel differs when a channel is off by more than
@@ -288,10 +288,10 @@ fn single_sampled_frames_match_golden_and_leave_no_trails() {
     );
     let after = held_scene(&view);
     let mut h = headless(640, 360);
-    let mut one = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1);
+    let mut one = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1).unwrap();
     let _ = one.render(&before).unwrap();
     let second = one.render(&after).unwrap();
-    let mut fresh = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1);
+    let mut fresh = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1).unwrap();
     let alone = fresh.render(&after).unwrap();
     assert!(second == alone, "the earlier frame left traces");
     compare("two_held_parts_x1", &alone);
@@ -349,10 +349,10 @@ fn two_characters_apart_redraw_only_where_they_are_and_were() {
         )
     };
     let frames = [frame(0.8, 0.0), frame(1.1, 30.0), frame(0.6, -20.0)];
-    let mut kept = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1);
+    let mut kept = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1).unwrap();
     for (k, f) in frames.iter().enumerate() {
         let drawn = kept.render(f).unwrap();
-        let mut fresh = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1);
+        let mut fresh = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1).unwrap();
         assert!(
             drawn == fresh.render(f).unwrap(),
             "frame {k} kept traces of the one before"

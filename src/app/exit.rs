@@ -89,11 +89,11 @@ impl ExitStatus for PresentError {
     fn exit_code(&self) -> u8 {
         match self {
             Self::Kms(e) => e.exit_code(),
-            Self::NoOutput(_)
-            | Self::Master { .. }
-            | Self::LostMaster(_)
-            | Self::Direct { .. }
-            | Self::Gpu(_) => UNAVAILABLE,
+            Self::NoOutput(_) | Self::Master { .. } | Self::LostMaster(_) | Self::Direct { .. } => {
+                UNAVAILABLE
+            }
+            Self::Gpu(e) if e.is_configuration() => CONFIG,
+            Self::Gpu(_) => UNAVAILABLE,
             Self::Io { .. } => IOERR,
         }
     }
@@ -116,6 +116,7 @@ impl ExitStatus for HeadlessError {
     /// The exit code (sysexits) for systemd and scripts.
     fn exit_code(&self) -> u8 {
         match self {
+            Self::Gpu(e) if e.is_configuration() => CONFIG,
             Self::Gpu(_) => UNAVAILABLE,
             Self::Write { .. } => CANTCREAT,
         }
@@ -150,7 +151,9 @@ impl ExitStatus for EvemuError {
             EvemuError::Io { source, .. }
                 if matches!(
                     source.kind(),
-                    io::ErrorKind::NotFound | io::ErrorKind::PermissionDenied
+                    io::ErrorKind::NotFound
+                        | io::ErrorKind::PermissionDenied
+                        | io::ErrorKind::IsADirectory
                 ) =>
             {
                 NOINPUT

@@ -106,7 +106,7 @@ impl Screen {
         let (w, h) = presenter.size();
         let headless = match renderer {
             Some(adapter) => {
-                let headless = Headless::new(Gpu::new(adapter)?, w, h, samples);
+                let headless = Headless::new(Gpu::new(adapter)?, w, h, samples)?;
                 tracing::info!(
                     width = w,
                     height = h,
@@ -251,7 +251,7 @@ impl Screen {
                     w,
                     h,
                     self.samples,
-                )));
+                )?));
             }
             Presenter::Direct(d) => d.rebuild_gpu()?,
         }

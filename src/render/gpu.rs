@@ -24,6 +24,25 @@ pub enum GpuError {
     /// The device went away or failed while rendering.
     #[error("the GPU device was lost or failed: {0}")]
     Lost(String),
+    /// A picture larger than the adapter can render or read back.
+    #[error(
+        "a picture of {width}x{height} is larger than {adapter} renders (at most {max_side} pixels a side and {max_bytes} bytes a picture): lower display.width and display.height"
+    )]
+    TooLarge {
+        width: u32,
+        height: u32,
+        adapter: String,
+        max_side: u32,
+        max_bytes: u64,
+    },
+}
+
+impl GpuError {
+    /// A picture too large for the adapter: the configuration asks for it.
+    #[must_use]
+    pub fn is_configuration(&self) -> bool {
+        matches!(self, Self::TooLarge { .. })
+    }
 }
 
 /// Which adapters to accept.

@@ -124,8 +124,26 @@ impl Headless {
     /// Frames of `width` x `height` (the output's size, before rotation)
     /// with up to `samples` samples per pixel (0: 4 on a GPU, 1 on a CPU
     /// renderer).
-    #[must_use]
-    pub fn new(gpu: Gpu, width: u32, height: u32, samples: u32) -> Self {
+    pub fn new(gpu: Gpu, width: u32, height: u32, samples: u32) -> Result<Self, GpuError> {
+        // Checked before anything is allocated: wgpu panics on a texture or
+        // buffer over the device's limits.
+        let limits = gpu.device.limits();
+        let padded =
+            u64::from((width.max(1) * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+        let bytes = padded * u64::from(height);
+        let max_bytes = limits.max_buffer_size.min(u64::from(u32::MAX));
+        if width > limits.max_texture_dimension_2d
+            || height > limits.max_texture_dimension_2d
+            || bytes > max_bytes
+        {
+            return Err(GpuError::TooLarge {
+                width,
+                height,
+                adapter: gpu.info.name.clone(),
+                max_side: limits.max_texture_dimension_2d,
+                max_bytes,
+            });
+        }
         let samples = match samples {
             0 if gpu.is_cpu() => 1,
             0 => 4,
@@ -155,14 +173,14 @@ impl Headless {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        Self {
+        Ok(Self {
             gpu,
             renderer,
             size: (width, height),
             texture,
             readback,
             padded_row,
-        }
+        })
     }
 
     /// Output size in pixels.

@@ -109,7 +109,7 @@ pub(super) enum Command {
         #[arg(long)]
         out: PathBuf,
         /// File units to metres [default: detected]
-        #[arg(long)]
+        #[arg(long, value_parser = metres_per_unit)]
         scale_to_m: Option<f64>,
     },
     /// Build the learned models of a library and cache them (run and demo
@@ -228,7 +228,7 @@ pub(super) enum EvalCommand {
         method: EvalMethod,
         /// Frames sampled evenly from the test clips (from each clip with
         /// --leave-one-out)
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, value_parser = at_least_one)]
         frames: usize,
         /// Blocks of cells the grid search looks into, the best first
         /// (--method model; 0: every cell) [default: the synthesis's, 16]
@@ -312,4 +312,27 @@ pub enum LibraryCommand {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// `--scale-to-m`: metres per file unit, a positive number no file unit is
+/// smaller than a micrometre or larger than a kilometre.
+fn metres_per_unit(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| {
+        format!("`{s}` is not a number (metres per file unit: 0.01 for centimetres)")
+    })?;
+    if v.is_finite() && (1e-6..=1e3).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{v} metres per file unit is no unit: give 0.01 for centimetres, 0.0254 for inches, 1 for metres"
+        ))
+    }
+}
+
+/// A count of at least one.
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("`{s}` is not a count of at least 1")),
+    }
 }

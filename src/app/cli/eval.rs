@@ -52,6 +52,20 @@ pub(super) fn eval_actions(
         let (_, clip) = read_clip(f, None)?;
         clips.push((action, clip));
     }
+    if clips.is_empty() {
+        return Err(Failure::new(
+            exit::NOINPUT,
+            format!(
+                "{}: no test clips: name them <action>_<anything>.bvh after the library's actions ({})",
+                test_dir.display(),
+                actions
+                    .iter()
+                    .map(|a| a.def.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ));
+    }
     let tests: Vec<(String, &crate::character::motion::Clip)> =
         clips.iter().map(|(a, c)| (a.clone(), c)).collect();
     let mut result = if models_only {

@@ -425,7 +425,7 @@ pub fn run_table(
             })?;
             clear_old_frames(&dir.join("frames"))?;
             let gpu = Gpu::new(opts.adapter)?;
-            let h = Headless::new(gpu, ow, oh, config.display.samples);
+            let h = Headless::new(gpu, ow, oh, config.display.samples)?;
             tracing::info!(
                 width = ow,
                 height = oh,

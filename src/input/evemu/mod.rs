@@ -81,9 +81,12 @@ impl Recording {
 
     /// Time from the first to the last event, in seconds.
     #[must_use]
+    /// From the earliest to the latest event time stamp (s): a clock that
+    /// went back during the recording does not make it negative.
     pub fn duration_s(&self) -> f64 {
-        match (self.events.first(), self.events.last()) {
-            (Some(a), Some(b)) => (b.time_us - a.time_us) as f64 / 1e6,
+        let times = self.events.iter().map(|e| e.time_us);
+        match (times.clone().min(), times.max()) {
+            (Some(a), Some(b)) => (b - a) as f64 / 1e6,
             _ => 0.0,
         }
     }

@@ -46,6 +46,17 @@ impl<'a> Parser<'a> {
                 self.rec.version = parse_version(v.trim()).ok_or_else(|| {
                     self.err(n, format!("expected `# EVEMU major.minor`, found `{line}`"))
                 })?;
+                // evemu has written format 1.x since 2010; a later major
+                // version would be a format this reader does not know.
+                if self.rec.version.0 != 1 {
+                    return Err(self.err(
+                        n,
+                        format!(
+                            "evemu format {}.{} is not one marionette reads (1.0 to 1.3); record it again with evemu-record or marionette record",
+                            self.rec.version.0, self.rec.version.1
+                        ),
+                    ));
+                }
             }
             return Ok(());
         }

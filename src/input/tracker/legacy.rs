@@ -93,11 +93,13 @@ pub(crate) fn match_by_proximity(
     old: &[Active],
     points: &[(RawPoint, Option<i32>, i32)],
 ) -> Vec<Option<usize>> {
-    let mut pairs: Vec<(i64, usize, usize)> = Vec::with_capacity(old.len() * points.len());
+    // Squared distances of axes spanning the whole i32 range reach 2^65:
+    // in u128 they neither overflow nor wrap into the wrong order.
+    let mut pairs: Vec<(u128, usize, usize)> = Vec::with_capacity(old.len() * points.len());
     for (j, (p, _, _)) in points.iter().enumerate() {
         for (i, a) in old.iter().enumerate() {
-            let dx = i64::from(p.x) - i64::from(a.pos.x);
-            let dy = i64::from(p.y) - i64::from(a.pos.y);
+            let dx = u128::from((i64::from(p.x) - i64::from(a.pos.x)).unsigned_abs());
+            let dy = u128::from((i64::from(p.y) - i64::from(a.pos.y)).unsigned_abs());
             pairs.push((dx * dx + dy * dy, j, i));
         }
     }
@@ -111,4 +113,35 @@ pub(crate) fn match_by_proximity(
         }
     }
     assignment
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::touch::Tool;
+
+    #[test]
+    fn contacts_at_the_ends_of_the_i32_range_keep_their_partners() {
+        // Two contacts at opposite corners of a panel whose axes span the
+        // whole i32 range: the squared distances overflowed i64 (a panic
+        // in a debug build, swapped contacts in a release one).
+        let at = |x, y| RawPoint { x, y };
+        let old = [
+            Active {
+                id: 1,
+                tool: Tool::Finger,
+                pos: at(i32::MIN, i32::MIN),
+            },
+            Active {
+                id: 2,
+                tool: Tool::Finger,
+                pos: at(i32::MAX, i32::MAX),
+            },
+        ];
+        let moved = [
+            (at(i32::MIN + 5, i32::MIN), None, 0),
+            (at(i32::MAX - 5, i32::MAX), None, 0),
+        ];
+        assert_eq!(match_by_proximity(&old, &moved), vec![Some(0), Some(1)]);
+    }
 }
