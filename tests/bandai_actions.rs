@@ -125,10 +125,11 @@ fn bandai_styles_left_out_and_what_library_check_says() {
         "{advice:#?}"
     );
     let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
-    // Left out in turn (618 drags): correct 0.188, wrong 0.044, slow 0.008.
-    assert_eq!(check["drags"], 618);
-    assert!((f(&check, "correct") - 0.188).abs() < 0.03, "{check}");
-    assert!(f(&check, "wrong_action") < 0.06, "{check}");
+    // Left out in turn (606 drags; the feminine bye-bye, whose hands
+    // hardly move, is no action): correct 0.177, wrong 0.036, slow 0.003.
+    assert_eq!(check["drags"], 606);
+    assert!((f(&check, "correct") - 0.177).abs() < 0.03, "{check}");
+    assert!(f(&check, "wrong_action") < 0.05, "{check}");
     assert!(f(&check, "false_trigger_slow") <= 0.01, "{check}");
 
     // The styles nobody recorded for the library, through the recogniser
@@ -156,12 +157,12 @@ fn bandai_styles_left_out_and_what_library_check_says() {
         .unwrap()
     );
     assert_eq!(eval["trials"], 240);
-    // Measured: correct 0.254, wrong 0.050, slow 0.013, decided at 0.240
+    // Measured: correct 0.246, wrong 0.038, slow 0.004, decided at 0.241
     // (the paper's rule on the same trials: 0.171 correct, 0.108 slow,
     // decided at 0.593).
-    assert!(f(&eval, "correct") >= 0.235, "{eval}");
-    assert!(f(&eval, "wrong_action") <= 0.06, "{eval}");
-    assert!(f(&eval, "false_trigger_slow") <= 0.02, "{eval}");
+    assert!(f(&eval, "correct") >= 0.23, "{eval}");
+    assert!(f(&eval, "wrong_action") <= 0.05, "{eval}");
+    assert!(f(&eval, "false_trigger_slow") <= 0.01, "{eval}");
     assert!(f(&eval, "decided_at") <= 0.27, "{eval}");
     assert_eq!(eval["views"].as_array().unwrap().len(), 2);
     // What the builder is told is what held-out performers get, within 0.1.

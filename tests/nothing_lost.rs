@@ -272,3 +272,68 @@ fn eval_actions_without_test_clips_says_so_and_a_folder_is_no_file() {
         assert_eq!(out.status.code(), Some(66), "{args:?}: {}", stderr(&out));
     }
 }
+
+/// `text`'s first frame, `n` times.
+fn still(text: &str, n: usize) -> String {
+    let i = text.find("Frames:").unwrap();
+    let rest: Vec<&str> = text[i..].lines().collect();
+    let frame_time = rest[1];
+    let first = rest[2];
+    format!(
+        "{}Frames: {n}\n{frame_time}\n{}",
+        &text[..i],
+        format!("{first}\n").repeat(n)
+    )
+}
+
+#[test]
+fn one_frame_and_motionless_takes_are_no_actions() {
+    let dir = tempfile::tempdir().unwrap();
+    let takes = dir.path().join("takes");
+    std::fs::create_dir(&takes).unwrap();
+    let text = std::fs::read_to_string(bandai("d1_kick_normal_001.bvh")).unwrap();
+    std::fs::write(takes.join("kick_one.bvh"), still(&text, 1)).unwrap();
+    std::fs::write(takes.join("wave_still.bvh"), still(&text, 30)).unwrap();
+    std::os::unix::fs::symlink(
+        bandai("d1_bow_active_001.bvh"),
+        takes.join("bow_active.bvh"),
+    )
+    .unwrap();
+    let lib = dir.path().join("lib");
+    let out = marionette(&[
+        "library",
+        "init",
+        takes.to_str().unwrap(),
+        "--out",
+        lib.to_str().unwrap(),
+    ]);
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        report.contains("not an action kick_one.bvh: one frame"),
+        "{report}"
+    );
+    assert!(
+        report.contains("not an action wave_still.bvh: no part moves"),
+        "{report}"
+    );
+    assert!(!report.contains("NaN"), "{report}");
+    let lib = marionette::character::library::Library::load(&lib).unwrap();
+    let names: Vec<&str> = lib.actions.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["bow"]);
+    assert_eq!(lib.posing.len(), 3);
+}
+
+#[test]
+fn contacts_with_metrics_is_a_usage_error_not_ignored() {
+    let out = marionette(&[
+        "replay",
+        "assets/recordings/demo-two-hands.evemu",
+        "--metrics",
+        "/tmp/never-written.json",
+        "--contacts",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--contacts"), "{}", stderr(&out));
+    assert!(!Path::new("/tmp/never-written.json").exists());
+}

@@ -270,7 +270,7 @@ impl Config {
                 return Err(invalid(
                     &key("calibration"),
                     format!(
-                        "must be 6 finite numbers [a, b, c, d, e, f] with a·e − b·d ≠ 0 (identity is [1, 0, 0, 0, 1, 0]), found {:?}",
+                        "must be 6 numbers [a, b, c, d, e, f] within ±10 with |a·e − b·d| between 0.01 and 100, mapping the panel onto the screen within a factor of 10 (identity is [1, 0, 0, 0, 1, 0]), found {:?}",
                         dev.calibration
                     ),
                 ));
@@ -517,6 +517,13 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("input.device[0].calibration"), "{e}");
+        // A typing slip: the panel would land a long way off the screen.
+        let e = parse(
+            "[[input.device]]\nmatch_name = \"x\"\ncalibration = [1e308, 0, 0, 0, 1e308, 0]\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("within a factor of 10"), "{e}");
         let e = parse("[[input.device]]\ncalibration = [1, 0, 0, 0, 1, 0]\n")
             .unwrap_err()
             .to_string();

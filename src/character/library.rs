@@ -8,6 +8,7 @@
 //! clips_dir = "clips"        # where the BVH files are, relative to this file (default: beside it)
 //! scale_to_m = 0.01          # file units to metres; detected when left out
 //! action_lead_in = 0.3       # how much of each action clip also feeds posing
+//! max_file_mb = 256          # larger BVH files are refused before they are read
 //!
 //! [roles]                    # optional: joints the names do not give away
 //! left_hand = "LeftWrist"
@@ -80,6 +81,7 @@ struct SettingsFile {
     clips_dir: Option<PathBuf>,
     scale_to_m: Option<f64>,
     action_lead_in: Option<f64>,
+    max_file_mb: Option<u64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -146,6 +148,11 @@ impl ActionDef {
     }
 }
 
+/// The most actions a library holds, mirror images included (each is
+/// models and templates in memory, and a drag is matched against those of
+/// its part).
+pub const MAX_ACTIONS: usize = 200;
+
 /// A loaded, validated library.
 #[derive(Clone, Debug)]
 pub struct Library {
@@ -197,6 +204,10 @@ impl Library {
             )])
         })?;
 
+        let max_bytes = file
+            .settings
+            .max_file_mb
+            .map_or(bvh::MAX_FILE_BYTES, |mb| mb.saturating_mul(1 << 20));
         let lead_in = file.settings.action_lead_in.unwrap_or(0.3);
         if !(0.0..=1.0).contains(&lead_in) {
             problems.push(format!(
@@ -267,7 +278,18 @@ impl Library {
             };
             let file = files.entry(clip_ref.file).or_insert_with(|| {
                 let path = clips_dir.join(clip_ref.file);
-                let read = std::fs::read(&path)
+                let read = std::fs::metadata(&path)
+                    .and_then(|m| {
+                        if m.len() > max_bytes {
+                            Err(std::io::Error::other(format!(
+                                "{} MB, over settings.max_file_mb ({} MB)",
+                                m.len().div_ceil(1 << 20),
+                                max_bytes >> 20
+                            )))
+                        } else {
+                            std::fs::read(&path)
+                        }
+                    })
                     .map_err(|source| bvh::BvhError::Io {
                         path: path.clone(),
                         source,
@@ -332,6 +354,14 @@ impl Library {
         }
         let mut actions = Vec::new();
         let mut seen = BTreeMap::new();
+        let mirrors = file.action.iter().filter(|a| a.mirror).count();
+        if file.action.len() + mirrors > MAX_ACTIONS {
+            return Err(fail(vec![format!(
+                "{} actions ({} and {mirrors} mirror images): a library holds at most {MAX_ACTIONS}",
+                file.action.len() + mirrors,
+                file.action.len()
+            )]));
+        }
         for (i, a) in file.action.iter().enumerate() {
             let label = if a.name.is_empty() {
                 format!("action #{}", i + 1)

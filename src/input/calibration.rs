@@ -54,12 +54,15 @@ impl Matrix {
         }
     }
 
-    /// Whether the matrix maps the plane onto itself (not degenerate) with
-    /// finite numbers.
+    /// Whether the matrix maps the plane onto itself: finite, and mapping the panel onto the screen and back within a
+    /// factor of 10 each way: no coefficient over 10, and an area scale
+    /// (the determinant) between 1/100 and 100. A real panel is off by a
+    /// few percent; `[1e308, 0, 0, 0, 1e308, 0]` is a typing slip.
     #[must_use]
     pub fn is_usable(&self) -> bool {
         let [a, b, _, d, e, _] = self.0;
-        self.0.iter().all(|v| v.is_finite()) && (a * e - b * d).abs() > 1e-9
+        let det = (a * e - b * d).abs();
+        self.0.iter().all(|v| v.is_finite() && v.abs() <= 10.0) && (0.01..=100.0).contains(&det)
     }
 }
 

@@ -42,8 +42,9 @@ pub(super) enum Command {
     /// Replay a recording through the input stack
     Replay {
         file: PathBuf,
-        /// Print every touch frame as a JSON line.
-        #[arg(long)]
+        /// Print every touch frame as a JSON line (a replay of its own:
+        /// not with --headless or --metrics).
+        #[arg(long, conflicts_with_all = ["headless", "metrics"])]
         contacts: bool,
         /// Run the whole pipeline into images (needs --out).
         #[arg(long, requires = "out")]

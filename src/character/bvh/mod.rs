@@ -32,7 +32,12 @@ pub const MAX_FRAME_TIME_S: f64 = 1.0;
 /// terminal or the screen) and cut to [`QUOTE_CHARS`] characters.
 #[must_use]
 pub fn quote(input: &str) -> String {
-    let escaped: String = input.escape_debug().collect();
+    // Only what is shown is escaped: a token of 200 MB is not copied.
+    let escaped: String = input
+        .chars()
+        .take(QUOTE_CHARS + 1)
+        .flat_map(char::escape_debug)
+        .collect();
     if escaped.chars().count() <= QUOTE_CHARS {
         format!("`{escaped}`")
     } else {
@@ -123,35 +128,78 @@ impl BvhFile {
 }
 
 struct Tokens<'a> {
-    toks: Vec<(usize, &'a str)>,
-    pos: usize,
+    /// The text not read yet, and the line it begins on.
+    rest: &'a str,
+    line: usize,
+    /// The next token and its line, once looked at.
+    peeked: Option<(usize, &'a str)>,
     path: &'a Path,
+    /// The last line of the file (for errors at its end).
     last_line: usize,
 }
 
 impl<'a> Tokens<'a> {
+    /// Tokens of `text`, read as they are asked for: nothing is kept per
+    /// token, so memory stays the text's and the frames'.
     fn new(text: &'a str, path: &'a Path) -> Self {
-        let mut toks = Vec::new();
-        let mut last_line = 1;
-        for (i, line) in text.lines().enumerate() {
-            for t in line.split_whitespace() {
-                toks.push((i + 1, t));
-            }
-            last_line = i + 1;
-        }
         Self {
-            toks,
-            pos: 0,
+            rest: text,
+            line: 1,
+            peeked: None,
             path,
-            last_line,
+            last_line: text.lines().count().max(1),
         }
     }
 
-    fn line(&self) -> usize {
-        self.toks.get(self.pos).map_or(self.last_line, |t| t.0)
+    /// Skip whitespace (counting lines) and cut the next token off `rest`.
+    fn scan(rest: &mut &'a str, line: &mut usize) -> Option<(usize, &'a str)> {
+        let start = rest.find(|c: char| {
+            if c == '\n' {
+                *line += 1;
+            }
+            !c.is_whitespace()
+        })?;
+        let after = &rest[start..];
+        let end = after.find(char::is_whitespace).unwrap_or(after.len());
+        let tok = &after[..end];
+        *rest = &after[end..];
+        Some((*line, tok))
     }
 
-    fn err(&self, message: impl Into<String>) -> BvhError {
+    fn fill(&mut self) {
+        if self.peeked.is_none() {
+            self.peeked = Self::scan(&mut self.rest, &mut self.line);
+        }
+    }
+
+    /// Put back a token just read.
+    fn unread(&mut self, line: usize, tok: &'a str) {
+        debug_assert!(self.peeked.is_none());
+        self.peeked = Some((line, tok));
+    }
+
+    /// How many tokens are left, and the line of the last one (a scan that
+    /// allocates nothing).
+    fn remaining(&mut self) -> (usize, usize) {
+        self.fill();
+        let (mut rest, mut line) = (self.rest, self.line);
+        let (mut n, mut last) = match self.peeked {
+            Some((l, _)) => (1, l),
+            None => (0, self.last_line),
+        };
+        while let Some((l, _)) = Self::scan(&mut rest, &mut line) {
+            n += 1;
+            last = l;
+        }
+        (n, last)
+    }
+
+    fn line(&mut self) -> usize {
+        self.fill();
+        self.peeked.map_or(self.last_line, |t| t.0)
+    }
+
+    fn err(&mut self, message: impl Into<String>) -> BvhError {
         BvhError::Syntax {
             path: self.path.to_owned(),
             line: self.line(),
@@ -159,15 +207,16 @@ impl<'a> Tokens<'a> {
         }
     }
 
-    fn peek(&self) -> Option<&'a str> {
-        self.toks.get(self.pos).map(|t| t.1)
+    fn peek(&mut self) -> Option<&'a str> {
+        self.fill();
+        self.peeked.map(|t| t.1)
     }
 
     fn next(&mut self, what: &str) -> Result<&'a str, BvhError> {
         let t = self
             .peek()
             .ok_or_else(|| self.err(format!("expected {what}, found the end of the file")))?;
-        self.pos += 1;
+        self.peeked = None;
         Ok(t)
     }
 
@@ -202,12 +251,15 @@ impl<'a> Tokens<'a> {
     fn rest_of_line(&mut self, what: &str) -> Result<String, BvhError> {
         let line = self.line();
         let mut parts = Vec::new();
-        while let Some((l, t)) = self.toks.get(self.pos) {
-            if *l != line || *t == "{" {
-                break;
+        loop {
+            self.fill();
+            match self.peeked {
+                Some((l, t)) if l == line && t != "{" => {
+                    parts.push(t);
+                    self.peeked = None;
+                }
+                _ => break,
             }
-            parts.push(*t);
-            self.pos += 1;
         }
         if parts.is_empty() {
             return Err(self.err(format!("expected {what}")));
@@ -222,9 +274,10 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
     t.expect("HIERARCHY")?;
     let mut skeleton = Skeleton::default();
     let mut channels: Vec<Vec<Channel>> = Vec::new();
+    let line = t.line();
     let kw = t.next("`ROOT`")?;
     if !kw.eq_ignore_ascii_case("ROOT") {
-        t.pos -= 1;
+        t.unread(line, kw);
         return Err(t.err(format!("expected `ROOT`, found {}", quote(kw))));
     }
     parse_joint(&mut t, &mut skeleton, &mut channels, None)?;
@@ -258,7 +311,7 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
         });
     }
     let per_frame: usize = channels.iter().map(Vec::len).sum();
-    let remaining = t.toks.len() - t.pos;
+    let (remaining, last_value_line) = t.remaining();
     if per_frame == 0 {
         return Err(t.err("the hierarchy has no channels"));
     }
@@ -270,7 +323,7 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
     let declared = frames_declared as usize;
     let available = remaining / per_frame;
     if available < declared {
-        let line = t.toks.last().map_or(t.last_line, |x| x.0);
+        let line = last_value_line;
         return Err(BvhError::Syntax {
             path: path.to_owned(),
             line,
@@ -482,12 +535,34 @@ fn parse_joint(
 
 /// Read a BVH file from disk.
 pub fn read_file(path: &Path) -> Result<BvhFile, BvhError> {
-    let bytes = std::fs::read(path).map_err(|source| BvhError::Io {
+    read_file_within(path, MAX_FILE_BYTES)
+}
+
+/// [`read_file`], refusing a file over `max_bytes` before reading it.
+pub fn read_file_within(path: &Path, max_bytes: u64) -> Result<BvhFile, BvhError> {
+    let io = |source| BvhError::Io {
         path: path.to_owned(),
         source,
-    })?;
+    };
+    let size = std::fs::metadata(path).map_err(io)?.len();
+    if size > max_bytes {
+        return Err(BvhError::Syntax {
+            path: path.to_owned(),
+            line: 1,
+            message: format!(
+                "the file is {} MB, over the {} MB a clip may be (settings.max_file_mb in library.toml raises it)",
+                size.div_ceil(1 << 20),
+                max_bytes >> 20
+            ),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
     parse(&String::from_utf8_lossy(&bytes), path)
 }
+
+/// The largest BVH file read unless a library allows more (bytes): hours
+/// of capture at 120 frames per second.
+pub const MAX_FILE_BYTES: u64 = 256 << 20;
 
 mod write;
 pub use write::write;

@@ -212,6 +212,28 @@ pub struct Plan {
     pub unit: String,
     /// Files left out, with the reason.
     pub skipped: Vec<(String, String)>,
+    /// Takes named after an action that feed posing only, with the reason
+    /// (one frame, or a body that hardly moves: no drag could start it).
+    pub not_actions: Vec<(String, String)>,
+}
+
+/// A take whose every part stays within this (m) shows no action.
+const MIN_ACTION_RANGE_M: f64 = 0.1;
+
+/// Why `take` cannot be an action, if it cannot.
+fn no_action(take: &Take) -> Option<String> {
+    if take.clip.frames.len() < 2 {
+        return Some("one frame: an action moves".to_owned());
+    }
+    let most = part_motion(&take.clip)
+        .iter()
+        .map(|m| m.range_m)
+        .fold(0.0, f64::max);
+    (most.is_nan() || most < MIN_ACTION_RANGE_M).then(|| {
+        format!(
+            "no part moves more than {most:.3} m: an action moves (at least {MIN_ACTION_RANGE_M} m); it feeds posing only"
+        )
+    })
 }
 
 /// Read the takes in `src` and decide the library.
@@ -277,11 +299,16 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
         );
     let roles = first.clip.roles.names(&first.clip.skeleton);
     let mut by_action: BTreeMap<String, Vec<&Take>> = BTreeMap::new();
+    let mut not_actions = Vec::new();
     for t in &takes {
         let stem = t.file.rsplit_once('.').map_or(t.file.as_str(), |(s, _)| s);
         match stem.split_once('_') {
             Some(("pose", _)) => {}
             Some((action, _)) if !action.is_empty() => {
+                if let Some(why) = no_action(t) {
+                    not_actions.push((t.file.clone(), why));
+                    continue;
+                }
                 by_action.entry(action.to_owned()).or_default().push(t);
             }
             _ => {}
@@ -317,6 +344,7 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
         roles,
         unit,
         skipped,
+        not_actions,
     })
 }
 

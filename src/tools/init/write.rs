@@ -49,6 +49,12 @@ impl Plan {
                 let _ = writeln!(t, "#   {}: {}", one_line(file), one_line(why));
             }
         }
+        if !self.not_actions.is_empty() {
+            let _ = writeln!(t, "\n# Takes named after an action that feed posing only:");
+            for (file, why) in &self.not_actions {
+                let _ = writeln!(t, "#   {}: {}", one_line(file), one_line(why));
+            }
+        }
         let _ = writeln!(t, "\n[posing]\n# Every clip feeds posing.\nclips = [");
         for c in &self.posing {
             let _ = writeln!(t, "  {},", toml_string(c));
@@ -96,6 +102,9 @@ impl Plan {
         )];
         for (file, why) in &self.skipped {
             lines.push(format!("left out {file}: {why}"));
+        }
+        for (file, why) in &self.not_actions {
+            lines.push(format!("not an action {file}: {why}"));
         }
         for a in &self.actions {
             lines.push(format!("action {}: {} clips", a.name, a.clips.len()));
