@@ -72,7 +72,7 @@ impl Controller {
             _ => None,
         })?;
         let a = &self.ch.actions[found.action];
-        tracing::info!(
+        tracing::debug!(
             action = %a.def.name,
             cost_px = found.matched.cost,
             coverage = found.matched.coverage,
@@ -131,10 +131,8 @@ impl Controller {
                 .decide(&self.ch.actions, &self.ch.recogniser.thresholds);
         }
         let d = found?;
-        tracing::info!(
-            action = %self.ch.actions[d.action].def.name,
-            "drag recognised"
-        );
+        // The kiosk logs each start once ("action started"); why it started
+        // is for a closer look.
         tracing::debug!(
             action = %self.ch.actions[d.action].def.name,
             clip = %d.clip,
