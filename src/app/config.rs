@@ -56,6 +56,11 @@ pub const DUEL_SPACING_M: f64 = 0.9;
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Config {
+    /// The file this configuration was read from (empty: built-in
+    /// defaults): relative paths in it are resolved from its folder, and
+    /// errors name it.
+    #[serde(skip)]
+    pub source: PathBuf,
     pub display: DisplayConfig,
     pub input: InputConfig,
     pub action: ActionConfig,
@@ -123,11 +128,25 @@ impl Config {
 
     /// Parse and validate configuration text; `path` is for messages.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        let config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let mut config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
             path: path.to_owned(),
             message: e.to_string().trim_end().to_owned(),
         })?;
         config.validate(path)?;
+        // A relative library folder is the configuration file's neighbour,
+        // wherever the program was started from.
+        let base = std::path::absolute(path)
+            .ok()
+            .and_then(|p| p.parent().map(Path::to_path_buf));
+        for c in &mut config.character.0 {
+            if !c.library.as_os_str().is_empty()
+                && c.library.is_relative()
+                && let Some(base) = &base
+            {
+                c.library = base.join(&c.library);
+            }
+        }
+        config.source = path.to_owned();
         Ok(config)
     }
 
@@ -435,6 +454,47 @@ impl Config {
         self.character.iter().map(Self::library_dir_of).collect()
     }
 
+    /// Why `dir`, the library folder configured under `key`, is not a
+    /// library, with what to do: `None` when it holds a `library.toml`.
+    #[must_use]
+    pub fn library_problem(&self, dir: &Path, key: &str) -> Option<String> {
+        let file = if self.source.as_os_str().is_empty() {
+            "the configuration".to_owned()
+        } else {
+            self.source.display().to_string()
+        };
+        // A flag is the command line's; a key is the file's.
+        let at = if key.starts_with("--") {
+            key.to_owned()
+        } else {
+            format!("{file}: {key}")
+        };
+        let shown = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
+        let shown = shown.display();
+        if dir.join("library.toml").is_file() {
+            return None;
+        }
+        Some(if dir.is_file() {
+            let folder = dir.parent().unwrap_or(Path::new("."));
+            format!(
+                "{at}: {shown} is a file; name the library's folder, {}",
+                folder.display()
+            )
+        } else if !dir.exists() {
+            format!(
+                "{at}: the folder {shown} does not exist; set it to a library folder (with library.toml), relative to {file}'s folder or absolute, or leave it empty for the default library"
+            )
+        } else if crate::character::bvh::files_in(dir).is_ok_and(|f| !f.is_empty()) {
+            format!(
+                "{at}: {shown} holds BVH takes but no library.toml: run `marionette library init {shown} --out LIBRARY` and set {key} to LIBRARY"
+            )
+        } else {
+            format!(
+                "{at}: {shown} has no library.toml; make one with `marionette library init TAKES --out {shown}`"
+            )
+        })
+    }
+
     fn library_dir_of(character: &CharacterConfig) -> PathBuf {
         let configured = &character.library;
         if !configured.as_os_str().is_empty() {
@@ -463,7 +523,13 @@ mod tests {
 
     #[test]
     fn empty_file_gives_defaults() {
-        assert_eq!(parse("").unwrap(), Config::default());
+        assert_eq!(
+            parse("").unwrap(),
+            Config {
+                source: PathBuf::from("/etc/marionette/marionette.toml"),
+                ..Config::default()
+            }
+        );
     }
 
     #[test]
@@ -473,6 +539,7 @@ mod tests {
         assert_eq!(c.input.device.len(), 1);
         // Every other key shows its default.
         c.input.device.clear();
+        c.source = PathBuf::new();
         assert_eq!(c, Config::default());
     }
 

@@ -116,9 +116,10 @@ pub(super) enum Command {
     /// Build the learned models of a library and cache them (run and demo
     /// use the cache when it matches the library, and bake when it does not)
     Bake {
-        /// Library folder (with library.toml)
-        #[arg(long, default_value = "assets/library")]
-        library: PathBuf,
+        /// Library folder (with library.toml) [default: the configuration's
+        /// character.library, else the shipped library]
+        #[arg(long)]
+        library: Option<PathBuf>,
         /// Bake even if a matching cache exists
         #[arg(long)]
         force: bool,
@@ -146,9 +147,10 @@ pub(super) enum Command {
     /// Draw each clip of a library as a contact sheet (stick figures, front
     /// and side views) and report foot sliding, floor contact and joint limits
     ContactSheet {
-        /// Library folder (with library.toml)
-        #[arg(long, default_value = "assets/library")]
-        library: PathBuf,
+        /// Library folder (with library.toml) [default: the configuration's
+        /// character.library, else the shipped library]
+        #[arg(long)]
+        library: Option<PathBuf>,
         /// Output folder for the PNG files
         #[arg(long, default_value = "contact-sheets")]
         out: PathBuf,
@@ -204,9 +206,10 @@ pub(super) enum EvalCommand {
     /// constraint_err_cm, ms_per_pose, poses; with --leave-one-out, their
     /// means and each clip's)
     Pose {
-        /// Library folder (with library.toml)
+        /// Library folder (with library.toml) [default: the configuration's
+        /// character.library, else the shipped library]
         #[arg(long)]
-        library: PathBuf,
+        library: Option<PathBuf>,
         /// Held-out BVH clips of the library's skeleton
         #[arg(long, num_args = 1.., required_unless_present = "leave_one_out")]
         test: Vec<PathBuf>,
@@ -245,9 +248,10 @@ pub(super) enum EvalCommand {
     /// JSON object (trials, correct, wrong_action, missed,
     /// false_trigger_slow, decided_at)
     Actions {
-        /// Library folder (with library.toml)
+        /// Library folder (with library.toml) [default: the configuration's
+        /// character.library, else the shipped library]
         #[arg(long)]
-        library: PathBuf,
+        library: Option<PathBuf>,
         /// Folder of held-out clips named <action>_*.bvh
         #[arg(long)]
         test: PathBuf,

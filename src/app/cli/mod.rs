@@ -173,7 +173,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             out,
             scale_to_m,
         } => convert_bvh(&file, &out, scale_to_m),
-        Command::Bake { library, force } => bake(&library, force),
+        Command::Bake { library, force } => bake(&chosen_library(config, library)?, force),
         Command::Library {
             what: LibraryCommand::Init { src, out, force },
         } => motion::library_init(&src, &out, force),
@@ -188,7 +188,13 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     seed,
                     models_only,
                 },
-        } => eval_actions(config, &library, &test, seed, models_only),
+        } => eval_actions(
+            config,
+            &chosen_library(config, library)?,
+            &test,
+            seed,
+            models_only,
+        ),
         Command::Eval {
             what:
                 EvalCommand::Pose {
@@ -211,6 +217,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                      the other methods do not search the grid",
                 ));
             }
+            let library = chosen_library(config, library)?;
             let mut setup = pose_setup(parts, mode, method, frames);
             setup.blocks = blocks.map(|b| b as usize);
             setup.cells = cells.map(|c| c as usize);
@@ -241,7 +248,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             library,
             out,
             frames,
-        } => contact_sheets(&library, &out, frames),
+        } => contact_sheets(&chosen_library(config, library)?, &out, frames),
         Command::Watch { seconds } => live::watch(
             &config.input,
             config.display.picture(),
@@ -250,6 +257,37 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
         )
         .map_err(Failure::from),
     }
+}
+
+/// The library a command works on: `--library`, else the configuration's
+/// `character.library`, else the shipped library; the log says which.
+fn chosen_library(config: &Config, given: Option<PathBuf>) -> Result<PathBuf, Failure> {
+    let (dir, from) = match given {
+        Some(d) => (d, "--library"),
+        None if !config.character.first().library.as_os_str().is_empty() => (
+            config.library_dir(),
+            "the configuration's character.library",
+        ),
+        None => (
+            config.library_dir(),
+            "the shipped library (no --library, none configured)",
+        ),
+    };
+    tracing::info!(library = %dir.display(), "library from {from}");
+    let key = if from == "--library" {
+        "--library"
+    } else {
+        "character.library"
+    };
+    if let Some(why) = config.library_problem(&dir, key) {
+        let code = if key == "--library" {
+            exit::NOINPUT
+        } else {
+            exit::CONFIG
+        };
+        return Err(Failure::new(code, why));
+    }
+    Ok(dir)
 }
 
 fn stdout_error(e: std::io::Error) -> Failure {

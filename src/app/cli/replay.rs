@@ -15,16 +15,10 @@ pub(super) fn character(
     config: &Config,
 ) -> Result<std::sync::Arc<crate::control::character::Character>, Failure> {
     let dir = config.library_dir();
-    if !dir.is_dir() {
-        // A folder the configuration names that is not there is the
-        // configuration's fault: fix the file, restarting will not help.
-        return Err(Failure::new(
-            exit::CONFIG,
-            format!(
-                "the motion library folder {} does not exist: fix `character.library` in the configuration (empty for the shipped library)",
-                dir.display()
-            ),
-        ));
+    // A folder the configuration names that is no library is the
+    // configuration's fault: fix the file, restarting will not help.
+    if let Some(why) = config.library_problem(&dir, "character.library") {
+        return Err(Failure::new(exit::CONFIG, why));
     }
     Ok(crate::app::character::load(&dir)?)
 }
@@ -45,19 +39,13 @@ pub(super) fn cast(
             out.push(ch.clone());
             continue;
         }
-        if !dir.is_dir() {
-            let key = if dirs.len() > 1 {
-                format!("character[{k}].library")
-            } else {
-                "character.library".to_owned()
-            };
-            return Err(Failure::new(
-                exit::CONFIG,
-                format!(
-                    "the motion library folder {} does not exist: fix `{key}` in the configuration (empty for the shipped library)",
-                    dir.display()
-                ),
-            ));
+        let key = if dirs.len() > 1 {
+            format!("character[{k}].library")
+        } else {
+            "character.library".to_owned()
+        };
+        if let Some(why) = config.library_problem(dir, &key) {
+            return Err(Failure::new(exit::CONFIG, why));
         }
         let ch = crate::app::character::load(dir)?;
         loaded.push((dir.clone(), ch.clone()));

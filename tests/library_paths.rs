@@ -1,0 +1,125 @@
+//! Where the configuration's library is: a relative `character.library` is
+//! the configuration file's neighbour, whatever folder marionette is
+//! started from, and the usual mistakes (a library.toml named instead of
+//! its folder, a folder of takes with no library yet, a folder that is not
+//! there) are said with the file, the key, the absolute path and what to
+//! do.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+fn run_in(cwd: &Path, config: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .current_dir(cwd)
+        .arg("--config")
+        .arg(config)
+        .args(args)
+        .env_remove("RUST_LOG")
+        .env("CACHE_DIRECTORY", cwd.join("cache"))
+        .output()
+        .unwrap()
+}
+
+fn copy_default_library(to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    let from = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+    }
+}
+
+#[test]
+fn a_relative_library_is_found_beside_the_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let etc = dir.path().join("etc");
+    copy_default_library(&etc.join("mylib"));
+    let config = etc.join("marionette.toml");
+    std::fs::write(&config, "[character]\nlibrary = \"mylib\"\n").unwrap();
+    // Started from another folder altogether.
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let out = run_in(
+        &elsewhere,
+        &config,
+        &[
+            "replay",
+            &Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("assets/recordings/demo-two-hands.evemu")
+                .display()
+                .to_string(),
+            "--metrics",
+            "m.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(elsewhere.join("m.json").is_file());
+}
+
+#[test]
+fn the_usual_mistakes_are_named_with_what_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let takes = dir.path().join("takes");
+    std::fs::create_dir(&takes).unwrap();
+    std::os::unix::fs::symlink(
+        common::shared_dir().join("mocap/bandai/d1_bow_active_001.bvh"),
+        takes.join("bow_active.bvh"),
+    )
+    .unwrap();
+    copy_default_library(&dir.path().join("lib"));
+    let config = dir.path().join("marionette.toml");
+    for (library, says) in [
+        ("lib/library.toml", "is a file; name the library's folder"),
+        (
+            "takes",
+            "holds BVH takes but no library.toml: run `marionette library init",
+        ),
+        ("missing", "does not exist"),
+    ] {
+        std::fs::write(&config, format!("[character]\nlibrary = \"{library}\"\n")).unwrap();
+        let out = run_in(dir.path(), &config, &["demo", "--out", "out"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(78), "{library}: {err}");
+        let absolute = dir.path().join(library);
+        for part in [
+            config.display().to_string(),
+            "character.library".to_owned(),
+            absolute.display().to_string(),
+            says.to_owned(),
+        ] {
+            assert!(err.contains(&part), "{library}: `{part}` not in {err}");
+        }
+        assert!(!dir.path().join("out").exists());
+    }
+}
+
+#[test]
+fn bake_takes_the_configurations_library_and_a_flag_over_it() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_default_library(&dir.path().join("etc/mylib"));
+    let config = dir.path().join("etc/marionette.toml");
+    std::fs::write(&config, "[character]\nlibrary = \"mylib\"\n").unwrap();
+    let out = run_in(dir.path(), &config, &["bake"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains(&dir.path().join("etc/mylib").display().to_string()),
+        "{stdout}"
+    );
+    // --library wins, and a wrong one is the command line's (66), not the
+    // configuration's.
+    let out = run_in(dir.path(), &config, &["bake", "--library", "nowhere"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(66), "{err}");
+    assert!(err.contains("--library: the folder"), "{err}");
+}
