@@ -125,10 +125,11 @@ fn bandai_styles_left_out_and_what_library_check_says() {
         "{advice:#?}"
     );
     let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
-    // Left out in turn (606 drags; the feminine bye-bye, whose hands
-    // hardly move, is no action): correct 0.177, wrong 0.036, slow 0.003.
-    assert_eq!(check["drags"], 606);
-    assert!((f(&check, "correct") - 0.177).abs() < 0.03, "{check}");
+    // Left out in turn (558 drags; the feminine bye-bye, whose hands
+    // hardly move, is no action, and bye-bye and slash, both hands alike,
+    // have no mirror image): correct 0.197, wrong 0.041, slow 0.004.
+    assert_eq!(check["drags"], 558);
+    assert!((f(&check, "correct") - 0.197).abs() < 0.03, "{check}");
     assert!(f(&check, "wrong_action") < 0.05, "{check}");
     assert!(f(&check, "false_trigger_slow") <= 0.01, "{check}");
 
@@ -157,11 +158,11 @@ fn bandai_styles_left_out_and_what_library_check_says() {
         .unwrap()
     );
     assert_eq!(eval["trials"], 240);
-    // Measured: correct 0.246, wrong 0.038, slow 0.004, decided at 0.241
+    // Measured: correct 0.246, wrong 0.029, slow 0.004, decided at 0.239
     // (the paper's rule on the same trials: 0.171 correct, 0.108 slow,
     // decided at 0.593).
     assert!(f(&eval, "correct") >= 0.23, "{eval}");
-    assert!(f(&eval, "wrong_action") <= 0.05, "{eval}");
+    assert!(f(&eval, "wrong_action") <= 0.04, "{eval}");
     assert!(f(&eval, "false_trigger_slow") <= 0.01, "{eval}");
     assert!(f(&eval, "decided_at") <= 0.27, "{eval}");
     assert_eq!(eval["views"].as_array().unwrap().len(), 2);

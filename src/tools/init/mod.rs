@@ -331,6 +331,25 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
                 .push(format!("no mirror image: the takes have `{other}` already"));
             continue;
         }
+        // Both sides move alike (bye-bye with both hands): the action is
+        // its own mirror image, and a mirrored copy would only compete
+        // with it.
+        let (best, other_side) = (
+            a.ranges[0].1,
+            a.ranges
+                .iter()
+                .find(|(r, _)| *r == a.primary.mirrored())
+                .map_or(0.0, |(_, m)| *m),
+        );
+        if other_side >= ALSO_MOVES * best {
+            a.notes.push(format!(
+                "no mirror image: the {} moves as much as the {} ({:.0}%), so the action is its own mirror image",
+                a.primary.mirrored().name(),
+                a.primary.name(),
+                100.0 * other_side / best
+            ));
+            continue;
+        }
         a.mirror = true;
         a.notes.push(format!(
             "mirror = true: also `{other}`, led by the {}, from these clips mirrored",
