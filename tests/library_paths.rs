@@ -123,3 +123,21 @@ fn bake_takes_the_configurations_library_and_a_flag_over_it() {
     assert_eq!(out.status.code(), Some(66), "{err}");
     assert!(err.contains("--library: the folder"), "{err}");
 }
+
+#[test]
+fn inspect_of_a_library_points_at_library_check() {
+    let lib = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+    for target in [lib.join("library.toml"), lib.clone()] {
+        let out = Command::new(env!("CARGO_BIN_EXE_marionette"))
+            .arg("inspect")
+            .arg(&target)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(65), "{err}");
+        assert!(
+            err.contains("is a motion library") && err.contains("library check"),
+            "{err}"
+        );
+    }
+}

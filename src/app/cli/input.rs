@@ -19,6 +19,23 @@ pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
     {
         return inspect_bvh(file);
     }
+    // A motion library, where a recording or a BVH file was meant.
+    let library = if file.is_dir() {
+        file.join("library.toml").is_file().then(|| file.to_owned())
+    } else {
+        (file.file_name().is_some_and(|n| n == "library.toml"))
+            .then(|| file.parent().unwrap_or(Path::new(".")).to_owned())
+    };
+    if let Some(dir) = library {
+        return Err(Failure::new(
+            exit::DATAERR,
+            format!(
+                "{} is a motion library, not a recording or a BVH file: `marionette library check {}` shows what its drags start",
+                file.display(),
+                dir.display()
+            ),
+        ));
+    }
     let read = Recording::read_file(file)?;
     let rec = pipeline::with_overrides(&read, &config.input)
         .map_err(|e| Failure::new(exit::DATAERR, e))?;

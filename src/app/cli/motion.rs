@@ -140,7 +140,7 @@ pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Resul
     })?;
     let mut stdout = std::io::stdout().lock();
     for (name, clip) in &lib.clips {
-        let png = out.join(name.replace(".bvh", ".png"));
+        let png = out.join(sheet_name(name));
         sheet::write_sheet(&png, &clip.skeleton, &clip.roles, &clip.frames, frames).map_err(
             |e| {
                 Failure::new(
@@ -169,6 +169,31 @@ pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Resul
         .map_err(stdout_error)?;
     }
     writeln!(stdout, "sheets written to {}", out.display()).map_err(stdout_error)
+}
+
+/// The sheet's file name for a clip name: its file's stem (folders joined
+/// with `_`), then its frame range and `mirror` if it has them, `.png`:
+/// `bow.bvh#0-19~mirror` → `bow_0-19_mirror.png`.
+fn sheet_name(clip: &str) -> String {
+    let (rest, mirror) = clip
+        .strip_suffix("~mirror")
+        .map_or((clip, false), |r| (r, true));
+    let (file, range) = rest
+        .split_once('#')
+        .map_or((rest, None), |(f, r)| (f, Some(r)));
+    let stem = file.strip_suffix(".bvh").unwrap_or(file);
+    let mut name: String = stem
+        .chars()
+        .map(|c| if c == '/' || c.is_control() { '_' } else { c })
+        .collect();
+    if let Some(r) = range {
+        name.push('_');
+        name.push_str(r);
+    }
+    if mirror {
+        name.push_str("_mirror");
+    }
+    name + ".png"
 }
 
 pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Failure> {
@@ -258,4 +283,23 @@ pub(super) fn library_check(dir: &Path, json: bool) -> Result<(), Failure> {
         writeln!(stdout, "{line}").map_err(stdout_error)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sheet_name;
+
+    #[test]
+    fn sheet_names_are_file_names_with_the_range_and_the_side() {
+        assert_eq!(sheet_name("bow_feminine_001.bvh"), "bow_feminine_001.png");
+        assert_eq!(
+            sheet_name("bow_feminine_001.bvh#0-19"),
+            "bow_feminine_001_0-19.png"
+        );
+        assert_eq!(
+            sheet_name("punch.bvh#48-89~mirror"),
+            "punch_48-89_mirror.png"
+        );
+        assert_eq!(sheet_name("takes/wave.bvh~mirror"), "takes_wave_mirror.png");
+    }
 }

@@ -218,18 +218,26 @@ pub(super) fn replay_metrics(
     write_atomically(out, &(text + "\n"))?;
     writeln!(
         std::io::stdout(),
-        "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}; {} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}, {}), ground penetration {:.1} mm ({}), {} actions; written to {}",
+        "{} frames, {} with NaN, largest joint speed jump {:.2} rad/s ({}{} pops over {} rad/s), foot skate {:.2} mm/frame (max {:.2}{}), ground penetration {:.1} mm{}, {} actions; written to {}",
         m.frames,
         m.nan_frames,
         m.max_joint_speed_jump_rad_s,
-        m.worst_jump,
+        where_(&m.worst_jump, "; "),
         m.pops,
         crate::tools::metrics::POP_RAD_S,
         m.foot_skate_mm_per_frame,
         m.foot_skate_max_mm,
-        m.worst_skate,
+        if m.worst_skate.is_empty() {
+            String::new()
+        } else {
+            format!(", {}", m.worst_skate)
+        },
         m.ground_penetration_mm,
-        m.worst_penetration,
+        if m.worst_penetration.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", m.worst_penetration)
+        },
         summary.actions.len(),
         out.display()
     )
@@ -256,3 +264,13 @@ pub(super) fn export_bvh(config: &Config, file: &Path, out: &Path) -> Result<(),
 
 pub(super) const DEMO_RECORDING: &str = include_str!("../../../assets/recordings/demo.evemu");
 pub(super) const DUEL_RECORDING: &str = include_str!("../../../assets/recordings/duel.evemu");
+
+/// Where a worst value happened, followed by `sep`; nothing when no place
+/// is known (no foot slid, nothing went below the floor).
+fn where_(place: &str, sep: &str) -> String {
+    if place.is_empty() {
+        String::new()
+    } else {
+        format!("{place}{sep}")
+    }
+}
