@@ -176,7 +176,8 @@ fn a_landed_hit_moves_the_hit_part_and_the_character_recovers() {
     assert_eq!((h.striker, h.struck), (0, 1));
     assert!(h.impulse_ns > 0.5, "{h:?}");
     assert!(most > 0.03, "the hit moved B by {most:.3} m");
-    assert!(deepest < 0.05, "bodies sank {deepest:.3} m into each other");
+    // Under 1 cm after a step, as the README says (0 measured).
+    assert!(deepest < 0.01, "bodies sank {deepest:.3} m into each other");
     // Back within 2 s of the last contact.
     let mut back_at = None;
     for _ in 0..(3.0 / DT) as usize {

@@ -18,6 +18,9 @@ use crate::control::posing::model::LearnedModel;
 use crate::control::posing::sample::{Placement, samples_of};
 use crate::control::posing::synth::{blend, choose};
 
+/// The clips' blend weights follow the touches with this time constant (s).
+const CLIP_WEIGHT_TAU_S: f64 = 0.25;
+
 /// An action being played.
 #[derive(Clone, Debug)]
 pub struct ActionPlayer {
@@ -104,7 +107,21 @@ impl ActionPlayer {
         let primary_down = constraints.iter().any(|c| c.role == a.def.primary);
         let target = if primary_down {
             let weights = choose(&a.model, constraints, &self.at, &SynthOptions::ACTION);
-            self.clip_weights = per_clip(&a.model, &weights, a.def.clips.len());
+            // The clips' weights follow the touches' choice smoothly: the
+            // clips of a walk travel different distances, and a blend that
+            // jumped from one to another would move the body (and slide a
+            // planted foot) by their difference in one frame.
+            let target = per_clip(&a.model, &weights, a.def.clips.len());
+            let k = (dt / CLIP_WEIGHT_TAU_S).min(1.0);
+            for (w, t) in self.clip_weights.iter_mut().zip(&target) {
+                *w += (t - *w) * k;
+            }
+            let total: f64 = self.clip_weights.iter().sum();
+            if total > 1e-12 {
+                for w in &mut self.clip_weights {
+                    *w /= total;
+                }
+            }
             Some(
                 weights
                     .iter()

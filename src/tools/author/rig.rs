@@ -196,7 +196,7 @@ mod tests {
     use crate::character::skeleton::forward_kinematics;
 
     #[test]
-    fn rig_is_170_cm_and_has_every_role() {
+    fn rig_stands_1_68_m_to_the_head_joint_and_has_every_role() {
         let s = skeleton();
         let roles = crate::character::roles::fill(&s, &Default::default()).unwrap();
         let mut pose = s.rest_pose();
