@@ -10,6 +10,7 @@ use std::sync::Arc;
 use thiserror::Error;
 
 use super::cache::{self, Source};
+use crate::app::config::Config;
 use crate::character::library::{Library, LibraryError};
 use crate::control::character::Character;
 use crate::control::posing::model::LearnedModel;
@@ -91,4 +92,45 @@ pub fn recogniser(
         }
     }
     r
+}
+
+/// Why `dir`, the library folder configured under `key`, is not a
+/// library, with what to do: `None` when it holds a `library.toml`.
+#[must_use]
+pub fn library_problem(config: &Config, dir: &Path, key: &str) -> Option<String> {
+    let file = if config.source.as_os_str().is_empty() {
+        "the configuration".to_owned()
+    } else {
+        config.source.display().to_string()
+    };
+    // A flag is the command line's; a key is the file's.
+    let at = if key.starts_with("--") {
+        key.to_owned()
+    } else {
+        format!("{file}: {key}")
+    };
+    let shown = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
+    let shown = shown.display();
+    if dir.join("library.toml").is_file() {
+        return None;
+    }
+    Some(if dir.is_file() {
+        let folder = dir.parent().unwrap_or(Path::new("."));
+        format!(
+            "{at}: {shown} is a file; name the library's folder, {}",
+            folder.display()
+        )
+    } else if !dir.exists() {
+        format!(
+            "{at}: the folder {shown} does not exist; set it to a library folder (with library.toml), relative to {file}'s folder or absolute, or leave it empty for the default library"
+        )
+    } else if crate::character::bvh::files_in(dir).is_ok_and(|f| !f.is_empty()) {
+        format!(
+            "{at}: {shown} holds BVH takes but no library.toml: run `marionette library init {shown} --out LIBRARY` and set {key} to LIBRARY"
+        )
+    } else {
+        format!(
+            "{at}: {shown} has no library.toml; make one with `marionette library init TAKES --out {shown}`"
+        )
+    })
 }

@@ -279,7 +279,7 @@ fn chosen_library(config: &Config, given: Option<PathBuf>) -> Result<PathBuf, Fa
     } else {
         "character.library"
     };
-    if let Some(why) = config.library_problem(&dir, key) {
+    if let Some(why) = crate::app::character::library_problem(config, &dir, key) {
         let code = if key == "--library" {
             exit::NOINPUT
         } else {

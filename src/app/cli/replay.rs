@@ -17,7 +17,7 @@ pub(super) fn character(
     let dir = config.library_dir();
     // A folder the configuration names that is no library is the
     // configuration's fault: fix the file, restarting will not help.
-    if let Some(why) = config.library_problem(&dir, "character.library") {
+    if let Some(why) = crate::app::character::library_problem(config, &dir, "character.library") {
         return Err(Failure::new(exit::CONFIG, why));
     }
     Ok(crate::app::character::load(&dir)?)
@@ -44,7 +44,7 @@ pub(super) fn cast(
         } else {
             "character.library".to_owned()
         };
-        if let Some(why) = config.library_problem(dir, &key) {
+        if let Some(why) = crate::app::character::library_problem(config, dir, &key) {
             return Err(Failure::new(exit::CONFIG, why));
         }
         let ch = crate::app::character::load(dir)?;
