@@ -238,14 +238,17 @@ fn decode_recogniser(bytes: &[u8], key: u64) -> Result<(Thresholds, bool), Strin
 /// library's clips (and the cache rewritten atomically; one that cannot be
 /// written costs a calibration at the next start).
 pub fn recogniser(lib: &Library, actions: &[ActionModel], dir: &Path) -> (Recogniser, Source) {
+    let rule = TemplateRule::default();
+    // The thresholds hold for this library under this rule: a build whose
+    // rule differs calibrates afresh.
     let key = {
         let mut h = Fnv::new();
         h.write(&RECOGNISER_FORMAT.to_le_bytes());
         h.write(&library_key(lib).to_le_bytes());
+        h.write(format!("{rule:?}").as_bytes());
         h.finish()
     };
     let path = dir.join(format!("recogniser-{key:016x}.bin"));
-    let rule = TemplateRule::default();
     let reason = match std::fs::read(&path) {
         Ok(bytes) => match decode_recogniser(&bytes, key) {
             Ok((thresholds, _)) => {
