@@ -141,3 +141,46 @@ fn inspect_of_a_library_points_at_library_check() {
         );
     }
 }
+
+#[test]
+fn a_library_made_with_copy_clips_can_be_moved() {
+    let dir = tempfile::tempdir().unwrap();
+    let takes = dir.path().join("takes");
+    std::fs::create_dir(&takes).unwrap();
+    for (file, name) in [
+        ("d1_bow_active_001.bvh", "bow_active.bvh"),
+        ("d1_bow_angry_001.bvh", "bow_angry.bvh"),
+        ("d1_punch_normal_001.bvh", "punch_normal.bvh"),
+    ] {
+        std::os::unix::fs::symlink(
+            common::shared_dir().join("mocap/bandai").join(file),
+            takes.join(name),
+        )
+        .unwrap();
+    }
+    let init = |out: &Path, extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_marionette"))
+            .args(["library", "init"])
+            .arg(&takes)
+            .arg("--out")
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    // Without the flag, init says the library refers to the takes.
+    let said = init(&dir.path().join("refers"), &[]);
+    assert!(said.contains("the clips stay in"), "{said}");
+    // With it, the folder stands on its own: moved, it still loads.
+    let said = init(&dir.path().join("lib"), &["--copy-clips"]);
+    assert!(said.contains("copied 3 takes"), "{said}");
+    let moved = dir.path().join("elsewhere/lib");
+    std::fs::create_dir_all(moved.parent().unwrap()).unwrap();
+    std::fs::rename(dir.path().join("lib"), &moved).unwrap();
+    std::fs::remove_dir_all(&takes).unwrap();
+    let lib = marionette::character::library::Library::load(&moved).unwrap();
+    assert_eq!(lib.clips_dir, moved.join("clips"));
+    assert!(lib.actions.iter().any(|a| a.name == "punch"));
+}

@@ -303,6 +303,11 @@ pub enum LibraryCommand {
         /// Replace an existing library.toml there
         #[arg(long)]
         force: bool,
+        /// Copy the takes into DIR/clips, so that the library folder can be
+        /// moved, copied or packaged on its own (without it, DIR refers to
+        /// the takes where they are)
+        #[arg(long)]
+        copy_clips: bool,
     },
     /// Leave each clip of a library out in turn and replay it as drags
     /// from two views against the others: how often each action's drags

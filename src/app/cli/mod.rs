@@ -175,8 +175,14 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
         } => convert_bvh(&file, &out, scale_to_m),
         Command::Bake { library, force } => bake(&chosen_library(config, library)?, force),
         Command::Library {
-            what: LibraryCommand::Init { src, out, force },
-        } => motion::library_init(&src, &out, force),
+            what:
+                LibraryCommand::Init {
+                    src,
+                    out,
+                    force,
+                    copy_clips,
+                },
+        } => motion::library_init(&src, &out, force, copy_clips),
         Command::Library {
             what: LibraryCommand::Check { dir, json },
         } => motion::library_check(&dir, json),

@@ -196,7 +196,12 @@ fn sheet_name(clip: &str) -> String {
     name + ".png"
 }
 
-pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Failure> {
+pub(super) fn library_init(
+    src: &Path,
+    out: &Path,
+    force: bool,
+    copy_clips: bool,
+) -> Result<(), Failure> {
     use crate::character::library::Library;
     use crate::tools::init::{self, InitError};
     let target = out.join("library.toml");
@@ -209,7 +214,7 @@ pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Fa
             ),
         ));
     }
-    let plan = init::plan(src).map_err(|e| {
+    let mut plan = init::plan(src).map_err(|e| {
         let code = match &e {
             InitError::List { .. } | InitError::NoFiles { .. } => exit::NOINPUT,
             InitError::NothingUsable { .. } => exit::DATAERR,
@@ -223,6 +228,19 @@ pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Fa
         )
     };
     std::fs::create_dir_all(out).map_err(cant)?;
+    let clips_note = if copy_clips {
+        let n = copy_takes(&plan, &out.join("clips"), force)?;
+        plan.src = out.join("clips");
+        format!(
+            "copied {n} takes into {}: the library folder stands on its own",
+            plan.src.display()
+        )
+    } else {
+        format!(
+            "the clips stay in {} (settings.clips_dir refers to them): move or package the library with them, or run again with --copy-clips",
+            src.display()
+        )
+    };
     // Written beside, loaded from there, and renamed into place only once
     // it loads: an existing library is replaced by a working one or kept.
     let tmp = out.join(".library.toml.new");
@@ -244,6 +262,7 @@ pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Fa
     for line in plan.report() {
         writeln!(stdout, "{line}").map_err(stdout_error)?;
     }
+    writeln!(stdout, "{clips_note}").map_err(stdout_error)?;
     tracing::info!(library = %target.display(), clips = lib.clips.len(), actions = lib.actions.len(), "library written");
     writeln!(
         stdout,
@@ -253,6 +272,45 @@ pub(super) fn library_init(src: &Path, out: &Path, force: bool) -> Result<(), Fa
         lib.actions.len()
     )
     .map_err(stdout_error)
+}
+
+/// Copy every take of `plan` (the files, whole: cut ranges keep naming
+/// frames of them) into `clips`, each written whole. A different file of
+/// the same name there is kept unless `force`. Returns how many.
+fn copy_takes(
+    plan: &crate::tools::init::Plan,
+    clips: &Path,
+    force: bool,
+) -> Result<usize, Failure> {
+    let cant = |path: &Path, e: std::io::Error| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot copy a take to {}: {e}", path.display()),
+        )
+    };
+    std::fs::create_dir_all(clips).map_err(|e| cant(clips, e))?;
+    for name in &plan.posing {
+        let from = plan.src.join(name);
+        let to = clips.join(name);
+        let bytes = std::fs::read(&from).map_err(|e| {
+            Failure::new(
+                exit::NOINPUT,
+                format!("cannot read {}: {e}", from.display()),
+            )
+        })?;
+        if !force && std::fs::read(&to).is_ok_and(|old| old != bytes) {
+            return Err(Failure::new(
+                exit::CANTCREAT,
+                format!(
+                    "{} exists and differs from {}: pass --force to replace it",
+                    to.display(),
+                    from.display()
+                ),
+            ));
+        }
+        crate::output::replace_file(&to, &bytes).map_err(|e| cant(&to, e))?;
+    }
+    Ok(plan.posing.len())
 }
 
 pub(super) fn library_check(dir: &Path, json: bool) -> Result<(), Failure> {
