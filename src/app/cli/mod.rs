@@ -268,6 +268,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
 /// The library a command works on: `--library`, else the configuration's
 /// `character.library`, else the shipped library; the log says which.
 fn chosen_library(config: &Config, given: Option<PathBuf>) -> Result<PathBuf, Failure> {
+    let flag = given.is_some();
     let (dir, from) = match given {
         Some(d) => (d, "--library"),
         None if !config.character.first().library.as_os_str().is_empty() => (
@@ -280,20 +281,16 @@ fn chosen_library(config: &Config, given: Option<PathBuf>) -> Result<PathBuf, Fa
         ),
     };
     tracing::info!(library = %dir.display(), "library from {from}");
-    let key = if from == "--library" {
-        "--library"
+    // A wrong flag is the command line's (66); a wrong key the file's (78).
+    let (key, code) = if flag {
+        ("--library", exit::NOINPUT)
     } else {
-        "character.library"
+        ("character.library", exit::CONFIG)
     };
-    if let Some(why) = crate::app::character::library_problem(config, &dir, key) {
-        let code = if key == "--library" {
-            exit::NOINPUT
-        } else {
-            exit::CONFIG
-        };
-        return Err(Failure::new(code, why));
+    match crate::app::character::library_problem(config, &dir, key) {
+        Some(why) => Err(Failure::new(code, why)),
+        None => Ok(dir),
     }
-    Ok(dir)
 }
 
 fn stdout_error(e: std::io::Error) -> Failure {

@@ -154,14 +154,14 @@ pub struct Decision {
 
 /// What the drag's latest point says of one template.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TemplateCost {
+struct TemplateCost {
     pub action: usize,
     pub clip: usize,
     /// Least mean cost over the template's points the drag may have reached
     /// (m), and the same among points covering at least each of
     /// [`COVERAGE_FLOORS`].
-    pub any: [f64; CAPS],
-    pub covered: [f64; GATES],
+    any: [f64; CAPS],
+    covered: [f64; GATES],
     /// The template's point where each covered match ends.
     covered_j: [usize; GATES],
 }
@@ -190,6 +190,8 @@ pub struct DragMatch {
     seen: Vec<Seen>,
     /// Pixels a metre spans at the part's depth.
     px_per_m: f64,
+    /// A drag within this of where it began has not started moving (px).
+    still_px: f64,
     /// The first point, and the last one still within the lead-in radius.
     anchor: Option<TrailPoint>,
     last_still: Option<TrailPoint>,
@@ -265,6 +267,7 @@ impl DragMatch {
             rule,
             seen,
             px_per_m: scale,
+            still_px,
             anchor: None,
             last_still: None,
             origin: None,
@@ -280,13 +283,6 @@ impl DragMatch {
     #[must_use]
     pub fn drawable(&self, action: usize) -> usize {
         self.seen.iter().filter(|s| s.action == action).count()
-    }
-
-    /// The latest point's cost against each template (empty until the drag
-    /// has left its lead-in).
-    #[must_use]
-    pub fn costs(&self) -> &[TemplateCost] {
-        &self.costs
     }
 
     /// Add the drag's next point (times in seconds, increasing).
@@ -327,8 +323,7 @@ impl DragMatch {
                 self.last_still = Some(p);
                 return;
             };
-            let still_px = (self.rule.still_m * self.px_per_m).max(self.rule.still_px);
-            if p.at.distance(anchor.at) <= still_px {
+            if p.at.distance(anchor.at) <= self.still_px {
                 self.last_still = Some(p);
                 return;
             }

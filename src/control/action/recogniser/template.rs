@@ -96,7 +96,6 @@ pub(super) fn see(
         along.push(run / px);
     }
     let n = tpl.points.len().max(2) - 1;
-    let _ = still_px;
     Some(Seen {
         action,
         clip,
