@@ -337,3 +337,20 @@ fn contacts_with_metrics_is_a_usage_error_not_ignored() {
     assert!(stderr(&out).contains("--contacts"), "{}", stderr(&out));
     assert!(!Path::new("/tmp/never-written.json").exists());
 }
+
+#[test]
+fn a_clip_over_the_size_limit_is_refused_before_it_is_read() {
+    // settings.max_file_mb bounds what a library reads (256 MB unless set).
+    let dir = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(bandai("d1_bow_active_001.bvh"), dir.path().join("bow.bvh"))
+        .unwrap();
+    std::fs::write(
+        dir.path().join("library.toml"),
+        "[settings]\nmax_file_mb = 0\n\n[posing]\nclips = [\"bow.bvh\"]\n",
+    )
+    .unwrap();
+    let err = marionette::character::library::Library::load(dir.path())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("over settings.max_file_mb (0 MB)"), "{err}");
+}
