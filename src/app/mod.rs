@@ -26,7 +26,7 @@ pub mod cli;
 pub mod config;
 pub(crate) mod exit;
 pub(crate) mod fault;
-pub(crate) mod frame;
+pub mod frame;
 pub mod headless;
 pub(crate) mod kiosk;
 pub(crate) mod logging;
