@@ -17,40 +17,6 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-const LIBRARY_STYLES: [&str; 6] = [
-    "active",
-    "angry",
-    "feminine",
-    "happy",
-    "masculinity",
-    "proud",
-];
-const HELD_OUT_STYLES: [&str; 4] = ["childish", "giant", "musical", "normal"];
-const ACTIONS: [&str; 10] = [
-    "bow",
-    "bye",
-    "byebye",
-    "guide",
-    "walk",
-    "walk-back",
-    "walk-left",
-    "walk-right",
-    "run",
-    "dash",
-];
-/// Actions the share has one take of (normal style): library only.
-const ONE_TAKE: [&str; 3] = ["punch", "kick", "slash"];
-
-/// Link `d1_<action>_<style>_001.bvh` as `<action>_<style>_001.bvh`.
-fn link(dir: &Path, action: &str, style: &str) {
-    let bandai = common::shared_dir().join("mocap/bandai");
-    std::os::unix::fs::symlink(
-        bandai.join(format!("d1_{action}_{style}_001.bvh")),
-        dir.join(format!("{action}_{style}_001.bvh")),
-    )
-    .unwrap();
-}
-
 fn run(args: &[&str], cache: &Path) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_marionette"))
         .args(args)
@@ -81,17 +47,7 @@ fn bandai_styles_left_out_and_what_library_check_says() {
     for d in [&takes, &held] {
         std::fs::create_dir(d).unwrap();
     }
-    for action in ACTIONS {
-        for style in LIBRARY_STYLES {
-            link(&takes, action, style);
-        }
-        for style in HELD_OUT_STYLES {
-            link(&held, action, style);
-        }
-    }
-    for action in ONE_TAKE {
-        link(&takes, action, "normal");
-    }
+    common::bandai::split(&takes, Some(&held));
     let s = |p: &Path| p.to_str().unwrap().to_owned();
     let init = run(&["library", "init", &s(&takes), "--out", &s(&lib)], &cache);
     assert!(
@@ -109,7 +65,7 @@ fn bandai_styles_left_out_and_what_library_check_says() {
         .map(|a| a.as_str().unwrap().to_owned())
         .collect();
     eprintln!("library check: {}", serde_json::to_string(&check).unwrap());
-    for one in ONE_TAKE {
+    for one in common::bandai::ONE_TAKE {
         assert!(
             advice
                 .iter()
@@ -158,10 +114,11 @@ fn bandai_styles_left_out_and_what_library_check_says() {
         .unwrap()
     );
     assert_eq!(eval["trials"], 240);
-    // Measured: correct 0.246, wrong 0.029, slow 0.004, decided at 0.239
-    // (the paper's rule on the same trials: 0.171 correct, 0.108 slow,
-    // decided at 0.593).
-    assert!(f(&eval, "correct") >= 0.23, "{eval}");
+    // Measured: correct 0.271, wrong 0.029, slow 0.004, decided at 0.248
+    // (before templates were also matched from a pause after a drift:
+    // 0.246; the paper's rule on the same trials: 0.171 correct, 0.108
+    // slow, decided at 0.593).
+    assert!(f(&eval, "correct") >= 0.26, "{eval}");
     assert!(f(&eval, "wrong_action") <= 0.04, "{eval}");
     assert!(f(&eval, "false_trigger_slow") <= 0.01, "{eval}");
     assert!(f(&eval, "decided_at") <= 0.27, "{eval}");

@@ -176,7 +176,7 @@ pub fn posing_model(
 
 const RECOGNISER_MAGIC: &[u8; 8] = b"MRNTRECG";
 /// Bumped whenever the template recogniser or its calibration changes.
-const RECOGNISER_FORMAT: u32 = 1;
+const RECOGNISER_FORMAT: u32 = 2;
 
 fn encode_recogniser(key: u64, t: &Thresholds, within_budget: bool) -> Vec<u8> {
     let mut out = Vec::with_capacity(64);

@@ -117,3 +117,63 @@ pub fn egalax_like() -> marionette::input::evemu::Recording {
         ..real
     }
 }
+
+/// The Bandai split the recognition tests use: a library's takes from six
+/// styles of ten actions (and the single normal takes of punch, kick and
+/// slash), and the four other styles held out. `d1_<action>_<style>_001.bvh`
+/// is linked as `<action>_<style>_001.bvh` (`library init` names actions
+/// by the text before the first `_`).
+pub mod bandai {
+    use std::path::Path;
+
+    pub const LIBRARY_STYLES: [&str; 6] = [
+        "active",
+        "angry",
+        "feminine",
+        "happy",
+        "masculinity",
+        "proud",
+    ];
+    pub const HELD_OUT_STYLES: [&str; 4] = ["childish", "giant", "musical", "normal"];
+    pub const ACTIONS: [&str; 10] = [
+        "bow",
+        "bye",
+        "byebye",
+        "guide",
+        "walk",
+        "walk-back",
+        "walk-left",
+        "walk-right",
+        "run",
+        "dash",
+    ];
+    /// Actions the share has one take of (normal style): library only.
+    pub const ONE_TAKE: [&str; 3] = ["punch", "kick", "slash"];
+
+    fn link(dir: &Path, action: &str, style: &str) {
+        let bandai = super::shared_dir().join("mocap/bandai");
+        std::os::unix::fs::symlink(
+            bandai.join(format!("d1_{action}_{style}_001.bvh")),
+            dir.join(format!("{action}_{style}_001.bvh")),
+        )
+        .unwrap();
+    }
+
+    /// The library's takes into `takes`, the held-out ones into `held`
+    /// (when given); both folders must exist.
+    pub fn split(takes: &Path, held: Option<&Path>) {
+        for action in ACTIONS {
+            for style in LIBRARY_STYLES {
+                link(takes, action, style);
+            }
+            if let Some(held) = held {
+                for style in HELD_OUT_STYLES {
+                    link(held, action, style);
+                }
+            }
+        }
+        for action in ONE_TAKE {
+            link(takes, action, "normal");
+        }
+    }
+}

@@ -88,7 +88,26 @@ impl Controller {
         camera: &crate::character::camera::Camera,
     ) -> Option<Decision> {
         let at = self.placement_now();
-        self.matching.retain(|id, _| self.grabs.contains_key(id));
+        let (grabs, actions) = (&self.grabs, &self.ch.actions);
+        let thresholds = self.ch.recogniser.thresholds;
+        self.matching.retain(|id, m| {
+            let held = grabs.contains_key(id);
+            if let (false, Some(c)) = (held, m.drag.closest()) {
+                // A drag that started nothing: what it came nearest to, and
+                // which threshold held it back.
+                tracing::debug!(
+                    nearest = %actions[c.action].def.name,
+                    clip = %c.clip,
+                    cost_m = c.cost_m,
+                    cost_limit_m = actions[c.action].def.threshold_m.unwrap_or(thresholds.cost_m),
+                    margin_m = c.margin_m,
+                    margin_needed_m = thresholds.margin_m,
+                    coverage = c.coverage,
+                    "drag started no action"
+                );
+            }
+            held
+        });
         let mut found = None;
         for (id, g) in &self.grabs {
             let Grab::Part {

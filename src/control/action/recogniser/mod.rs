@@ -18,6 +18,9 @@
 //!   more than [`Thresholds::max_slow`] times slower than the template's
 //!   part it covers is no match at all (this is what refuses slow posing
 //!   drags).
+//! - A template whose part drifts and pauses before its movement (a bow's
+//!   head before it goes down) is matched from the pause too, as a drag
+//!   that rests begins anew.
 //! - Coverage is measured along the template's path (a share of its
 //!   length), and must reach the calibrated floor.
 //! - The paper's 45° view rule becomes what it stands for: a template whose
@@ -61,6 +64,11 @@ pub struct TemplateRule {
     /// there, as a clip is matched from the end of its still lead-in.
     pub rest_speed: f64,
     pub rest_window_s: f64,
+    /// A template that rests this much longer than `rest_window_s` on its
+    /// way is matched from there too (s).
+    pub min_pause_s: f64,
+    /// ...if the part drifted less than this before the pause (m).
+    pub max_drift_m: f64,
     /// Templates keep this much of their clip once the part moves (s):
     /// what a drag shows before the action should have started.
     pub horizon_s: f64,
@@ -90,6 +98,8 @@ impl Default for TemplateRule {
             horizon_s: 1.5,
             rest_speed: 0.15,
             rest_window_s: 0.2,
+            min_pause_s: 0.15,
+            max_drift_m: 0.15,
             still_m: 0.025,
             still_px: 8.0,
             min_path_px: 40.0,
@@ -207,6 +217,10 @@ pub struct DragMatch {
     u: f64,
     /// The drag's points over the last `rest_window_s` (and one before).
     recent: std::collections::VecDeque<TrailPoint>,
+    /// The leading template that came closest to starting its action
+    /// (least cost) while none started: what a drag that started nothing
+    /// was nearest to.
+    closest: Option<Decision>,
 }
 
 /// Pixels a metre spans at `p` seen by `camera`.
@@ -258,9 +272,7 @@ impl DragMatch {
                 if exclude == Some((ai, ci)) || tpl.peak_speed < floor {
                     continue;
                 }
-                if let Some(s) = see(tpl, ai, ci, camera, at, scale, still_px, &rule) {
-                    seen.push(s);
-                }
+                seen.extend(see(tpl, ai, ci, camera, at, scale, still_px, &rule));
             }
         }
         Self {
@@ -276,13 +288,20 @@ impl DragMatch {
             costs: Vec::new(),
             u: 0.0,
             recent: std::collections::VecDeque::new(),
+            closest: None,
         }
     }
 
     /// How many templates of action `action` can be drawn from this view.
     #[must_use]
     pub fn drawable(&self, action: usize) -> usize {
-        self.seen.iter().filter(|s| s.action == action).count()
+        let clips: std::collections::BTreeSet<usize> = self
+            .seen
+            .iter()
+            .filter(|s| s.action == action)
+            .map(|s| s.clip)
+            .collect();
+        clips.len()
     }
 
     /// Add the drag's next point (times in seconds, increasing).
@@ -439,6 +458,18 @@ impl DragMatch {
         Some((lead.action, lead.covered[gate], next))
     }
 
+    /// The action other than `action` whose templates cost least now (for
+    /// the slowness cap of `gate`): the one a drag of `action` is told
+    /// from by the margin.
+    #[must_use]
+    pub fn nearest_other(&self, action: usize, gate: usize) -> Option<usize> {
+        self.costs
+            .iter()
+            .filter(|c| c.action != action && c.any[gate % CAPS].is_finite())
+            .min_by(|a, b| a.any[gate % CAPS].total_cmp(&b.any[gate % CAPS]))
+            .map(|c| c.action)
+    }
+
     fn leader(&self, gate: usize) -> Option<usize> {
         self.costs
             .iter()
@@ -453,19 +484,15 @@ impl DragMatch {
     /// is under its threshold (the action's own `threshold_m`, else the
     /// library's) and every other action of this part costs the margin
     /// more.
-    #[must_use]
-    pub fn decide(&self, actions: &[ActionModel], thresholds: &Thresholds) -> Option<Decision> {
+    pub fn decide(&mut self, actions: &[ActionModel], thresholds: &Thresholds) -> Option<Decision> {
         let floor = gate_of(thresholds);
         let (action, cost, next) = self.lead(floor)?;
         let limit = actions[action].def.threshold_m.unwrap_or(thresholds.cost_m);
         let margin = next - cost;
-        if cost > limit || margin < thresholds.margin_m {
-            return None;
-        }
         let i = self.leader(floor)?;
         let (s, c) = (&self.seen[i], &self.costs[i]);
         let j = c.covered_j[floor];
-        Some(Decision {
+        let d = Decision {
             action,
             clip: actions[action].templates[c.clip].clip.clone(),
             cost_m: cost,
@@ -473,7 +500,21 @@ impl DragMatch {
             coverage: s.along[j],
             tempo: if self.u > 0.0 { s.t[j] / self.u } else { 1.0 },
             generalized: s.generalized[j],
-        })
+        };
+        if cost > limit || margin < thresholds.margin_m {
+            if self.closest.as_ref().is_none_or(|b| d.cost_m < b.cost_m) {
+                self.closest = Some(d);
+            }
+            return None;
+        }
+        Some(d)
+    }
+
+    /// The leading template that came closest to starting its action
+    /// while none did (for the log of a drag that started nothing).
+    #[must_use]
+    pub fn closest(&self) -> Option<&Decision> {
+        self.closest.as_ref()
     }
 }
 

@@ -48,8 +48,11 @@ impl Seen {
     }
 }
 
-/// A clip's path seen from `camera`, its still lead-in trimmed; `None`
-/// where it cannot be drawn from this view.
+/// A clip's path seen from `camera`: one template from the end of its
+/// still lead-in, and one more from each place it rests on the way (as a
+/// drag that rests begins anew, so does its template: a bow whose head
+/// pauses before it goes down is matched from the pause too). None where
+/// the path cannot be drawn from this view.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn see(
     tpl: &ClipPath,
@@ -60,20 +63,76 @@ pub(super) fn see(
     scale: f64,
     still_px: f64,
     rule: &TemplateRule,
-) -> Option<Seen> {
-    let screen: Vec<DVec2> = tpl
+) -> Vec<Seen> {
+    let Some(screen) = tpl
         .points
         .iter()
         .map(|p| camera.project(at.place(*p)).map(|s| DVec2::new(s.x, s.y)))
-        .collect::<Option<_>>()?;
+        .collect::<Option<Vec<_>>>()
+    else {
+        return Vec::new();
+    };
+    let from = |start: usize| seen_from(tpl, &screen, start, action, clip, scale, still_px, rule);
+    let mut out: Vec<Seen> = from(tpl.lead_in).into_iter().collect();
+    // Where the part pauses within what a drag shows (resting by the rule a
+    // drag rests by, for at least `min_pause_s` more): the last resting
+    // point of each stretch begins a template, where the part had only
+    // drifted before it (less than `max_drift_m`): the slow start a still
+    // lead-in leaves in. (A pause after a movement of its own, the crouch
+    // before a jump, would only add look-alikes: a squat rises too.)
+    let window = (rule.rest_window_s / tpl.dt).round().max(1.0) as usize;
+    let end = (tpl.lead_in + (rule.horizon_s / tpl.dt).ceil() as usize + 1).min(screen.len());
+    let resting = |k: usize| {
+        k >= window && {
+            let old = screen[k - window];
+            let radius = rule.rest_speed * window as f64 * tpl.dt * scale;
+            screen[k - window..=k]
+                .iter()
+                .all(|q| q.distance(old) < radius)
+        }
+    };
+    let mut k = tpl.lead_in + 1;
+    while k < end {
+        if resting(k) {
+            let first = k;
+            while k + 1 < end && resting(k + 1) {
+                k += 1;
+            }
+            let drift: f64 = screen[tpl.lead_in..=first]
+                .windows(2)
+                .map(|w| w[0].distance(w[1]))
+                .sum::<f64>()
+                / scale;
+            if (k - first) as f64 * tpl.dt >= rule.min_pause_s && drift < rule.max_drift_m {
+                out.extend(from(k));
+            }
+        }
+        k += 1;
+    }
+    out
+}
+
+/// The template of `tpl` from point `start` (its still lead-in from there
+/// trimmed), if it can be drawn from this view.
+#[allow(clippy::too_many_arguments)]
+fn seen_from(
+    tpl: &ClipPath,
+    screen: &[DVec2],
+    start: usize,
+    action: usize,
+    clip: usize,
+    scale: f64,
+    still_px: f64,
+    rule: &TemplateRule,
+) -> Option<Seen> {
     // The clip's still lead-in is left out (where the part starts its
     // movement), and so is what little it moves before that from here.
-    let first = *screen.get(tpl.lead_in)?;
-    let moved = tpl.lead_in
-        + screen[tpl.lead_in..]
+    let first = *screen.get(start)?;
+    let moved = start
+        + screen[start..]
             .iter()
             .position(|s| s.distance(first) > still_px)?;
-    let start = moved.saturating_sub(1).max(tpl.lead_in);
+    let start = moved.saturating_sub(1).max(start);
     // What a drag can show before the action should have started: the
     // first `horizon_s` of movement (a whole punch; two steps of a walk).
     let end = (start + (rule.horizon_s / tpl.dt).ceil() as usize + 1).min(screen.len());

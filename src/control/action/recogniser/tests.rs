@@ -246,3 +246,48 @@ fn time_counts_only_outside_the_band() {
     assert!((tempo_gap(1.0, 2.0, 1.6) - 0.4).abs() < 1e-12);
     assert!((tempo_gap(1.0, 0.5, 1.6) - (1.0 / 1.6 - 0.5)).abs() < 1e-12);
 }
+
+#[test]
+fn a_take_that_drifts_and_pauses_is_matched_from_its_pause() {
+    // A bow's head: a quick 6 cm nod (too quick for the still lead-in to
+    // leave out), a 0.5 s pause, then 0.45 m down and forward in 0.6 s. A
+    // drag that pauses there too rests, and what it draws next is matched
+    // afresh: against the template from the pause.
+    let ease = |s: f64| s * s * (3.0 - 2.0 * s);
+    let bow = |s: f64, k: usize| {
+        let t = s * 1.25;
+        let nod = 0.06 * ease((t / 0.15).min(1.0));
+        let down = ease(((t - 0.65) / 0.6).clamp(0.0, 1.0)) * (1.0 + 0.05 * k as f64);
+        DVec3::new(0.0, 1.5 - 0.36 * down, nod + 0.27 * down)
+    };
+    let actions = vec![action("bow", 3, 1.25, 0.3, &bow)];
+    let trail = drag(&actions[0], 0, 1.05, 1.0);
+    let starts = |rule: TemplateRule| {
+        let r = Recogniser {
+            rule,
+            thresholds: Thresholds::default(),
+        };
+        let mut m = DragMatch::new(
+            &r,
+            &actions,
+            Role::RightHand,
+            &side_camera(),
+            &origin(),
+            Some((0, 0)),
+        );
+        trail.iter().find_map(|p| {
+            m.push(*p);
+            m.decide(&actions, &r.thresholds)
+        })
+    };
+    let d = starts(TemplateRule::default()).expect("the bow starts");
+    assert_eq!(d.action, 0);
+    // Matched from the pause: well into the clip.
+    assert!(d.generalized > 0.5, "{d:?}");
+    // Without templates from pauses it does not.
+    let none = starts(TemplateRule {
+        min_pause_s: 99.0,
+        ..TemplateRule::default()
+    });
+    assert!(none.is_none(), "{none:?}");
+}
