@@ -434,6 +434,17 @@ impl Config {
         c
     }
 
+    /// This configuration with every character's library set to `dir`
+    /// (`--library` given to a command that replays).
+    #[must_use]
+    pub fn with_library(&self, dir: &Path) -> Config {
+        let mut c = self.clone();
+        for ch in &mut c.character.0 {
+            ch.library = dir.to_owned();
+        }
+        c
+    }
+
     /// The controller's settings from `[action]`, `[character]` and
     /// `[tracking]`.
     #[must_use]

@@ -34,6 +34,9 @@ struct Author<'a> {
     width: f64,
     height: f64,
     time: f64,
+    /// Actions are dragged along their clip drawn longest (else along the
+    /// action's average trajectory, as the default demo was authored).
+    from_template: bool,
 }
 
 impl<'a> Author<'a> {
@@ -49,6 +52,7 @@ impl<'a> Author<'a> {
             width: f64::from(width),
             height: f64::from(height),
             time: 0.0,
+            from_template: false,
         };
         a.frame();
         a.wait(0.8);
@@ -159,7 +163,12 @@ impl<'a> Author<'a> {
             let cam = self.ctl.rig().camera();
             let c = &self.ctl.actors()[k].ctl;
             let at = c.placement_now();
-            let traj = c.character().actions[index].projected(&cam, &at);
+            let model = &c.character().actions[index];
+            let traj = if self.from_template {
+                model.most_drawn(&cam, &at)
+            } else {
+                model.projected(&cam, &at)
+            };
             let Some(first) = traj.first().copied() else {
                 continue;
             };
@@ -247,7 +256,6 @@ pub fn author_demo(
         0.0,
     ));
     let mut a = Author::start("marionette demo panel", stage, input, picture);
-    let (width, height) = (a.width, a.height);
     for name in [
         "punch_left",
         "kick_right",
@@ -258,95 +266,138 @@ pub fn author_demo(
     ] {
         a.action(name);
     }
-    // One finger poses the right hand: up and out, held, let go.
-    let hand = a.part(Role::RightHand);
-    a.down(0, hand);
-    a.frame();
-    a.glide(
-        &[(0, &|u| {
-            ScreenPoint::new(hand.x - 90.0 * u, hand.y - 230.0 * u)
-        })],
-        1.8,
-    );
-    a.wait(0.5);
-    a.synth.up(0);
-    a.frame();
-    a.wait(0.6);
-    // Two fingers pose both hands.
-    let (l, r) = (a.part(Role::LeftHand), a.part(Role::RightHand));
-    a.down(0, l);
-    a.down(1, r);
-    a.frame();
-    a.glide(
-        &[
-            (0, &|u| ScreenPoint::new(l.x + 60.0 * u, l.y - 200.0 * u)),
-            (1, &|u| ScreenPoint::new(r.x - 40.0 * u, r.y + 140.0 * u)),
-        ],
-        1.8,
-    );
-    a.wait(0.4);
-    a.synth.up(0).up(1);
-    a.frame();
-    a.wait(0.6);
-    // A foot pinned by one finger while another moves the other hand around.
-    let foot = a.part(Role::LeftFoot);
-    a.down(0, foot);
-    a.frame();
-    a.wait(0.4);
-    // Holding the foot alone re-poses the body: find the hand afterwards.
-    let hand = a.part(Role::LeftHand);
-    a.down(1, hand);
-    a.frame();
-    a.glide(
-        &[
-            (0, &|_| foot),
-            (1, &|u| {
-                let ang = u * std::f64::consts::PI;
-                ScreenPoint::new(hand.x + 120.0 * ang.sin(), hand.y - 160.0 * u)
-            }),
-        ],
-        2.2,
-    );
-    a.wait(0.3);
-    a.synth.up(1);
-    a.frame();
-    a.synth.up(0);
-    a.frame();
-    a.wait(0.6);
-    // Camera: one finger on empty space turns the view, then two pinch and
-    // twist.
-    let empty = ScreenPoint::new(width * 0.12, height * 0.85);
-    a.down(0, empty);
-    a.frame();
-    a.glide(
-        &[(0, &|u| {
-            ScreenPoint::new(empty.x + 260.0 * u, empty.y - 40.0 * u)
-        })],
-        1.4,
-    );
-    a.synth.up(0);
-    a.frame();
-    a.wait(0.3);
-    let (c, d) = (
-        ScreenPoint::new(width * 0.15, height * 0.55),
-        ScreenPoint::new(width * 0.3, height * 0.55),
-    );
-    a.down(0, c);
-    a.down(1, d);
-    a.frame();
-    a.glide(
-        &[
-            (0, &|u| ScreenPoint::new(c.x - 60.0 * u, c.y + 30.0 * u)),
-            (1, &|u| ScreenPoint::new(d.x + 60.0 * u, d.y - 30.0 * u)),
-        ],
-        1.4,
-    );
-    a.synth.up(0).up(1);
-    a.frame();
-    a.wait(0.5);
-    // Idle: the camera eases back home.
-    a.wait(settings.home_after_s + 3.5);
+    a.posing_tour(settings.home_after_s);
     a.synth
+}
+
+/// A demo recording for any library, authored against its own character
+/// as the default one is: every action (mirror images included) dragged
+/// along the path its primary part takes in the clip drawn longest from
+/// the home view, then
+/// the posing tour of [`author_demo`] (one finger, two, a pinned foot, the
+/// camera turned and pinched, the table at rest). Returns the recording and
+/// the actions it drags, in order.
+#[must_use]
+pub fn author_library_demo(
+    ch: Arc<Character>,
+    settings: Settings,
+    input: &InputConfig,
+    picture: Picture,
+) -> (Synth, Vec<String>) {
+    let (w, h) = picture.size();
+    let names: Vec<String> = ch.actions.iter().map(|a| a.def.name.clone()).collect();
+    let stage = Stage::single(Controller::new(
+        ch,
+        settings,
+        f64::from(w),
+        f64::from(h),
+        0.0,
+    ));
+    let mut a = Author::start("marionette demo panel", stage, input, picture);
+    a.from_template = true;
+    for name in &names {
+        a.action(name);
+    }
+    a.posing_tour(settings.home_after_s);
+    (a.synth, names)
+}
+
+impl Author<'_> {
+    /// Posing with one finger and with two, a part pinned by one finger
+    /// while another poses, camera turns and a pinch, and a rest while the
+    /// camera eases home (after `home_after_s` and a little more).
+    fn posing_tour(&mut self, home_after_s: f64) {
+        let a = self;
+        let (width, height) = (a.width, a.height);
+        // One finger poses the right hand: up and out, held, let go.
+        let hand = a.part(Role::RightHand);
+        a.down(0, hand);
+        a.frame();
+        a.glide(
+            &[(0, &|u| {
+                ScreenPoint::new(hand.x - 90.0 * u, hand.y - 230.0 * u)
+            })],
+            1.8,
+        );
+        a.wait(0.5);
+        a.synth.up(0);
+        a.frame();
+        a.wait(0.6);
+        // Two fingers pose both hands.
+        let (l, r) = (a.part(Role::LeftHand), a.part(Role::RightHand));
+        a.down(0, l);
+        a.down(1, r);
+        a.frame();
+        a.glide(
+            &[
+                (0, &|u| ScreenPoint::new(l.x + 60.0 * u, l.y - 200.0 * u)),
+                (1, &|u| ScreenPoint::new(r.x - 40.0 * u, r.y + 140.0 * u)),
+            ],
+            1.8,
+        );
+        a.wait(0.4);
+        a.synth.up(0).up(1);
+        a.frame();
+        a.wait(0.6);
+        // A foot pinned by one finger while another moves the other hand around.
+        let foot = a.part(Role::LeftFoot);
+        a.down(0, foot);
+        a.frame();
+        a.wait(0.4);
+        // Holding the foot alone re-poses the body: find the hand afterwards.
+        let hand = a.part(Role::LeftHand);
+        a.down(1, hand);
+        a.frame();
+        a.glide(
+            &[
+                (0, &|_| foot),
+                (1, &|u| {
+                    let ang = u * std::f64::consts::PI;
+                    ScreenPoint::new(hand.x + 120.0 * ang.sin(), hand.y - 160.0 * u)
+                }),
+            ],
+            2.2,
+        );
+        a.wait(0.3);
+        a.synth.up(1);
+        a.frame();
+        a.synth.up(0);
+        a.frame();
+        a.wait(0.6);
+        // Camera: one finger on empty space turns the view, then two pinch and
+        // twist.
+        let empty = ScreenPoint::new(width * 0.12, height * 0.85);
+        a.down(0, empty);
+        a.frame();
+        a.glide(
+            &[(0, &|u| {
+                ScreenPoint::new(empty.x + 260.0 * u, empty.y - 40.0 * u)
+            })],
+            1.4,
+        );
+        a.synth.up(0);
+        a.frame();
+        a.wait(0.3);
+        let (c, d) = (
+            ScreenPoint::new(width * 0.15, height * 0.55),
+            ScreenPoint::new(width * 0.3, height * 0.55),
+        );
+        a.down(0, c);
+        a.down(1, d);
+        a.frame();
+        a.glide(
+            &[
+                (0, &|u| ScreenPoint::new(c.x - 60.0 * u, c.y + 30.0 * u)),
+                (1, &|u| ScreenPoint::new(d.x + 60.0 * u, d.y - 30.0 * u)),
+            ],
+            1.4,
+        );
+        a.synth.up(0).up(1);
+        a.frame();
+        a.wait(0.5);
+        // Idle: the camera eases back home.
+        a.wait(home_after_s + 3.5);
+    }
 }
 
 /// The duel recording, for a table of two characters facing each other

@@ -54,6 +54,19 @@ pub struct ActionReport {
     pub false_trigger_slow: f64,
     /// Clips whose drag can be drawn from the default camera.
     pub drawable_from_default_camera: usize,
+    /// Its take drawn longest from the default camera, dragged there as
+    /// recorded (as `demo --library` drags it): what it started, and the
+    /// action nearest to it.
+    pub home_view: HomeView,
+}
+
+/// What a drag of an action's own take from the default camera does.
+#[derive(Clone, Debug, Serialize)]
+pub struct HomeView {
+    /// The action it started (none: nothing).
+    pub started: Option<String>,
+    /// The other action costing least along the drag.
+    pub nearest_other: Option<String>,
 }
 
 /// One action's left-out drags from one view.
@@ -136,6 +149,17 @@ fn report(actions: &[ActionModel], c: &Calibration, camera: &Camera) -> LibraryR
                 takes.iter().next().copied().unwrap_or("")
             ));
         }
+        let home = home_view(actions, ai, &c.recogniser, camera, &origin);
+        match (&home.started, &home.nearest_other) {
+            (Some(s), _) if s == name => {}
+            (Some(other), _) => advice.push(format!(
+                "`{name}` dragged from the default camera as its take was recorded starts `{other}`: from there the two are drawn alike; merge them, or give one another primary part"
+            )),
+            (None, Some(other)) if drawable > 0 => advice.push(format!(
+                "`{name}` dragged from the default camera as its take was recorded starts nothing: `{other}` is drawn as near to it from there; merge them, give one another primary part, or record takes that differ more"
+            )),
+            _ => {}
+        }
         if drawable == 0 {
             advice.push(format!(
                 "`{name}`: from the default camera its {} moves too little on the screen (or straight towards the camera) to be drawn; a visitor must turn the view, or lead it with another part",
@@ -176,6 +200,7 @@ fn report(actions: &[ActionModel], c: &Calibration, camera: &Camera) -> LibraryR
             views,
             false_trigger_slow: share(slow, slow_n),
             drawable_from_default_camera: drawable,
+            home_view: home,
         });
     }
     if !c.within_budget {
@@ -214,6 +239,38 @@ fn report(actions: &[ActionModel], c: &Calibration, camera: &Camera) -> LibraryR
         },
         actions: rows,
         advice,
+    }
+}
+
+/// Action `ai`'s take drawn longest from `camera`, dragged as recorded
+/// against every template (its own included) with the library's
+/// thresholds.
+fn home_view(
+    actions: &[ActionModel],
+    ai: usize,
+    recogniser: &Recogniser,
+    camera: &Camera,
+    at: &Placement,
+) -> HomeView {
+    let a = &actions[ai];
+    let mut m = DragMatch::new(recogniser, actions, a.def.primary, camera, at, None);
+    let gate = crate::control::action::recogniser::gate_of(&recogniser.thresholds);
+    let mut nearest = None;
+    for p in a.most_drawn(camera, at) {
+        m.push(p);
+        if let Some(d) = m.decide(actions, &recogniser.thresholds) {
+            return HomeView {
+                started: Some(actions[d.action].def.name.clone()),
+                nearest_other: m
+                    .nearest_other(ai, gate)
+                    .map(|o| actions[o].def.name.clone()),
+            };
+        }
+        nearest = m.nearest_other(ai, gate).or(nearest);
+    }
+    HomeView {
+        started: None,
+        nearest_other: nearest.map(|o| actions[o].def.name.clone()),
     }
 }
 

@@ -34,6 +34,11 @@ pub(super) enum Command {
         /// `duel` (two characters, two visitors, hits).
         #[arg(long, value_enum, default_value = "solo")]
         scene: Scene,
+        /// A library to show instead of the default character: a recording
+        /// is authored against it (every action dragged, posing, the
+        /// camera) and written as `recording.evemu` beside the frames.
+        #[arg(long, value_name = "DIR", conflicts_with = "scene")]
+        library: Option<PathBuf>,
     },
     Inspect {
         /// An evemu recording, or a .bvh file
@@ -66,6 +71,10 @@ pub(super) enum Command {
         /// With --metrics: turn tracking control off, to compare.
         #[arg(long, requires = "metrics")]
         no_tracking: bool,
+        /// Replay with this library's character instead of the
+        /// configuration's (a recording `demo --library DIR` authored).
+        #[arg(long, value_name = "DIR")]
+        library: Option<PathBuf>,
     },
     /// Write the motion the character performs for a recording as BVH
     /// (the library's skeleton, at its frame rate).

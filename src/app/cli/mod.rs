@@ -28,7 +28,7 @@ use self::eval::{eval_actions, eval_pose, eval_pose_leave_one_out, pose_setup};
 use self::input::{inspect, list_devices, replay};
 use self::kiosk::{calibrate, list_outputs, run_kiosk};
 use self::motion::{bake, contact_sheets, convert_bvh};
-use self::replay::{demo, export_bvh, replay_metrics, show};
+use self::replay::{demo, demo_library, export_bvh, replay_metrics, show};
 use crate::app::config::{self, Config, ConfigError};
 use crate::app::exit::{self, ExitStatus};
 use crate::app::logging;
@@ -129,8 +129,27 @@ fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
 }
 
 fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
+    // A replay's `--library` stands for the configuration's.
+    let replayed;
+    let config = match &command {
+        Command::Replay {
+            library: Some(dir), ..
+        } => {
+            replayed = config.with_library(&chosen_library(config, Some(dir.clone()))?);
+            &replayed
+        }
+        _ => config,
+    };
     match command {
-        Command::Demo { out, fps, scene } => demo(config, &out, fps, scene),
+        Command::Demo {
+            out,
+            fps,
+            library: Some(dir),
+            ..
+        } => demo_library(config, chosen_library(config, Some(dir))?, &out, fps),
+        Command::Demo {
+            out, fps, scene, ..
+        } => demo(config, &out, fps, scene),
         Command::Inspect { file } => inspect(config, &file),
         Command::Replay {
             file,

@@ -62,6 +62,18 @@ pub(super) fn show(
     fps: f64,
     max_frames: u64,
 ) -> Result<(), Failure> {
+    let summary = render(config, rec, out, fps, max_frames)?;
+    writeln!(std::io::stdout(), "{summary}").map_err(stdout_error)
+}
+
+/// [`show`] without printing: the replay's summary.
+fn render(
+    config: &Config,
+    rec: &Recording,
+    out: &Path,
+    fps: f64,
+    max_frames: u64,
+) -> Result<crate::app::headless::Summary, Failure> {
     use crate::app::headless;
     check_fps(fps)?;
     let (summary, _) = pipeline::summarize(rec);
@@ -87,8 +99,7 @@ pub(super) fn show(
         until: Some(summary.replay_s),
         ..headless::Options::default()
     };
-    let summary = headless::run_table(cast, config, frames, &opts).map_err(Failure::from)?;
-    writeln!(std::io::stdout(), "{summary}").map_err(stdout_error)
+    headless::run_table(cast, config, frames, &opts).map_err(Failure::from)
 }
 
 /// Frames are written at most once per controller step.
@@ -138,6 +149,89 @@ pub(super) fn demo(
     )
     .map_err(stdout_error)?;
     show(&config, &rec, out_dir, fps, u64::MAX)
+}
+
+/// `demo --library DIR`: a recording authored against the library's own
+/// character (every action dragged, posing, the camera, the table at
+/// rest), written as `OUT/recording.evemu`, then replayed into frames and
+/// a contact sheet; `summary.json` adds which actions were dragged and
+/// which of them started.
+pub(super) fn demo_library(
+    config: &Config,
+    dir: std::path::PathBuf,
+    out_dir: &Path,
+    fps: f64,
+) -> Result<(), Failure> {
+    check_fps(fps)?;
+    let config = config.with_library(&dir);
+    let ch = crate::app::character::load(&dir)?;
+    let (synth, dragged) = crate::tools::demo::author_library_demo(
+        ch,
+        config.control_settings(),
+        &config.input,
+        config.display.picture(),
+    );
+    let rec = synth.finish();
+    let mut text = Vec::new();
+    rec.write(&mut text)
+        .map_err(|e| Failure::new(exit::FAILURE, e))?;
+    std::fs::create_dir_all(out_dir).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot create {}: {e}", out_dir.display()),
+        )
+    })?;
+    let recording = out_dir.join("recording.evemu");
+    crate::output::replace_file(&recording, &text).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", recording.display()),
+        )
+    })?;
+    let (length, _) = pipeline::summarize(&rec);
+    writeln!(
+        std::io::stdout(),
+        "demo: {} ({:.1} s authored against it, {} actions dragged), recording in {}",
+        dir.display(),
+        length.duration_s,
+        dragged.len(),
+        recording.display()
+    )
+    .map_err(stdout_error)?;
+    let summary = render(&config, &rec, out_dir, fps, u64::MAX)?;
+    let started: Vec<&str> = dragged
+        .iter()
+        .filter(|d| summary.actions.iter().any(|a| &a.action == *d))
+        .map(String::as_str)
+        .collect();
+    let missed: Vec<&str> = dragged
+        .iter()
+        .filter(|d| !started.contains(&d.as_str()))
+        .map(String::as_str)
+        .collect();
+    let mut json = serde_json::to_value(&summary).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    json["library"] = serde_json::json!(dir.display().to_string());
+    json["dragged"] = serde_json::json!(dragged);
+    json["dragged_started"] = serde_json::json!(started);
+    json["dragged_not_started"] = serde_json::json!(missed);
+    let text = serde_json::to_string_pretty(&json).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    write_atomically(&out_dir.join("summary.json"), &(text + "\n"))?;
+    writeln!(
+        std::io::stdout(),
+        "{summary}\n{} of {} dragged actions started{}",
+        started.len(),
+        dragged.len(),
+        if missed.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (not: {}; `marionette library check {}` says why)",
+                missed.join(", "),
+                dir.display()
+            )
+        }
+    )
+    .map_err(stdout_error)
 }
 
 /// What a replay without rendering keeps.

@@ -50,6 +50,25 @@ pub struct ClipPath {
     pub peak_speed: f64,
 }
 
+impl ClipPath {
+    /// The part's path on screen from the end of its still lead-in, for a
+    /// character placed at `at`, with times in seconds at the clip's speed.
+    #[must_use]
+    pub fn projected(&self, camera: &Camera, at: &Placement) -> Vec<TrailPoint> {
+        self.points
+            .iter()
+            .enumerate()
+            .skip(self.lead_in)
+            .filter_map(|(k, p)| {
+                camera.project(at.place(*p)).map(|s| TrailPoint {
+                    at: s,
+                    t: (k - self.lead_in) as f64 * self.dt,
+                })
+            })
+            .collect()
+    }
+}
+
 /// Speeds along a path (m per point), each over three points so that one
 /// noisy sample does not count.
 fn speeds(points: &[DVec3]) -> Vec<f64> {
@@ -157,6 +176,20 @@ impl ActionModel {
             duration: durations.iter().sum::<f64>() / durations.len().max(1) as f64,
             templates,
         }
+    }
+
+    /// The path of its take drawn longest on `camera`'s screen (a visitor
+    /// draws what they see), as [`ClipPath::projected`] gives it; empty
+    /// without templates.
+    #[must_use]
+    pub fn most_drawn(&self, camera: &Camera, at: &Placement) -> Vec<TrailPoint> {
+        let length =
+            |p: &[TrailPoint]| -> f64 { p.windows(2).map(|w| w[0].at.distance(w[1].at)).sum() };
+        self.templates
+            .iter()
+            .map(|t| t.projected(camera, at))
+            .max_by(|a, b| length(a).total_cmp(&length(b)))
+            .unwrap_or_default()
     }
 
     /// The trajectory on screen for a character placed at `at`, with times
