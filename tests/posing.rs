@@ -283,7 +283,9 @@ fn the_model_beats_its_baselines_on_held_out_mocap() {
         model_targets.mpjpe_cm < nearest_targets.mpjpe_cm,
         "blending and IK beat the nearest sample"
     );
-    assert!(model_targets.mpjpe_cm < 12.0, "{model_targets:?}");
+    // Measured: 3.51 cm (IK from the rest pose 9.16, the nearest sample
+    // 8.95).
+    assert!(model_targets.mpjpe_cm < 3.8, "{model_targets:?}");
 }
 
 /// A posing library of a few CMU clips, its model, and two held-out clips of
@@ -848,11 +850,14 @@ fn a_static_top_bone_above_the_pelvis_no_longer_misplaces_the_character() {
         "bandai, normal style held out, 5 parts: touch {:.2} cm ({:.2} px), targets {:.2} cm, ccd-rest touch {:.2} cm",
         touch.mpjpe_cm, touch.constraint_err_px, targets.mpjpe_cm, rest_touch.mpjpe_cm
     );
-    assert!(touch.mpjpe_cm < 6.0, "{touch:?}");
-    assert!(targets.mpjpe_cm < 4.0, "{targets:?}");
-    assert!(touch.constraint_err_px < 2.0, "{touch:?}");
+    // The README's figures: 3.96 cm from 5 touches (0.38 px), 2.17 cm
+    // from 5 targets, 1.39 times better than IK from the rest pose
+    // (5.50 cm).
+    assert!(touch.mpjpe_cm < 4.2, "{touch:?}");
+    assert!(targets.mpjpe_cm < 2.4, "{targets:?}");
+    assert!(touch.constraint_err_px < 0.5, "{touch:?}");
     assert!(
-        touch.mpjpe_cm < rest_touch.mpjpe_cm,
+        touch.mpjpe_cm * 1.3 < rest_touch.mpjpe_cm,
         "{touch:?} {rest_touch:?}"
     );
 }
@@ -886,6 +891,8 @@ fn posing_follows_a_held_out_clip_frame_by_frame_as_in_use() {
         r.frame_by_frame.mpjpe_cm < 2.0 * r.single_frames.mpjpe_cm + 1.0,
         "{r:?}"
     );
-    assert!(r.frame_by_frame.mpjpe_cm < 6.0, "{r:?}");
-    assert!(r.frame_by_frame.constraint_err_px < 4.0, "{r:?}");
+    // Measured: 3.29 cm and 1.80 px frame by frame, 3.41 cm and 0.56 px
+    // posing each frame on its own.
+    assert!(r.frame_by_frame.mpjpe_cm < 3.6, "{r:?}");
+    assert!(r.frame_by_frame.constraint_err_px < 2.0, "{r:?}");
 }
