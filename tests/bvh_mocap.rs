@@ -182,3 +182,26 @@ fn stature_comes_from_the_bones_not_the_first_posture() {
     let ratio = standing.first_frame_height_m / standing.height_m;
     assert!((0.95..1.05).contains(&ratio), "{ratio}");
 }
+
+#[test]
+fn a_rig_that_ends_at_the_head_joint_gets_its_crown() {
+    // The Bandai rig's Head has a zero End Site: its bones stop at the top
+    // of the neck (1.327 m from the bones alone). The crown, 12% of the
+    // stature above the head joint, is added; CMU's converted rig, whose
+    // head has its own extent, is measured as it was.
+    let shared = common::shared_dir().join("mocap");
+    let bandai = import(&shared.join("bandai/d1_walk_giant_001.bvh"));
+    assert!(
+        (bandai.height_m - 1.508).abs() < 0.005,
+        "{}",
+        bandai.height_m
+    );
+    // Its first frame, walking crouched as a giant, a little less.
+    assert!(
+        (bandai.first_frame_height_m - 1.490).abs() < 0.005,
+        "{}",
+        bandai.first_frame_height_m
+    );
+    let cmu = import(&shared.join("cmu-cc/002_05.bvh"));
+    assert!((cmu.height_m - 1.791).abs() < 0.005, "{}", cmu.height_m);
+}

@@ -76,8 +76,9 @@ pub fn detect_scale(height: f64) -> f64 {
 
 /// The skeleton's stature from its bone lengths alone, whatever the pose:
 /// the chain from a foot up through the hip, pelvis and spine to the top of
-/// the head (the head's End Site, or its furthest descendant). A standing
-/// person is about this tall; used to find the file's unit.
+/// the head (the head's End Site, or its furthest descendant; where the rig
+/// ends at the head joint, the crown estimated from the rest of the chain).
+/// A standing person is about this tall; used to find the file's unit.
 #[must_use]
 pub fn chain_stature(skeleton: &Skeleton, roles: &RoleMap) -> f64 {
     let head = roles.get(Role::Head);
@@ -105,7 +106,24 @@ pub fn chain_stature(skeleton: &Skeleton, roles: &RoleMap) -> f64 {
         .fold(0.0, f64::max);
     // Ankle to ground: the foot's End Site or its child's offset, roughly.
     let ankle = 0.04 * (leg + trunk);
-    leg + trunk + head_top + ankle
+    let below = leg + trunk + ankle;
+    below + head_top.max(head_extent(below, head_top))
+}
+
+/// A head joint at the top of the neck is about this share of a person's
+/// stature below the crown.
+const HEAD_TOP_SHARE: f64 = 0.12;
+
+/// The crown's height above the head joint where the rig ends there (no
+/// bone or End Site above it, as in some studios' rigs): `below` is the
+/// stature up to the head joint and `measured` what the rig shows above
+/// it. Zero where the rig has its own head.
+fn head_extent(below: f64, measured: f64) -> f64 {
+    if measured >= 0.02 * below {
+        0.0
+    } else {
+        below * HEAD_TOP_SHARE / (1.0 - HEAD_TOP_SHARE)
+    }
 }
 
 /// Floor to top of head of a pose, in the skeleton's units.
@@ -129,7 +147,11 @@ pub fn standing_height(skeleton: &Skeleton, roles: &RoleMap, pose: &Pose) -> f64
             }
         }
     }
-    top - floor
+    // A rig that ends at the head joint: the crown above it, as tall as
+    // the bones say it is (upright; a bowed head is over-counted a little).
+    let above = top - w.positions[head].y;
+    let below = w.positions[head].y - floor;
+    top + head_extent(below, above) - floor
 }
 
 /// Whether frame 0 is a converter's T-pose: arms straight out sideways at
