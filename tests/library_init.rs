@@ -84,16 +84,18 @@ fn a_folder_of_takes_becomes_a_library_that_loads() {
         2,
         "{stdout}"
     );
-    let mirrored = action("punch_mirror");
+    // Named by side: the punch taught with the left hand is `punch_left`,
+    // its mirror image `punch_right`.
+    let mirrored = action("punch_right");
     assert_eq!(mirrored.primary, Role::RightHand);
     assert!(mirrored.clips.iter().all(|c| c.ends_with("~mirror")));
-    assert_eq!(action("kick_mirror").primary, Role::LeftFoot);
+    assert_eq!(action("kick_left").primary, Role::LeftFoot);
     // The studio's punch take is five left punches, the kick three kicks,
     // the slash three slashes: each is cut into single actions.
-    let punch = action("punch");
+    let punch = action("punch_left");
     assert_eq!(punch.primary, Role::LeftHand);
     assert_eq!(punch.clips.len(), 5, "{:?}", punch.clips);
-    let kick = action("kick");
+    let kick = action("kick_right");
     assert_eq!(kick.primary, Role::RightFoot);
     assert_eq!(kick.clips.len(), 3, "{:?}", kick.clips);
     assert_eq!(action("slash").clips.len(), 3);

@@ -38,11 +38,27 @@ pub(super) fn eval_actions(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
+        let named = |n: &str| stem.starts_with(&format!("{n}_"));
+        // `bye_*.bvh` tests `bye`, or the action `library init` named by
+        // the side of its takes (`bye_right`; not its mirror image).
+        let sided = |a: &&ActionModel| {
+            !a.def.clips.iter().all(|c| c.ends_with("~mirror"))
+                && ["_left", "_right"]
+                    .iter()
+                    .any(|side| a.def.name.strip_suffix(side).is_some_and(named))
+        };
         let Some(action) = actions
             .iter()
             .map(|a| a.def.name.clone())
-            .filter(|n| stem.starts_with(&format!("{n}_")))
+            .filter(|n| named(n))
             .max_by_key(String::len)
+            .or_else(|| {
+                actions
+                    .iter()
+                    .filter(sided)
+                    .map(|a| a.def.name.clone())
+                    .max_by_key(String::len)
+            })
         else {
             tracing::warn!(file = %f.display(), "not named after an action of the library (<action>_*.bvh); skipped");
             continue;

@@ -322,10 +322,19 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
     // too, unless the folder has that action already.
     let names: Vec<String> = actions.iter().map(|a| a.name.clone()).collect();
     for a in &mut actions {
-        let other = crate::character::library::mirrored_name(&a.name);
         if a.primary.mirrored() == a.primary {
             continue;
         }
+        // A name that says no side gets its takes' side, so that the
+        // mirror image's name says the other (`punch` taught with the left
+        // hand: `punch_left` and `punch_right`).
+        let sided = if crate::character::library::mirrored_name(&a.name).ends_with("_mirror") {
+            let side = a.primary.name().split('_').next().unwrap_or_default();
+            format!("{}_{side}", a.name)
+        } else {
+            a.name.clone()
+        };
+        let other = crate::character::library::mirrored_name(&sided);
         if names.contains(&other) {
             a.notes
                 .push(format!("no mirror image: the takes have `{other}` already"));
@@ -349,6 +358,13 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
                 100.0 * other_side / best
             ));
             continue;
+        }
+        if sided != a.name {
+            a.notes.push(format!(
+                "named `{sided}` after the side of its takes ({}), its mirror image `{other}`",
+                a.primary.name()
+            ));
+            a.name = sided;
         }
         a.mirror = true;
         a.notes.push(format!(
