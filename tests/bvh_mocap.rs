@@ -205,3 +205,33 @@ fn a_rig_that_ends_at_the_head_joint_gets_its_crown() {
     let cmu = import(&shared.join("cmu-cc/002_05.bvh"));
     assert!((cmu.height_m - 1.791).abs() < 0.005, "{}", cmu.height_m);
 }
+
+#[test]
+fn limits_are_judged_from_the_body_not_the_rigs_axes() {
+    // The Bandai rig's rest pose lies along X: judged by its pelvis's
+    // joint axes, every standing frame read as hips spread 70-86° and the
+    // chest turned 95-106°. From where the hips, shoulders and neck are,
+    // a bow is within human limits and a high kick spreads the hip.
+    use marionette::tools::checks::{Limits, check};
+    let shared = common::shared_dir().join("mocap/bandai");
+    let judge = |name: &str| {
+        let c = import(&shared.join(name));
+        check(&c.skeleton, &c.roles, &c.frames, 0.0, &Limits::default())
+    };
+    for bow in [
+        "d1_bow_active_001.bvh",
+        "d1_bow_feminine_001.bvh",
+        "d1_bow_proud_001.bvh",
+    ] {
+        let r = judge(bow);
+        assert!(r.violations.is_empty(), "{bow}: {:?}", r.violations);
+    }
+    let kick = judge("d1_kick_normal_001.bvh");
+    assert!(
+        kick.violations
+            .iter()
+            .any(|v| v.contains("right_hip spread")),
+        "{:?}",
+        kick.violations
+    );
+}

@@ -138,8 +138,14 @@ pub fn check(
             }
         };
         let pelvis_rot = w.rotations[roles.get(Role::Pelvis)];
-        let up = pelvis_rot * DVec3::Y;
-        let forward = pelvis_rot * DVec3::Z;
+        // The pelvis's frame from where the body is, not from its joint's
+        // axes (a rig whose rest pose lies along X has other axes): its
+        // side from hip to hip, up towards the chest, forward across both.
+        let (up, forward) = frame(
+            g(w, Role::LeftHip) - g(w, Role::RightHip),
+            g(w, Role::Chest) - g(w, Role::Pelvis),
+        )
+        .unwrap_or((pelvis_rot * DVec3::Y, pelvis_rot * DVec3::Z));
         for (hip, knee, foot) in [
             (Role::LeftHip, Role::LeftKnee, Role::LeftFoot),
             (Role::RightHip, Role::RightKnee, Role::RightFoot),
@@ -208,9 +214,23 @@ pub fn check(
                 limits.head_turn
             ));
         }
-        let spine = (pelvis_rot.inverse() * chest_rot)
-            .angle_between(glam::DQuat::IDENTITY)
-            .to_degrees();
+        // The chest's frame against the pelvis's, both from positions
+        // (shoulder to shoulder, up the neck), where the rig has them.
+        let chest_frame = frame(
+            g(w, Role::LeftShoulder) - g(w, Role::RightShoulder),
+            g(w, Role::Neck) - g(w, Role::Chest),
+        );
+        let spine = match chest_frame {
+            Some((c_up, c_forward)) => {
+                let m = |u: DVec3, f: DVec3| glam::DMat3::from_cols(u.cross(f), u, f);
+                glam::DQuat::from_mat3(&(m(up, forward).transpose() * m(c_up, c_forward)))
+                    .angle_between(glam::DQuat::IDENTITY)
+                    .to_degrees()
+            }
+            None => (pelvis_rot.inverse() * chest_rot)
+                .angle_between(glam::DQuat::IDENTITY)
+                .to_degrees(),
+        };
         if spine > limits.spine_turn {
             bad(format!(
                 "chest turned {spine:.0}° from the pelvis (limit {})",
@@ -219,4 +239,16 @@ pub fn check(
         }
     }
     r
+}
+
+/// A body frame from a side-to-side vector (right to left) and one
+/// roughly up: its up and forward, orthonormal; `None` where either is
+/// degenerate.
+fn frame(side: DVec3, towards_up: DVec3) -> Option<(DVec3, DVec3)> {
+    let up = towards_up - side * (towards_up.dot(side) / side.length_squared().max(1e-12));
+    if side.length() < 1e-6 || up.length() < 1e-6 {
+        return None;
+    }
+    let (side, up) = (side.normalize(), up.normalize());
+    Some((up, side.cross(up)))
 }

@@ -106,7 +106,7 @@ pub(super) fn eval_actions(
         &tests,
         &config.action.rule(),
     ));
-    let json = serde_json::to_string(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    let json = serde_json::to_string_pretty(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 

@@ -317,7 +317,7 @@ fn stdout_error(e: std::io::Error) -> Failure {
 }
 
 fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
-    let json = serde_json::to_string(value).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    let json = serde_json::to_string_pretty(value).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
