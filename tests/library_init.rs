@@ -65,6 +65,12 @@ fn a_folder_of_takes_becomes_a_library_that_loads() {
             .unwrap_or_else(|| panic!("no action {name}: {stdout}"))
     };
     assert!(lib.actions.iter().all(|a| a.name != "pose"));
+    // The report ends with what to do next.
+    let last = stdout.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("next: `marionette library check") && last.contains("demo --library"),
+        "{stdout}"
+    );
     // Six actions, and the mirror images of the two led by one side's
     // hand or foot alone (punch, kick): both hands wave bye-bye and swing
     // the slash, so those are their own mirror images.

@@ -271,6 +271,13 @@ pub(super) fn library_init(
         lib.clips.len(),
         lib.actions.len()
     )
+    .map_err(stdout_error)?;
+    let dir = out.display();
+    writeln!(
+        stdout,
+        "next: `marionette library check {dir}` (what a drag can start, and what to record or merge), `marionette demo --library {dir} --out {dir}-demo` (see it perform), then `library = \"{}\"` under [character] in the configuration",
+        std::path::absolute(out).unwrap_or_else(|_| out.to_owned()).display()
+    )
     .map_err(stdout_error)
 }
 
