@@ -209,7 +209,7 @@ impl Config {
             return Err(invalid(
                 "display.presenter",
                 format!(
-                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers) or \"copy\" (frames copied into KMS buffers: any driver), found \"{}\"",
+                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (frames written into gbm's scanout buffers: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found \"{}\"",
                     d.presenter
                 ),
             ));
@@ -578,7 +578,7 @@ mod tests {
             e.contains("`display.presenter`") && e.contains("\"copy\"") && e.contains("vulkan"),
             "{e}"
         );
-        for ok in ["auto", "direct", "copy"] {
+        for ok in ["auto", "direct", "gbm", "copy"] {
             let c = parse(&format!("[display]\npresenter = \"{ok}\"\n")).unwrap();
             assert_eq!(c.display.presenter, ok);
         }

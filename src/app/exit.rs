@@ -89,9 +89,11 @@ impl ExitStatus for PresentError {
     fn exit_code(&self) -> u8 {
         match self {
             Self::Kms(e) => e.exit_code(),
-            Self::NoOutput(_) | Self::Master { .. } | Self::LostMaster(_) | Self::Direct { .. } => {
-                UNAVAILABLE
-            }
+            Self::NoOutput(_)
+            | Self::Master { .. }
+            | Self::LostMaster(_)
+            | Self::Direct { .. }
+            | Self::Gbm { .. } => UNAVAILABLE,
             Self::Gpu(e) if e.is_configuration() => CONFIG,
             Self::Gpu(_) => UNAVAILABLE,
             Self::Io { .. } => IOERR,

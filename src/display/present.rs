@@ -1,7 +1,7 @@
 //! Showing frames on a KMS output. The copy presenter renders offscreen
 //! (any Vulkan adapter, lavapipe included), copies each frame into one of
-//! two dumb buffers and page-flips to it on vblank: it works on every KMS
-//! driver. marionette becomes DRM master for the output it drives, and
+//! two scanout buffers (gbm's where gbm opens the card, else dumb buffers)
+//! and page-flips to it on vblank: it works on every KMS driver. marionette becomes DRM master for the output it drives, and
 //! gives the CRTC back as it found it when it stops.
 
 use std::os::fd::{AsFd, BorrowedFd};
@@ -13,6 +13,8 @@ use drm::control::dumbbuffer::DumbBuffer;
 use drm::control::{Device as _, Mode, PageFlipFlags, connector, crtc, framebuffer};
 use thiserror::Error;
 
+pub use super::output::{Attempt, OutputChoice, PresenterKind};
+use super::output::{Found, become_master, find_output};
 use crate::platform::kms::Card;
 use crate::render::headless::Image;
 
@@ -41,6 +43,14 @@ pub enum PresentError {
     /// No GPU to render with.
     #[error(transparent)]
     Gpu(#[from] crate::render::gpu::GpuError),
+    /// gbm cannot make scanout buffers on this card.
+    #[error("{path}: gbm cannot drive the display: {what}: {source}")]
+    Gbm {
+        path: PathBuf,
+        what: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
     /// The direct presenter cannot drive this output.
     #[error("{path}: Vulkan cannot drive the display directly: {why}")]
     Direct { path: PathBuf, why: String },
@@ -48,38 +58,6 @@ pub enum PresentError {
     /// back.
     #[error("{0}: the display was taken by another program (VT switch)")]
     LostMaster(PathBuf),
-}
-
-/// Which output and mode to drive: by connector name (`HDMI-A-1`) and
-/// `WIDTHxHEIGHT[@HZ]`, else the first connected output and its preferred
-/// mode.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct OutputChoice {
-    pub connector: Option<String>,
-    pub mode: Option<(u16, u16, Option<u32>)>,
-}
-
-impl OutputChoice {
-    /// The output and mode `[display]` asks for.
-    #[must_use]
-    pub fn from_config(d: &crate::display::config::DisplayConfig) -> Self {
-        Self {
-            connector: (!d.output.is_empty()).then(|| d.output.clone()),
-            mode: Self::parse_mode(&d.mode),
-        }
-    }
-
-    /// Parse a mode as written in the configuration: `1280x800` or
-    /// `1920x1080@60`.
-    #[must_use]
-    pub fn parse_mode(s: &str) -> Option<(u16, u16, Option<u32>)> {
-        let (size, hz) = match s.split_once('@') {
-            Some((size, hz)) => (size, Some(hz.trim().parse().ok()?)),
-            None => (s, None),
-        };
-        let (w, h) = size.split_once('x')?;
-        Some((w.trim().parse().ok()?, h.trim().parse().ok()?, hz))
-    }
 }
 
 /// The output being driven, with its two buffers.
@@ -90,7 +68,7 @@ pub struct CopyPresenter {
     connector: connector::Handle,
     crtc: crtc::Handle,
     mode: Mode,
-    buffers: Vec<(DumbBuffer, framebuffer::Handle)>,
+    buffers: Buffers,
     /// The buffer on screen (or queued to be).
     front: usize,
     /// A page flip is queued and its event not yet read.
@@ -98,134 +76,34 @@ pub struct CopyPresenter {
     /// The CRTC as it was, to give back.
     saved: Option<crtc::Info>,
     flips: u64,
+    /// Time spent writing frames into the buffers (s), and how many: the
+    /// copy's cost, said when the presenter stops.
+    copy_s: f64,
+    copies: u64,
 }
 
-pub(crate) fn connector_name(info: &connector::Info) -> String {
-    format!("{}-{}", info.interface().as_str(), info.interface_id())
+/// Where the frames are copied to.
+enum Buffers {
+    Dumb(Vec<(DumbBuffer, framebuffer::Handle)>),
+    Gbm(Box<super::gbm::GbmBuffers>),
 }
 
-/// How frames reach the output.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum PresenterKind {
-    /// Direct where the Vulkan driver can drive the display, else copy.
-    #[default]
-    Auto,
-    /// Vulkan drives the display (VK_EXT_acquire_drm_display).
-    Direct,
-    /// Frames rendered offscreen and copied into dumb buffers.
-    Copy,
-}
-
-impl PresenterKind {
-    /// `auto`, `direct` or `copy`, as written in `[display] presenter`.
-    #[must_use]
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "auto" => Some(Self::Auto),
-            "direct" => Some(Self::Direct),
-            "copy" => Some(Self::Copy),
-            _ => None,
+impl Buffers {
+    fn framebuffer(&self, i: usize) -> framebuffer::Handle {
+        match self {
+            Self::Dumb(b) => b[i].1,
+            Self::Gbm(g) => g.bos[i].1,
         }
     }
 }
 
-/// A connected output found on a card, with the mode to drive it in.
-pub(crate) struct Found {
-    pub card: Card,
-    pub path: PathBuf,
-    pub name: String,
-    pub connector: connector::Handle,
-    pub crtc: crtc::Handle,
-    pub mode: Mode,
-}
-
-/// Find the output `choice` names (or the first connected one) on the
-/// cards in `dir` (normally `/dev/dri`).
-pub(crate) fn find_output(dir: &Path, choice: &OutputChoice) -> Result<Found, PresentError> {
-    let mut seen = Vec::new();
-    for path in crate::platform::kms::card_paths(dir)? {
-        let card = Card::open(&path)?;
-        let io = |what, source| PresentError::Io {
-            path: path.clone(),
-            what,
-            source,
-        };
-        let Ok(res) = card.resource_handles() else {
-            continue; // a render-only node
-        };
-        for &h in res.connectors() {
-            let info = card
-                .get_connector(h, true)
-                .map_err(|e| io("reading a connector", e))?;
-            let name = connector_name(&info);
-            let connected = info.state() == connector::State::Connected;
-            seen.push(format!(
-                "{name} ({})",
-                if connected {
-                    "connected"
-                } else {
-                    "disconnected"
-                }
-            ));
-            if choice.connector.as_ref().is_some_and(|c| *c != name) || !connected {
-                continue;
-            }
-            let mode = pick_mode(info.modes(), choice.mode).ok_or_else(|| {
-                PresentError::NoOutput(format!(
-                    "{name} has no mode {}; its modes: {}",
-                    choice.mode.map_or_else(String::new, |(w, h, hz)| format!(
-                        "{w}x{h}{}",
-                        hz.map_or(String::new(), |hz| format!("@{hz}"))
-                    )),
-                    info.modes()
-                        .iter()
-                        .map(|m| format!("{}x{}@{}", m.size().0, m.size().1, m.vrefresh()))
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                ))
-            })?;
-            let crtc = crtc_for(&card, &res, &info)
-                .ok_or_else(|| PresentError::NoOutput(format!("{name}: no CRTC can drive it")))?;
-            return Ok(Found {
-                card,
-                path: path.clone(),
-                name,
-                connector: h,
-                crtc,
-                mode,
-            });
-        }
-    }
-    let seen = if seen.is_empty() {
-        "none".to_owned()
-    } else {
-        seen.join(", ")
-    };
-    Err(PresentError::NoOutput(match &choice.connector {
-        Some(c) => format!(
-            "no connected output named {c} in {} (outputs: {seen}); see `marionette list-outputs`",
-            dir.display(),
-        ),
-        None => format!(
-            "no connected display in {} (outputs: {seen}): plug a display in, or check the cable",
-            dir.display(),
-        ),
-    }))
-}
-
-/// Become DRM master of `card` (the first client of a card is master
-/// already; an explicit request fails only if another program holds it).
-#[tracing::instrument(level = "debug", skip(card), err(level = "debug"))]
-pub(crate) fn become_master(card: &Card, path: &Path) -> Result<(), PresentError> {
-    if let Err(source) = drm::Device::acquire_master_lock(card) {
-        if source.raw_os_error() != Some(libc::EINVAL) {
-            return Err(PresentError::Master {
-                path: path.to_owned(),
-                source,
-            });
-        }
-    }
-    Ok(())
+/// Which buffers the copy presenter copies frames into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Via {
+    /// Dumb buffers (every KMS driver has them).
+    Dumb,
+    /// gbm's scanout buffers (refused where gbm cannot open the card).
+    Gbm,
 }
 
 impl CopyPresenter {
@@ -237,19 +115,20 @@ impl CopyPresenter {
         skip(choice),
         err(level = "debug")
     )]
-    pub fn open(dir: &Path, choice: &OutputChoice) -> Result<Self, PresentError> {
+    pub fn open(dir: &Path, choice: &OutputChoice, via: Via) -> Result<Self, PresentError> {
         let f = find_output(dir, choice)?;
-        Self::start(f.card, f.path, f.name, f.connector, f.crtc, f.mode)
+        Self::start(f, via)
     }
 
-    fn start(
-        card: Card,
-        path: PathBuf,
-        name: String,
-        connector: connector::Handle,
-        crtc: crtc::Handle,
-        mode: Mode,
-    ) -> Result<Self, PresentError> {
+    fn start(f: Found, via: Via) -> Result<Self, PresentError> {
+        let Found {
+            card,
+            path,
+            name,
+            connector,
+            crtc,
+            mode,
+        } = f;
         become_master(&card, &path)?;
         let io = |what, source| PresentError::Io {
             path: path.clone(),
@@ -257,7 +136,77 @@ impl CopyPresenter {
             source,
         };
         let (w, h) = mode.size();
-        let mut buffers = Vec::new();
+        let buffers = match via {
+            Via::Gbm => Buffers::Gbm(Box::new(super::gbm::GbmBuffers::allocate(
+                &card,
+                &path,
+                u32::from(w),
+                u32::from(h),
+            )?)),
+            Via::Dumb => Buffers::Dumb(dumb_buffers(&card, &path, w, h)?),
+        };
+        let saved = card.get_crtc(crtc).ok();
+        card.set_crtc(
+            crtc,
+            Some(buffers.framebuffer(0)),
+            (0, 0),
+            &[connector],
+            Some(mode),
+        )
+        .map_err(|e| io("setting the mode", e))?;
+        match &buffers {
+            Buffers::Gbm(g) => tracing::info!(
+                card = %path.display(),
+                output = %name,
+                width = w,
+                height = h,
+                refresh_hz = mode.vrefresh(),
+                presenter = "gbm",
+                gbm_backend = g.backend(),
+                "driving the display (frames rendered offscreen, written into gbm scanout buffers, page-flipped on vblank)"
+            ),
+            Buffers::Dumb(_) => tracing::info!(
+                card = %path.display(),
+                output = %name,
+                width = w,
+                height = h,
+                refresh_hz = mode.vrefresh(),
+                presenter = "copy",
+                "driving the display (frames rendered offscreen, copied into dumb buffers, page-flipped on vblank)"
+            ),
+        }
+        Ok(Self {
+            card,
+            path,
+            name,
+            connector,
+            crtc,
+            mode,
+            buffers,
+            front: 0,
+            pending: false,
+            saved,
+            flips: 0,
+            copy_s: 0.0,
+            copies: 0,
+        })
+    }
+}
+
+/// Two dumb buffers of `w` x `h`, cleared, with their framebuffers.
+fn dumb_buffers(
+    card: &Card,
+    path: &Path,
+    w: u16,
+    h: u16,
+) -> Result<Vec<(DumbBuffer, framebuffer::Handle)>, PresentError> {
+    let io = |what, source| PresentError::Io {
+        path: path.to_owned(),
+        what,
+        source,
+    };
+    let mut buffers = Vec::new();
+    {
         for _ in 0..2 {
             let mut db = card
                 .create_dumb_buffer((u32::from(w), u32::from(h)), DrmFourcc::Xrgb8888, 32)
@@ -273,33 +222,11 @@ impl CopyPresenter {
                 .map_err(|e| io("adding a frame buffer", e))?;
             buffers.push((db, fb));
         }
-        let saved = card.get_crtc(crtc).ok();
-        card.set_crtc(crtc, Some(buffers[0].1), (0, 0), &[connector], Some(mode))
-            .map_err(|e| io("setting the mode", e))?;
-        tracing::info!(
-            card = %path.display(),
-            output = %name,
-            width = w,
-            height = h,
-            refresh_hz = mode.vrefresh(),
-            presenter = "copy",
-            "driving the display (frames rendered offscreen, copied into dumb buffers, page-flipped on vblank)"
-        );
-        Ok(Self {
-            card,
-            path,
-            name,
-            connector,
-            crtc,
-            mode,
-            buffers,
-            front: 0,
-            pending: false,
-            saved,
-            flips: 0,
-        })
     }
+    Ok(buffers)
+}
 
+impl CopyPresenter {
     /// The output's size in pixels.
     #[must_use]
     pub fn size(&self) -> (u32, u32) {
@@ -403,23 +330,33 @@ impl CopyPresenter {
         }
         let back = 1 - self.front;
         let (w, h) = self.size();
-        {
-            let (db, _) = &mut self.buffers[back];
-            let pitch = drm::buffer::Buffer::pitch(db) as usize;
-            let mut map = self
-                .card
-                .map_dumb_buffer(db)
-                .map_err(|source| PresentError::Io {
-                    path: self.path.clone(),
-                    what: "mapping a frame buffer",
-                    source,
-                })?;
-            copy_rgba_to_xrgb(img, map.as_mut(), pitch, w, h);
+        let mapping = |source| PresentError::Io {
+            path: self.path.clone(),
+            what: "mapping a frame buffer",
+            source,
+        };
+        #[allow(
+            clippy::disallowed_methods,
+            reason = "the copy's cost is measured for the journal, not used to decide anything"
+        )]
+        let started = std::time::Instant::now();
+        match &mut self.buffers {
+            Buffers::Dumb(b) => {
+                let (db, _) = &mut b[back];
+                let pitch = drm::buffer::Buffer::pitch(db) as usize;
+                let mut map = self.card.map_dumb_buffer(db).map_err(mapping)?;
+                copy_rgba_to_xrgb(img, map.as_mut(), pitch, w, h);
+            }
+            Buffers::Gbm(g) => g.write(back, img, w, h).map_err(mapping)?,
         }
-        match self
-            .card
-            .page_flip(self.crtc, self.buffers[back].1, PageFlipFlags::EVENT, None)
-        {
+        self.copy_s += started.elapsed().as_secs_f64();
+        self.copies += 1;
+        match self.card.page_flip(
+            self.crtc,
+            self.buffers.framebuffer(back),
+            PageFlipFlags::EVENT,
+            None,
+        ) {
             Ok(()) => {
                 self.front = back;
                 self.pending = true;
@@ -452,7 +389,7 @@ impl CopyPresenter {
         self.card
             .set_crtc(
                 self.crtc,
-                Some(self.buffers[self.front].1),
+                Some(self.buffers.framebuffer(self.front)),
                 (0, 0),
                 &[self.connector],
                 Some(self.mode),
@@ -474,6 +411,17 @@ impl CopyPresenter {
 impl Drop for CopyPresenter {
     /// Give the CRTC back as it was and stop being master.
     fn drop(&mut self) {
+        if self.copies > 0 {
+            tracing::info!(
+                buffers = match self.buffers {
+                    Buffers::Gbm(_) => "gbm",
+                    Buffers::Dumb(_) => "dumb",
+                },
+                frames = self.copies,
+                copy_ms_mean = self.copy_s / self.copies as f64 * 1e3,
+                "frames written into scanout buffers"
+            );
+        }
         if self.pending {
             let _ = self.wait_flip(Duration::from_millis(100));
         }
@@ -486,52 +434,22 @@ impl Drop for CopyPresenter {
                 s.mode(),
             );
         }
-        for (db, fb) in self.buffers.drain(..) {
-            let _ = self.card.destroy_framebuffer(fb);
-            let _ = self.card.destroy_dumb_buffer(db);
+        match &mut self.buffers {
+            Buffers::Dumb(b) => {
+                for (db, fb) in b.drain(..) {
+                    let _ = self.card.destroy_framebuffer(fb);
+                    let _ = self.card.destroy_dumb_buffer(db);
+                }
+            }
+            // The buffer objects go with the gbm device when dropped.
+            Buffers::Gbm(g) => {
+                for (_, fb) in &g.bos {
+                    let _ = self.card.destroy_framebuffer(*fb);
+                }
+            }
         }
         let _ = drm::Device::release_master_lock(&self.card);
     }
-}
-
-/// The mode asked for, else the preferred one, else the first.
-fn pick_mode(modes: &[Mode], want: Option<(u16, u16, Option<u32>)>) -> Option<Mode> {
-    match want {
-        Some((w, h, hz)) => modes
-            .iter()
-            .filter(|m| m.size() == (w, h) && hz.is_none_or(|hz| m.vrefresh() == hz))
-            .max_by_key(|m| m.vrefresh())
-            .copied(),
-        None => modes
-            .iter()
-            .find(|m| {
-                m.mode_type()
-                    .contains(drm::control::ModeTypeFlags::PREFERRED)
-            })
-            .or_else(|| modes.first())
-            .copied(),
-    }
-}
-
-/// A CRTC for the connector: the one its encoder drives now, else the
-/// first its encoders can use.
-fn crtc_for(
-    card: &Card,
-    res: &drm::control::ResourceHandles,
-    info: &connector::Info,
-) -> Option<crtc::Handle> {
-    if let Some(c) = info
-        .current_encoder()
-        .and_then(|e| card.get_encoder(e).ok())
-        .and_then(|e| e.crtc())
-    {
-        return Some(c);
-    }
-    info.encoders()
-        .iter()
-        .filter_map(|&e| card.get_encoder(e).ok())
-        .flat_map(|e| res.filter_crtcs(e.possible_crtcs()))
-        .next()
 }
 
 /// RGBA rows into XRGB8888 (little-endian B, G, R, X) rows of `pitch`
@@ -555,20 +473,6 @@ pub fn copy_rgba_to_xrgb(img: &Image, dst: &mut [u8], pitch: usize, width: u32, 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn modes_parse_as_written() {
-        assert_eq!(
-            OutputChoice::parse_mode("1280x800"),
-            Some((1280, 800, None))
-        );
-        assert_eq!(
-            OutputChoice::parse_mode("1920x1080@60"),
-            Some((1920, 1080, Some(60)))
-        );
-        assert_eq!(OutputChoice::parse_mode("big"), None);
-        assert_eq!(OutputChoice::parse_mode("1280x"), None);
-    }
 
     #[test]
     fn rgba_becomes_xrgb_with_the_pitch() {

@@ -1,14 +1,15 @@
 //! The KMS output behind one interface, whichever presenter drives it:
-//! direct (Vulkan renders into the display's swapchain) or copy (rendered
-//! offscreen, copied into dumb buffers). `auto` tries direct and falls back
-//! to copy, and the journal says which and why.
+//! direct (Vulkan renders into the display's swapchain), gbm (rendered
+//! offscreen, written into gbm's scanout buffers) or copy (the same into
+//! dumb buffers). `auto` tries direct, then gbm, then copy, and the journal
+//! says which and why each earlier one was refused.
 
 use std::os::fd::BorrowedFd;
 use std::path::Path;
 use std::time::Duration;
 
 use super::direct::DirectPresenter;
-use super::present::{CopyPresenter, OutputChoice, PresentError, PresenterKind};
+use super::present::{Attempt, CopyPresenter, OutputChoice, PresentError, PresenterKind, Via};
 use crate::render::gpu::{AdapterChoice, Gpu};
 use crate::render::headless::{Headless, Image};
 use crate::render::mesh::DrawList;
@@ -63,31 +64,47 @@ impl Screen {
         samples: u32,
     ) -> Result<Self, PresentError> {
         let adapter = renderer.unwrap_or_default();
-        let copy = |why: &str| {
-            tracing::info!("presenter: copy ({why})");
-            Self::copy(dir, choice, renderer, samples)
-        };
-        let presenter = match kind {
-            PresenterKind::Direct => {
-                Presenter::Direct(Box::new(DirectPresenter::open(dir, choice, samples)?))
-            }
-            PresenterKind::Copy => copy("as configured")?,
+        let attempts = kind.attempts(adapter == AdapterChoice::Cpu);
+        let why = match kind {
             PresenterKind::Auto if adapter == AdapterChoice::Cpu => {
-                copy("rendering on the CPU was asked for; only the copy presenter can show it")?
+                "chosen automatically; rendering on the CPU was asked for, which only a copy presenter can show"
             }
-            PresenterKind::Auto => match DirectPresenter::open(dir, choice, samples) {
-                Ok(d) => {
-                    tracing::info!("presenter: direct (chosen automatically)");
-                    Presenter::Direct(Box::new(d))
+            PresenterKind::Auto => "chosen automatically",
+            _ => "as configured",
+        };
+        let mut presenter = None;
+        for (n, attempt) in attempts.iter().enumerate() {
+            let opened = match attempt {
+                Attempt::Direct => DirectPresenter::open(dir, choice, samples)
+                    .map(|d| Presenter::Direct(Box::new(d))),
+                Attempt::Gbm => Self::copy(dir, choice, renderer, samples, Via::Gbm),
+                Attempt::Dumb => Self::copy(dir, choice, renderer, samples, Via::Dumb),
+            };
+            match opened {
+                Ok(p) => {
+                    match attempt {
+                        Attempt::Direct => tracing::info!("presenter: direct ({why})"),
+                        Attempt::Gbm => tracing::info!(
+                            zero_copy = "not built: rendering straight into gbm buffers needs their dma-bufs imported into Vulkan (VK_EXT_external_memory_dma_buf, VK_EXT_image_drm_format_modifier); frames are written into them",
+                            "presenter: gbm ({why})"
+                        ),
+                        Attempt::Dumb => tracing::info!("presenter: copy ({why})"),
+                    }
+                    presenter = Some(p);
+                    break;
                 }
+                // No display, or another program's: no presenter helps.
                 Err(e @ (PresentError::NoOutput(_) | PresentError::Master { .. })) => {
                     return Err(e);
                 }
+                Err(e) if n + 1 == attempts.len() => return Err(e),
                 Err(e) => {
-                    tracing::info!(reason = %e, "the direct presenter is not available here");
-                    copy("chosen automatically")?
+                    tracing::info!(reason = %e, "the {} presenter is not available here", attempt.name())
                 }
-            },
+            }
+        }
+        let Some(presenter) = presenter else {
+            return Err(PresentError::NoOutput("no presenter to try".to_owned()));
         };
         Ok(Self {
             presenter,
@@ -101,8 +118,9 @@ impl Screen {
         choice: &OutputChoice,
         renderer: Option<AdapterChoice>,
         samples: u32,
+        via: Via,
     ) -> Result<Presenter, PresentError> {
-        let presenter = Box::new(CopyPresenter::open(dir, choice)?);
+        let presenter = Box::new(CopyPresenter::open(dir, choice, via)?);
         let (w, h) = presenter.size();
         let headless = match renderer {
             Some(adapter) => {

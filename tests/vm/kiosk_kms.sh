@@ -46,6 +46,15 @@ lvp=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["ICD"]["li
 vm_copy_with_libs "$ird" "$lvp"
 mkdir -p "$ird$(dirname "$icd")"
 cp "$icd" "$ird$icd"
+# Mesa's gbm (libgbm, linked by marionette, comes with it) and the DRI
+# drivers it opens the card with: virtio-gpu's, and the software KMS one
+# it falls back to on a card without 3D.
+# (Where Mesa's loader looks for them: /usr/lib/<multiarch>/dri.)
+dri=/usr/lib/x86_64-linux-gnu/dri
+for d in kms_swrast_dri.so virtio_gpu_dri.so; do
+    [ -f "$dri/$d" ] || { echo "vm test: $dri/$d is missing: apt-get install libgl1-mesa-dri" >&2; exit 69; }
+    vm_copy_with_libs "$ird" "$dri/$d"
+done
 # The motion library the kiosk loads (next to the binary's source tree is
 # not in the guest).
 mkdir -p "$ird/library"
@@ -136,7 +145,8 @@ cp /m.toml /tmp/m.toml
 cmp -s /m.toml.bak /m.orig.toml && echo "backup kept" >> /tmp/rc
 # The service view on: the panel's name, the figures and the finger's
 # trail over the scene.
-{ cat /m.orig.toml; echo 'service_view = true'; } > /svc.toml   # [display] is last
+# (With the dumb buffers of the copy presenter: `auto` took gbm above.)
+{ cat /m.orig.toml; echo 'service_view = true'; echo 'presenter = "copy"'; } > /svc.toml   # [display] is last
 marionette --config /svc.toml run --seconds 60 > /tmp/svc.log 2>&1 &
 svc=$!
 # Under emulation the start takes seconds: drag once the first frame is up.

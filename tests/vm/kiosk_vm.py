@@ -29,8 +29,8 @@ for want in ["play1 rc=0", "play2 rc=0", "run rc=0"]:
 m = re.search(r"stop took (\S+) (\S+)", rc)
 if not m or float(m.group(2)) - float(m.group(1)) > 1.0:
     failures.append(f"SIGTERM should stop the kiosk within 1 s: {m and m.groups()}")
-for want in ["direct presenter is not available here", "presenter: copy (chosen automatically)",
-             "presenter=\"copy\"", "first frame on screen", "touchscreen added",
+for want in ["direct presenter is not available here", "presenter: gbm (chosen automatically)",
+             "presenter=\"gbm\"", "first frame on screen", "touchscreen added",
              "touchscreen removed", "stopped", "no touchscreen is read"]:
     if want not in log:
         failures.append(f"expected '{want}' in the kiosk's log")
@@ -85,6 +85,26 @@ prom = open(os.path.join(out, "prom.txt")).read() if os.path.exists(os.path.join
 for want in ["marionette_starts_total 2", "marionette_touchscreens ", "marionette_fps "]:
     if want not in prom:
         failures.append(f"expected '{want}' in the metrics textfile:\n" + prom[-800:])
+# The service view ran on dumb buffers (presenter = "copy").
+svc = open(os.path.join(out, "svc.log")).read() if os.path.exists(os.path.join(out, "svc.log")) else ""
+for want in ["presenter: copy (as configured)", "presenter=\"copy\""]:
+    if want not in svc:
+        failures.append(f"expected '{want}' in the service view run's log")
+# The copy's cost: into gbm's buffers (the kiosk) and into dumb buffers
+# (the service view), the same output and picture size.
+costs = {}
+for name, text in [("gbm", log), ("dumb", svc)]:
+    m = re.search(r'buffers="' + name + r'" frames=(\d+) copy_ms_mean=([0-9.]+)', text)
+    if m:
+        costs[name] = float(m.group(2))
+        print(f"copy into {name} buffers: {float(m.group(2)):.3f} ms a frame over {m.group(1)} frames")
+    else:
+        failures.append(f"no copy cost said for the {name} buffers")
+if len(costs) == 2:
+    ratio = costs["gbm"] / max(costs["dumb"], 1e-9)
+    print(f"gbm / dumb copy: {ratio:.2f}")
+    if ratio > 1.5:
+        failures.append(f"the copy through gbm costs {ratio:.2f} times the copy through dumb buffers")
 # The service view: its cyan text and the finger's trail on the screen.
 if "service rc=0" not in rc:
     failures.append("the kiosk with the service view should run and stop cleanly")
