@@ -62,7 +62,7 @@ Version: $version
 Architecture: $arch
 Maintainer: marionette developers <marionette@localhost>
 Installed-Size: $size
-Depends: libc6, libgcc-s1, libvulkan1, mesa-vulkan-drivers, passwd, systemd
+Depends: libc6, libgcc-s1, libgbm1, libvulkan1, mesa-vulkan-drivers, passwd, systemd
 Section: misc
 Priority: optional
 Description: touch-table kiosk: drag a 3-D character to pose it and act
