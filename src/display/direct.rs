@@ -9,8 +9,8 @@ use std::path::PathBuf;
 
 use drm::control::Mode;
 
+use super::error::PresentError;
 use super::output::{Found, OutputChoice, become_master, find_output};
-use super::present::PresentError;
 use crate::platform::kms::Card;
 use crate::render::gpu::Gpu;
 use crate::render::headless::Image;

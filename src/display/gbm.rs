@@ -15,7 +15,7 @@ use std::path::Path;
 use drm::control::{Device as _, framebuffer};
 use gbm::{BufferObject, BufferObjectFlags, Format};
 
-use super::present::{PresentError, copy_rgba_to_xrgb};
+use super::error::{PresentError, copy_rgba_to_xrgb};
 use crate::platform::kms::Card;
 use crate::render::headless::Image;
 

@@ -6,6 +6,7 @@
 
 pub mod config;
 pub mod direct;
+pub mod error;
 pub mod gbm;
 pub mod output;
 pub mod present;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use drm::control::{Device as _, Mode, connector, crtc};
 
-use super::present::PresentError;
+use super::error::PresentError;
 use crate::platform::kms::Card;
 
 /// Which output and mode to drive: by connector name (`HDMI-A-1`) and

@@ -1,8 +1,9 @@
 //! Showing frames on a KMS output. The copy presenter renders offscreen
 //! (any Vulkan adapter, lavapipe included), copies each frame into one of
 //! two scanout buffers (gbm's where gbm opens the card, else dumb buffers)
-//! and page-flips to it on vblank: it works on every KMS driver. marionette becomes DRM master for the output it drives, and
-//! gives the CRTC back as it found it when it stops.
+//! and page-flips to it on vblank: it works on every KMS driver.
+//! marionette becomes DRM master for the output it drives, and gives the
+//! CRTC back as it found it when it stops.
 
 use std::os::fd::{AsFd, BorrowedFd};
 use std::path::{Path, PathBuf};
@@ -11,54 +12,12 @@ use std::time::Duration;
 use drm::buffer::DrmFourcc;
 use drm::control::dumbbuffer::DumbBuffer;
 use drm::control::{Device as _, Mode, PageFlipFlags, connector, crtc, framebuffer};
-use thiserror::Error;
 
+pub use super::error::{PresentError, copy_rgba_to_xrgb};
 pub use super::output::{Attempt, OutputChoice, PresenterKind};
 use super::output::{Found, become_master, find_output};
 use crate::platform::kms::Card;
 use crate::render::headless::Image;
-
-/// Why frames cannot be shown.
-#[derive(Debug, Error)]
-pub enum PresentError {
-    #[error(transparent)]
-    Kms(#[from] crate::platform::kms::KmsError),
-    #[error("{0}")]
-    NoOutput(String),
-    #[error(
-        "{path}: cannot become DRM master: {source} (another program drives the display: stop the display manager, or switch marionette to a free VT)"
-    )]
-    Master {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{path}: {what}: {source}")]
-    Io {
-        path: PathBuf,
-        what: &'static str,
-        #[source]
-        source: std::io::Error,
-    },
-    /// No GPU to render with.
-    #[error(transparent)]
-    Gpu(#[from] crate::render::gpu::GpuError),
-    /// gbm cannot make scanout buffers on this card.
-    #[error("{path}: gbm cannot drive the display: {what}: {source}")]
-    Gbm {
-        path: PathBuf,
-        what: &'static str,
-        #[source]
-        source: std::io::Error,
-    },
-    /// The direct presenter cannot drive this output.
-    #[error("{path}: Vulkan cannot drive the display directly: {why}")]
-    Direct { path: PathBuf, why: String },
-    /// Another program took the display (a VT switch): wait and take it
-    /// back.
-    #[error("{0}: the display was taken by another program (VT switch)")]
-    LostMaster(PathBuf),
-}
 
 /// The output being driven, with its two buffers.
 pub struct CopyPresenter {
@@ -449,46 +408,5 @@ impl Drop for CopyPresenter {
             }
         }
         let _ = drm::Device::release_master_lock(&self.card);
-    }
-}
-
-/// RGBA rows into XRGB8888 (little-endian B, G, R, X) rows of `pitch`
-/// bytes; what does not fit is cut, what is missing stays black.
-pub fn copy_rgba_to_xrgb(img: &Image, dst: &mut [u8], pitch: usize, width: u32, height: u32) {
-    let w = width.min(img.width) as usize;
-    for y in 0..height.min(img.height) as usize {
-        let src = &img.rgba[y * img.width as usize * 4..][..w * 4];
-        let Some(row) = dst.get_mut(y * pitch..y * pitch + w * 4) else {
-            break;
-        };
-        for (d, s) in row.chunks_exact_mut(4).zip(src.chunks_exact(4)) {
-            d[0] = s[2];
-            d[1] = s[1];
-            d[2] = s[0];
-            d[3] = 0xff;
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rgba_becomes_xrgb_with_the_pitch() {
-        let img = Image {
-            width: 2,
-            height: 2,
-            rgba: vec![
-                1, 2, 3, 4, 5, 6, 7, 8, //
-                9, 10, 11, 12, 13, 14, 15, 16,
-            ],
-        };
-        let mut dst = vec![0u8; 3 * 12];
-        copy_rgba_to_xrgb(&img, &mut dst, 12, 3, 3);
-        assert_eq!(&dst[0..8], &[3, 2, 1, 255, 7, 6, 5, 255]);
-        assert_eq!(&dst[8..12], &[0, 0, 0, 0], "beyond the image stays black");
-        assert_eq!(&dst[12..20], &[11, 10, 9, 255, 15, 14, 13, 255]);
-        assert!(dst[24..].iter().all(|b| *b == 0));
     }
 }
