@@ -220,6 +220,23 @@ pub struct Plan {
 /// A take whose every part stays within this (m) shows no action.
 const MIN_ACTION_RANGE_M: f64 = 0.1;
 
+/// A piece cut from a take whose part moves less than this share of the
+/// take's largest piece (or under [`MIN_ACTION_RANGE_M`]) is no action.
+const MIN_PIECE_SHARE: f64 = 0.35;
+
+/// The diagonal of the box `path` fills (m).
+fn box_diagonal(path: &[DVec3]) -> f64 {
+    let (lo, hi) = path.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    if path.is_empty() {
+        0.0
+    } else {
+        (hi - lo).length()
+    }
+}
+
 /// Why `take` cannot be an action, if it cannot.
 fn no_action(take: &Take) -> Option<String> {
     if take.clip.frames.len() < 2 {
@@ -429,6 +446,17 @@ fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
         let mut edges = vec![0];
         edges.extend(&cut_at);
         edges.push(speed.len() - 1);
+        // A piece in which the part hardly moves (a hand brought to the
+        // chest before a bow) is no action of its own: posing only.
+        let ranges: Vec<f64> = edges
+            .windows(2)
+            .map(|w| box_diagonal(&part.path[w[0]..=w[1]]))
+            .collect();
+        let largest = ranges.iter().copied().fold(0.0, f64::max);
+        let kept: Vec<bool> = ranges
+            .iter()
+            .map(|r| *r >= largest || *r >= (MIN_PIECE_SHARE * largest).max(MIN_ACTION_RANGE_M))
+            .collect();
         if cut_at.is_empty() {
             clips.push(take.file.clone());
         } else {
@@ -443,16 +471,25 @@ fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
                     .collect::<Vec<_>>()
                     .join(", ")
             ));
-            for w in edges.windows(2) {
-                clips.push(format!(
+            for ((w, range), keep) in edges.windows(2).zip(&ranges).zip(&kept) {
+                let name = format!(
                     "{}#{}-{}",
                     take.file,
                     w[0] + take.skipped,
                     w[1] + take.skipped
-                ));
+                );
+                if *keep {
+                    clips.push(name);
+                } else {
+                    notes.push(format!(
+                        "{name}: the {} moves {range:.2} m in it ({:.0}% of the take's largest movement): no action of its own, it feeds posing only",
+                        primary.name(),
+                        100.0 * range / largest.max(1e-9)
+                    ));
+                }
             }
         }
-        for w in edges.windows(2) {
+        for (w, _) in edges.windows(2).zip(&kept).filter(|(_, k)| **k) {
             let piece = &speed[w[0]..=w[1]];
             if let Some((a, b)) = active_span(piece) {
                 let last = (piece.len() - 1).max(1) as f64;
