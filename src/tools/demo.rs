@@ -59,6 +59,23 @@ impl<'a> Author<'a> {
         a
     }
 
+    /// The demo panel over one character standing at the origin.
+    fn alone(
+        ch: Arc<Character>,
+        settings: Settings,
+        input: &'a InputConfig,
+        picture: Picture,
+    ) -> Self {
+        let (w, h) = picture.size();
+        let controller = Controller::new(ch, settings, f64::from(w), f64::from(h), 0.0);
+        Self::start(
+            "marionette demo panel",
+            Stage::single(controller),
+            input,
+            picture,
+        )
+    }
+
     /// Run the controller over what is authored so far.
     fn sync(&mut self) {
         let rec = self.synth.finish();
@@ -247,15 +264,7 @@ pub fn author_demo(
     input: &InputConfig,
     picture: Picture,
 ) -> Synth {
-    let (w, h) = picture.size();
-    let stage = Stage::single(Controller::new(
-        ch,
-        settings,
-        f64::from(w),
-        f64::from(h),
-        0.0,
-    ));
-    let mut a = Author::start("marionette demo panel", stage, input, picture);
+    let mut a = Author::alone(ch, settings, input, picture);
     for name in [
         "punch_left",
         "kick_right",
@@ -284,16 +293,8 @@ pub fn author_library_demo(
     input: &InputConfig,
     picture: Picture,
 ) -> (Synth, Vec<String>) {
-    let (w, h) = picture.size();
     let names: Vec<String> = ch.actions.iter().map(|a| a.def.name.clone()).collect();
-    let stage = Stage::single(Controller::new(
-        ch,
-        settings,
-        f64::from(w),
-        f64::from(h),
-        0.0,
-    ));
-    let mut a = Author::start("marionette demo panel", stage, input, picture);
+    let mut a = Author::alone(ch, settings, input, picture);
     a.from_template = true;
     for name in &names {
         a.action(name);

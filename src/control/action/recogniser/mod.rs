@@ -489,6 +489,11 @@ impl DragMatch {
         let (action, cost, next) = self.lead(floor)?;
         let limit = actions[action].def.threshold_m.unwrap_or(thresholds.cost_m);
         let margin = next - cost;
+        let starts = cost <= limit && margin >= thresholds.margin_m;
+        // A refusal that comes no closer than one before needs no record.
+        if !starts && self.closest.as_ref().is_some_and(|b| b.cost_m <= cost) {
+            return None;
+        }
         let i = self.leader(floor)?;
         let (s, c) = (&self.seen[i], &self.costs[i]);
         let j = c.covered_j[floor];
@@ -501,10 +506,8 @@ impl DragMatch {
             tempo: if self.u > 0.0 { s.t[j] / self.u } else { 1.0 },
             generalized: s.generalized[j],
         };
-        if cost > limit || margin < thresholds.margin_m {
-            if self.closest.as_ref().is_none_or(|b| d.cost_m < b.cost_m) {
-                self.closest = Some(d);
-            }
+        if !starts {
+            self.closest = Some(d);
             return None;
         }
         Some(d)
