@@ -379,3 +379,101 @@ fn the_ragdoll_never_explodes() {
         }
     }
 }
+
+/// The library `library init` makes of the Bandai share's six styles
+/// (walks, runs and dashes among its actions: clips that carry the pelvis
+/// metres from where they began).
+fn bandai_library() -> std::sync::Arc<marionette::control::character::Character> {
+    let dir = tempfile::tempdir().unwrap();
+    let takes = dir.path().join("takes");
+    std::fs::create_dir_all(&takes).unwrap();
+    common::bandai::split(&takes, None);
+    let lib = dir.path().join("lib");
+    let out = common::marionette(&[
+        "library",
+        "init",
+        takes.to_str().unwrap(),
+        "--out",
+        lib.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lib = marionette::character::library::Library::load(&lib).unwrap();
+    std::sync::Arc::new(marionette::control::character::Character::from_library(lib))
+}
+
+#[test]
+fn a_pelvis_dragged_far_leans_the_body_and_the_legs_stay_under_it() {
+    // Posing samples are placed where their clip began; a walk's late
+    // frames put the pelvis metres from there. Dragged far, the pelvis
+    // went with them and IK pulled the feet back to where they stood: the
+    // character lay in the air, legs stretched out behind it. Standing
+    // feet now bound the search.
+    let ch = bandai_library();
+    let mut ctl = Controller::new(ch, Settings::default(), 1280.0, 720.0, 0.0);
+    ctl.advance(1.0 / 30.0);
+    let start = screen_of(&ctl, Role::Pelvis);
+    ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, start)]));
+    let roles = ctl.character().roles.clone();
+    let mut worst: f64 = 0.0;
+    for k in 2..120 {
+        let t = f64::from(k) / 30.0;
+        let s = (f64::from(k - 2) / 90.0).min(1.0);
+        let p = ScreenPoint::new(start.x + 560.0 * s, start.y + 40.0 * s);
+        ctl.touch(&frame(t, vec![contact(1, Phase::Move, p)]));
+        ctl.advance(t);
+        let w = ctl.world();
+        let pelvis = w.positions[roles.get(Role::Pelvis)];
+        for foot in [Role::LeftFoot, Role::RightFoot] {
+            // How far up the legs reach towards the pelvis.
+            worst = worst.max(w.positions[roles.get(foot)].y / pelvis.y);
+        }
+    }
+    eprintln!("highest foot: {:.2} of the pelvis's height", worst);
+    assert!(
+        worst < 0.35,
+        "a foot rose to {worst:.2} of the pelvis's height"
+    );
+}
+
+#[test]
+fn a_foot_lifted_by_a_finger_comes_down_when_it_lets_go() {
+    let mut ctl = controller();
+    ctl.advance(1.0 / 30.0);
+    let roles = ctl.character().roles.clone();
+    let rest = ctl.world().positions[roles.get(Role::LeftFoot)].y;
+    let foot = screen_of(&ctl, Role::LeftFoot);
+    ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, foot)]));
+    for k in 2..60 {
+        let t = f64::from(k) / 30.0;
+        let s = f64::from(k - 2) / 58.0;
+        let p = ScreenPoint::new(foot.x + 30.0 * s, foot.y - 120.0 * s);
+        ctl.touch(&frame(t, vec![contact(1, Phase::Move, p)]));
+        ctl.advance(t);
+    }
+    let raised = ctl.world().positions[roles.get(Role::LeftFoot)].y;
+    assert!(raised > rest + 0.15, "raised {:.3} m", raised - rest);
+    ctl.touch(&frame(2.0, vec![contact(1, Phase::Up, foot)]));
+    for k in 61..120 {
+        ctl.advance(f64::from(k) / 30.0);
+    }
+    let down = ctl.world().positions[roles.get(Role::LeftFoot)].y;
+    let sole = marionette::character::skeleton::sole(
+        &ctl.character().lib.skeleton,
+        ctl.world(),
+        roles.get(Role::LeftFoot),
+    )
+    .y;
+    eprintln!(
+        "ankle raised {:.3} m, {:.3} m after letting go, its lowest point {:.3} m above the floor",
+        raised - rest,
+        down - rest,
+        sole
+    );
+    // The default character stands with its soles 2.0 cm up (the toe's
+    // End Site); put down, within 1.5 cm of that.
+    assert!(down - rest < 0.015 && sole < 0.035, "left at {sole:.3} m");
+}

@@ -261,6 +261,7 @@ fn another_performers_proportions_are_carried_onto_the_library_skeleton() {
         Clip::from_bvh(file, &ImportSettings::default()).unwrap()
     };
     let lib = Library::load(dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("moved onto the floor by {:.3} m", lib.floor_shift_m);
     let first = own("132_38.bvh");
     assert_eq!(lib.skeleton, first.skeleton);
     for name in ["143_30.bvh", "74_10.bvh"] {
@@ -276,7 +277,9 @@ fn another_performers_proportions_are_carried_onto_the_library_skeleton() {
             for (qa, qb) in a.rotations.iter().zip(&b.rotations) {
                 assert!(qa.abs_diff_eq(*qb, 1e-12), "{name}");
             }
-            assert!(a.translations[0].abs_diff_eq(b.translations[0] * ratio, 1e-9));
+            // (and the library stands on its floor: see `floor`).
+            let up = glam::DVec3::Y * lib.floor_shift_m;
+            assert!(a.translations[0].abs_diff_eq(b.translations[0] * ratio + up, 1e-9));
         }
         // Feet stay on the floor: the lowest foot over the clip is as near
         // the floor as the performer's own.
@@ -291,7 +294,7 @@ fn another_performers_proportions_are_carried_onto_the_library_skeleton() {
                 })
                 .fold(f64::INFINITY, f64::min)
         };
-        let (was, is) = (lowest(&before), lowest(after));
+        let (was, is) = (lowest(&before) + lib.floor_shift_m, lowest(after));
         assert!(
             (was - is).abs() < 0.02,
             "{name}: lowest foot {was:.3} m, now {is:.3} m"

@@ -323,6 +323,7 @@ fn cmu_library(
             let mut clip =
                 marionette::character::motion::Clip::from_bvh(f, &Default::default()).unwrap();
             clip.retarget(&lib.skeleton);
+            marionette::character::floor::shift(&mut clip, lib.floor_shift_m);
             clip
         })
         .collect();
@@ -826,6 +827,7 @@ fn bandai_library(dir: &std::path::Path) -> (Library, Vec<Clip>) {
             )
             .unwrap();
             clip.retarget(&lib.skeleton);
+            marionette::character::floor::shift(&mut clip, lib.floor_shift_m);
             clip
         })
         .collect();

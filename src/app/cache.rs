@@ -175,8 +175,9 @@ pub fn posing_model(
 }
 
 const RECOGNISER_MAGIC: &[u8; 8] = b"MRNTRECG";
-/// Bumped whenever the template recogniser or its calibration changes.
-const RECOGNISER_FORMAT: u32 = 2;
+/// Bumped whenever the template recogniser or its calibration changes
+/// (3: libraries whose feet stood off the floor are moved onto it).
+const RECOGNISER_FORMAT: u32 = 3;
 
 fn encode_recogniser(key: u64, t: &Thresholds, within_budget: bool) -> Vec<u8> {
     let mut out = Vec::with_capacity(64);

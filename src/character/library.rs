@@ -40,6 +40,7 @@ use thiserror::Error;
 
 use super::bvh;
 pub use super::clip_ref::{ClipRef, ClipRefError};
+use super::floor;
 use super::motion::{Clip, ImportSettings};
 use super::roles::Role;
 use super::skeleton::Skeleton;
@@ -170,6 +171,10 @@ pub struct Library {
     /// Fraction (generalized time) of each action clip that also feeds the
     /// posing model.
     pub action_lead_in: f64,
+    /// How far the clips were moved up (m) to stand on the floor
+    /// ([`floor::settle`]); other takes of the same capture are moved
+    /// alike.
+    pub floor_shift_m: f64,
 }
 
 impl Library {
@@ -352,6 +357,16 @@ impl Library {
             }
             clips.insert(name.clone(), clip);
         }
+        let settled = floor::settle(&mut clips);
+        if let Some((stood, dy)) = settled.filter(|s| s.1 != 0.0) {
+            tracing::info!(
+                standing_sole_m = stood,
+                moved_m = dy,
+                "the takes' feet stand {:.1} cm {} their floor: the clips are moved onto it",
+                stood.abs() * 100.0,
+                if stood > 0.0 { "above" } else { "below" }
+            );
+        }
         let mut actions = Vec::new();
         let mut seen = BTreeMap::new();
         let mirrors = file.action.iter().filter(|a| a.mirror).count();
@@ -473,6 +488,7 @@ impl Library {
             posing: file.posing.clips,
             actions,
             action_lead_in: lead_in,
+            floor_shift_m: settled.map_or(0.0, |s| s.1),
         })
     }
 }

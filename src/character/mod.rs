@@ -13,6 +13,7 @@
 pub mod bvh;
 pub mod camera;
 pub mod clip_ref;
+pub mod floor;
 pub mod library;
 pub mod mirror;
 pub mod motion;

@@ -158,6 +158,12 @@ impl<'a> Meter<'a> {
                     .map(|(a, b)| (b - a).with_y(0.0).length() * 1e3)
                     .collect();
                 if let Some(mm) = planted.into_iter().reduce(f64::max) {
+                    tracing::trace!(
+                        time_s = (k + 1) as f64 * dt,
+                        foot = %skeleton.joints[f].name,
+                        mm,
+                        "planted foot slid"
+                    );
                     self.skate_sum += mm;
                     self.skate_n += 1;
                     if mm > m.foot_skate_max_mm {

@@ -82,6 +82,10 @@ pub(super) enum Command {
         file: PathBuf,
         #[arg(long)]
         out: PathBuf,
+        /// Replay with this library's character instead of the
+        /// configuration's (a recording `demo --library DIR` authored).
+        #[arg(long, value_name = "DIR")]
+        library: Option<PathBuf>,
     },
     Record {
         /// Device node [default: the first touchscreen found]

@@ -65,7 +65,8 @@ pub(super) fn eval_actions(
         };
         // Any rig in any unit will do: only the primary part's path is
         // used, in metres as its bone lengths say.
-        let (_, clip) = read_clip(f, None)?;
+        let (_, mut clip) = read_clip(f, None)?;
+        crate::character::floor::shift(&mut clip, lib.floor_shift_m);
         clips.push((action, clip));
     }
     if clips.is_empty() {
@@ -157,6 +158,9 @@ pub(super) fn eval_pose(
         // Another performer's proportions are carried onto the library's
         // skeleton: the touches are on the character the library drives.
         clip.retarget(&lib.skeleton);
+        // Takes of the same capture stand on the floor the library was
+        // moved onto.
+        crate::character::floor::shift(&mut clip, lib.floor_shift_m);
         clips.push(clip);
     }
     if learned.samples.is_empty() {

@@ -134,6 +134,9 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
     let config = match &command {
         Command::Replay {
             library: Some(dir), ..
+        }
+        | Command::ExportBvh {
+            library: Some(dir), ..
         } => {
             replayed = config.with_library(&chosen_library(config, Some(dir.clone()))?);
             &replayed
@@ -169,7 +172,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             ..
         } => replay_metrics(config, &file, &out, no_tracking),
         Command::Replay { file, contacts, .. } => replay(config, &file, contacts),
-        Command::ExportBvh { file, out } => export_bvh(config, &file, &out),
+        Command::ExportBvh { file, out, .. } => export_bvh(config, &file, &out),
         Command::Record {
             device,
             out,

@@ -16,7 +16,10 @@ use glam::DVec3;
 mod actions;
 mod contact;
 mod effects;
+mod feet;
+mod stance;
 
+use self::feet::FootHold;
 use super::character::Character;
 use super::rig::Rig;
 use crate::character::roles::Role;
@@ -113,14 +116,6 @@ enum Grab {
     },
 }
 
-/// Where a foot is held while it carries the body, and where it was let
-/// go (with how much of that still shows) after it lifts.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct FootHold {
-    anchor: Option<DVec3>,
-    release: Option<(DVec3, f64)>,
-}
-
 /// Posing, or playing an action.
 #[derive(Clone, Debug)]
 pub enum Mode {
@@ -152,6 +147,9 @@ pub struct Controller {
     /// Ankle height standing at rest (m): a foot lower than this plus a
     /// little is on the floor.
     ankle_rest: f64,
+    /// Hip to ankle along the bones (m): a planted foot farther than
+    /// this from its hip steps.
+    leg_length: f64,
     world: WorldPose,
     /// Physics-based tracking: the ragdoll and the effects taken from it.
     ragdoll: Ragdoll,
@@ -171,9 +169,21 @@ pub struct Controller {
 /// The longest drag kept for recognition (s): longer than any action.
 const MAX_TRAIL_S: f64 = 4.0;
 
-/// The fastest a planted foot follows a target that slid away (m/s):
-/// 3 mm per frame at 30 Hz.
-const FOOT_CREEP_M_S: f64 = 0.09;
+/// Hip to ankle along the bones of the rest skeleton (m), the shorter leg.
+fn leg_length(
+    sk: &crate::character::skeleton::Skeleton,
+    roles: &crate::character::roles::RoleMap,
+) -> f64 {
+    [
+        (Role::LeftKnee, Role::LeftFoot),
+        (Role::RightKnee, Role::RightFoot),
+    ]
+    .into_iter()
+    .map(|(knee, foot)| {
+        sk.joints[roles.get(knee)].offset.length() + sk.joints[roles.get(foot)].offset.length()
+    })
+    .fold(f64::INFINITY, f64::min)
+}
 
 /// A part this close to the floor touches it (m).
 const GROUND_CONTACT_M: f64 = 0.03;
@@ -230,6 +240,7 @@ impl Controller {
             feet: [FootHold::default(); 2],
             last_feet: feet_now,
             ankle_rest: feet_now[0].y.min(feet_now[1].y),
+            leg_length: leg_length(&ch.lib.skeleton, &ch.roles),
             settings,
             rig: Rig::new(width, height),
             mode: Mode::Posing,
@@ -515,6 +526,9 @@ impl Controller {
                         self.planted,
                         &SynthOptions::default(),
                     );
+                } else if self.planted.take().is_some() {
+                    // The last finger on the body lifted.
+                    self.settle_stance();
                 }
             }
             Mode::Action(player) => {

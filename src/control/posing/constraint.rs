@@ -15,6 +15,9 @@ pub enum Target {
     Ray(HalfLine),
     /// At a 3-D point (tests and other interfaces).
     Point(DVec3),
+    /// Anywhere within `radius` of a point: a planted foot that the legs
+    /// can still reach from where a sample puts it.
+    Within { at: DVec3, radius: f64 },
 }
 
 impl Target {
@@ -24,6 +27,7 @@ impl Target {
         match self {
             Target::Ray(r) => r.distance(p),
             Target::Point(q) => (p - *q).length(),
+            Target::Within { at, radius } => ((p - *at).length() - radius).max(0.0),
         }
     }
 
@@ -33,7 +37,32 @@ impl Target {
         match self {
             Target::Ray(r) => r.closest(p),
             Target::Point(q) => *q,
+            Target::Within { at, radius } => *at + (p - *at).clamp_length_max(*radius),
         }
+    }
+
+    /// The target shifted by `shift`, then turned by `turn` (about the
+    /// origin), as a point would be.
+    #[must_use]
+    pub fn moved(&self, shift: DVec3, turn: DQuat) -> Self {
+        match *self {
+            Target::Point(q) => Target::Point(turn * (q + shift)),
+            Target::Ray(r) => Target::Ray(HalfLine {
+                origin: turn * (r.origin + shift),
+                dir: turn * r.dir,
+            }),
+            Target::Within { at, radius } => Target::Within {
+                at: turn * (at + shift),
+                radius,
+            },
+        }
+    }
+
+    /// Whether this is a soft bound added by synthesis (a planted foot),
+    /// not a finger's or a caller's constraint.
+    #[must_use]
+    pub fn is_bound(&self) -> bool {
+        matches!(self, Target::Within { .. })
     }
 }
 
@@ -127,13 +156,7 @@ pub(crate) fn localize(constraints: &[Constraint], at: &Placement) -> Vec<Local>
         .iter()
         .map(|c| Local {
             role: c.role,
-            target: match c.target {
-                Target::Point(q) => Target::Point(unturn * (q - floor)),
-                Target::Ray(r) => Target::Ray(HalfLine {
-                    origin: unturn * (r.origin - floor),
-                    dir: unturn * r.dir,
-                }),
-            },
+            target: c.target.moved(-floor, unturn),
         })
         .collect()
 }

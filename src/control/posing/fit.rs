@@ -10,7 +10,6 @@ use super::limbs::{self, limb_index};
 use super::model::LearnedModel;
 use super::rank::smallest;
 use super::sample::Placement;
-use crate::character::camera::HalfLine;
 use crate::character::roles::RoleMap;
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 
@@ -48,6 +47,10 @@ pub(crate) fn across(target: Target, p: DVec3) -> DVec3 {
         Target::Ray(r) => {
             let v = p - r.origin;
             v - r.dir * v.dot(r.dir)
+        }
+        Target::Within { at, radius } => {
+            let v = p - at;
+            v - v.clamp_length_max(radius)
         }
     }
 }
@@ -176,13 +179,7 @@ pub fn refit_limbs(
             .map_or(DQuat::IDENTITY, |p| w.rotations[p])
             .inverse();
         let origin = w.positions[base];
-        let target = match c.target {
-            Target::Point(q) => Target::Point(unturn * (q - origin)),
-            Target::Ray(r) => Target::Ray(HalfLine {
-                origin: unturn * (r.origin - origin),
-                dir: unturn * r.dir,
-            }),
-        };
+        let target = c.target.moved(-origin, unturn);
         let reach = &model.index.reach[limb];
         let miss = |i: usize| across(target, reach[i]);
         let mut own = weights.to_vec();

@@ -59,6 +59,11 @@ pub fn select(
                             s.1 += (ray.distance(*p) - slack * r).max(0.0);
                         }
                     }
+                    Target::Within { at, radius } => {
+                        for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
+                            s.1 += ((*p - at).length() - radius - slack * r).max(0.0);
+                        }
+                    }
                 }
                 continue;
             }
@@ -71,6 +76,11 @@ pub fn select(
                 Target::Ray(r) => {
                     for (s, p) in sums.iter_mut().zip(col) {
                         s.1 += r.distance(*p);
+                    }
+                }
+                Target::Within { at, radius } => {
+                    for (s, p) in sums.iter_mut().zip(col) {
+                        s.1 += ((*p - at).length() - radius).max(0.0);
                     }
                 }
             }
@@ -123,7 +133,10 @@ pub fn select(
         score(&index.samples, 0..index.samples.len(), 0.0, &mut scored);
     }
     keep_best(&mut scored, opts.blend);
-    let (ids, count) = (&index.samples.ids, local.len().max(1) as f64);
+    // The mean over the caller's constraints: bounds cost nothing where
+    // they are met, and do not dilute the rest.
+    let count = local.iter().filter(|c| !c.target.is_bound()).count();
+    let (ids, count) = (&index.samples.ids, count.max(1) as f64);
     for s in &mut scored {
         *s = (ids[s.0] as usize, s.1 / count);
     }
@@ -190,6 +203,11 @@ pub fn blend(
     pose_of(skeleton, &blended, at)
 }
 
+/// How far a sample may put a planted foot from where it stands before
+/// the search counts it against the sample (m): IK brings a foot this far
+/// back without the leg stretching out of its pose.
+pub const PLANTED_SLACK_M: f64 = 0.1;
+
 /// Synthesise a posture meeting `constraints`, the character standing at
 /// `at`. `planted` gives positions the feet must keep (when unconstrained).
 #[must_use]
@@ -202,7 +220,25 @@ pub fn synthesize(
     planted: Option<[DVec3; 2]>,
     opts: &SynthOptions,
 ) -> Pose {
-    let weights = choose(model, constraints, at, opts);
+    // Planted feet bound the search: a sample that puts a free foot more
+    // than a step from where it stands would have IK drag the leg back to
+    // it (a library's walks and runs carry the pelvis metres from where
+    // their clip began; the legs would trail, stretched, behind it).
+    let mut search = constraints.to_vec();
+    if let Some(feet) = planted {
+        for (role, at) in [Role::LeftFoot, Role::RightFoot].into_iter().zip(feet) {
+            if constraints.iter().all(|c| c.role != role) {
+                search.push(Constraint {
+                    role,
+                    target: Target::Within {
+                        at,
+                        radius: PLANTED_SLACK_M,
+                    },
+                });
+            }
+        }
+    }
+    let weights = choose(model, &search, at, opts);
     let mut pose = blend(skeleton, model, &weights, at);
     if opts.limb_fit > 0.0 {
         refit_limbs(

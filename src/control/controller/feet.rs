@@ -1,0 +1,209 @@
+//! The feet that carry the body: a foot of the target posture that comes
+//! down near the floor and nearly still is planted where it is shown and
+//! stays there while tracking moves the body; when the posture wants it
+//! elsewhere (farther than a short step, out of the leg's reach, or
+//! lifted) it steps there, lifted in an arc, instead of sliding. Feet held
+//! by a finger are the finger's. No sole goes below the floor.
+
+use glam::{DQuat, DVec3};
+
+use super::{Controller, GROUND_CONTACT_M};
+use crate::character::roles::Role;
+use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics, sole};
+use crate::control::posing::ik::plant_feet;
+
+/// A planted foot steps when the posture wants it this far away (m, on
+/// the floor).
+pub(crate) const STEP_TRIGGER_M: f64 = 0.12;
+
+/// How high a step of at least [`STEP_TRIGGER_M`] lifts the foot (m).
+const STEP_HEIGHT_M: f64 = 0.06;
+
+/// The fastest a target foot may move and still come down (m/s).
+const LANDING_SPEED_M_S: f64 = 0.3;
+
+/// Where a foot stands, or the step it is taking.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct FootHold {
+    /// Where the foot stands while it carries the body.
+    pub(super) anchor: Option<DVec3>,
+    /// A step under way: where it left from, how far along it is (0..1)
+    /// and how long it takes (s).
+    step: Option<(DVec3, f64, f64)>,
+}
+
+/// How long a step of `dist` metres takes (s): a quick lift for a foot
+/// the posture raises where it stands, about a walking step's time for a
+/// stride.
+fn step_duration(dist: f64) -> f64 {
+    (0.12 + dist * 0.8).min(0.3)
+}
+
+impl Controller {
+    /// Plant, hold and step the feet of the tracked posture (see the
+    /// module), then keep every sole above the floor.
+    pub(super) fn fix_feet(&mut self, dt: f64) {
+        let sk = &self.ch.lib.skeleton;
+        let roles = &self.ch.roles;
+        let target = forward_kinematics(sk, &self.target);
+        let shown = forward_kinematics(sk, &self.output);
+        let held = self.held();
+        let settle = 1.0 - (-dt / 0.06).exp();
+        let switched = std::mem::take(&mut self.switched);
+        let feet = [Role::LeftFoot, Role::RightFoot];
+        let hips = [Role::LeftHip, Role::RightHip];
+        let mut goals = [None; 2];
+        for (k, role) in feet.into_iter().enumerate() {
+            let foot_j = roles.get(role);
+            let p = target.positions[foot_j];
+            // Across a switch of controller the target's feet jump: that
+            // is not the foot moving.
+            let speed = if dt > 0.0 && !switched {
+                (p - self.last_feet[k]).length() / dt
+            } else {
+                0.0
+            };
+            self.last_feet[k] = p;
+            let tracked = shown.positions[foot_j];
+            let other_planted = self.feet[1 - k].anchor.is_some();
+            let foot = &mut self.feet[k];
+            if held.contains(&role) {
+                *foot = FootHold::default();
+                continue;
+            }
+            if let Some((from, s, dur)) = foot.step {
+                let s = s + dt / dur;
+                if s < 1.0 {
+                    foot.step = Some((from, s, dur));
+                    let e = s * s * (3.0 - 2.0 * s);
+                    let dist = (tracked - from).with_y(0.0).length();
+                    let arc = STEP_HEIGHT_M
+                        * (std::f64::consts::PI * s).sin()
+                        * (dist / STEP_TRIGGER_M).min(1.0);
+                    goals[k] = Some(from + (tracked - from) * e + DVec3::Y * arc);
+                    continue;
+                }
+                // Landed: where the tracked posture has the foot.
+                foot.step = None;
+            }
+            let on_floor = p.y <= self.ankle_rest + GROUND_CONTACT_M;
+            match foot.anchor {
+                Some(a) => {
+                    let away = (p - a).with_y(0.0).length();
+                    let hip = shown.positions[roles.get(hips[k])];
+                    let out_of_reach = (hip - a).length() > self.leg_length * 1.02;
+                    // A foot the posture lifts goes at once; one it moves
+                    // along the floor waits for the other to stand.
+                    let lifts = !on_floor;
+                    let strays = (away > STEP_TRIGGER_M || out_of_reach) && other_planted;
+                    if lifts || strays {
+                        foot.anchor = None;
+                        let dist = (tracked - a).with_y(0.0).length();
+                        foot.step = Some((a, 0.0, step_duration(dist)));
+                        goals[k] = Some(a);
+                    } else {
+                        // Height from the target (a heel may rise over
+                        // planted toes), reached smoothly.
+                        let a = a.with_y(a.y + (p.y - a.y) * settle);
+                        foot.anchor = Some(a);
+                        goals[k] = Some(a);
+                    }
+                }
+                None if on_floor && speed < LANDING_SPEED_M_S => {
+                    // Comes down where it is shown: no jump.
+                    foot.anchor = Some(tracked);
+                    goals[k] = Some(tracked);
+                }
+                None => {}
+            }
+        }
+        if goals.iter().any(Option::is_some) {
+            plant_feet(sk, roles, &mut self.output, goals);
+        }
+        self.onto_floor(goals);
+    }
+
+    /// The floor: a sole below it (tracking straightens a leg before the
+    /// pelvis rises, toes tip down) is lifted onto it: the leg bends to
+    /// raise the foot by as much as its lowest point went under (the foot
+    /// keeps its turn: turning it instead snaps the ankle round each time a
+    /// fast foot meets the floor), then any toes still under turn up at
+    /// the ankle, as toes flatten on the ground.
+    fn onto_floor(&mut self, mut goals: [Option<DVec3>; 2]) {
+        let sk = &self.ch.lib.skeleton;
+        let roles = &self.ch.roles;
+        let feet = [Role::LeftFoot, Role::RightFoot];
+        let mut lifted = false;
+        let ankle_min = self.ankle_rest * 0.5;
+        let w = forward_kinematics(sk, &self.output);
+        for (k, role) in feet.into_iter().enumerate() {
+            let j = roles.get(role);
+            let ankle = w.positions[j];
+            // As deep as the lowest point of the foot went, or the ankle
+            // under half its standing height.
+            let below = (-sole(sk, &w, j).y).max(ankle_min - ankle.y);
+            goals[k] = if below > 0.0 {
+                lifted = true;
+                Some(ankle + DVec3::Y * below)
+            } else {
+                goals[k].map(|_| ankle)
+            };
+        }
+        if lifted {
+            plant_feet(sk, roles, &mut self.output, goals);
+        }
+        let w = forward_kinematics(sk, &self.output);
+        for role in feet {
+            let j = roles.get(role);
+            let turn = toes_onto_floor(sk, &w, j);
+            if turn != DQuat::IDENTITY {
+                let parent = sk.joints[j]
+                    .parent
+                    .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
+                self.output.rotations[j] = (parent.inverse() * turn * w.rotations[j]).normalize();
+            }
+        }
+    }
+}
+
+/// The turn at ankle `j` (world frame) that brings the foot's points in
+/// front of the ankle (toes, their End Sites) up onto the floor: about the
+/// foot's own across axis (level, square to where the toes point), by the
+/// most any point needs. Each point's need and their largest change
+/// smoothly with the posture, whichever point is lowest, so the foot never
+/// flips from one frame to the next.
+fn toes_onto_floor(sk: &Skeleton, w: &WorldPose, j: usize) -> DQuat {
+    let ankle = w.positions[j];
+    let mut points = Vec::new();
+    for i in 0..sk.len() {
+        if i == j || sk.is_ancestor(j, i) {
+            points.extend(std::iter::once(w.positions[i]).chain(w.end_site(sk, i)));
+        }
+    }
+    let Some(tip) = points
+        .iter()
+        .copied()
+        .max_by(|a, b| (*a - ankle).length().total_cmp(&(*b - ankle).length()))
+    else {
+        return DQuat::IDENTITY;
+    };
+    let ahead = (tip - ankle).with_y(0.0);
+    if ahead.length() < 1e-6 {
+        return DQuat::IDENTITY;
+    }
+    let ahead = ahead.normalize();
+    let mut turn = 0.0f64;
+    for p in points {
+        let r = p - ankle;
+        let (u, v) = (r.dot(ahead), r.y);
+        if ankle.y + v >= 0.0 || u <= 0.0 {
+            continue;
+        }
+        let want = (-ankle.y / u.hypot(v)).clamp(-1.0, 1.0).asin();
+        turn = turn.max(want - v.atan2(u));
+    }
+    if turn <= 0.0 {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_axis_angle(ahead.cross(DVec3::Y).normalize(), turn.min(1.2))
+}
