@@ -10,6 +10,7 @@ use super::character::LoadError;
 use super::config::ConfigError;
 use super::headless::HeadlessError;
 use super::kiosk::RunError;
+use crate::character::gltf::GltfError;
 use crate::display::present::PresentError;
 use crate::input::evemu::EvemuError;
 use crate::input::hub::LiveError;
@@ -161,6 +162,18 @@ impl ExitStatus for EvemuError {
                 NOINPUT
             }
             EvemuError::Io { .. } => IOERR,
+            _ => DATAERR,
+        }
+    }
+}
+
+impl ExitStatus for GltfError {
+    fn exit_code(&self) -> u8 {
+        match self {
+            // A file that is not there (or cannot be read) is missing
+            // input; anything wrong inside it is bad data.
+            Self::Io { source, .. } if source.kind() == io::ErrorKind::NotFound => NOINPUT,
+            Self::Io { .. } => IOERR,
             _ => DATAERR,
         }
     }

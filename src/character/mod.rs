@@ -14,6 +14,7 @@ pub mod bvh;
 pub mod camera;
 pub mod clip_ref;
 pub mod floor;
+pub mod gltf;
 pub mod library;
 pub mod mirror;
 pub mod motion;

@@ -322,6 +322,22 @@ pub fn fill(
         let h = map.get(&knee).and_then(|&k| limb_parent(skeleton, k));
         put(&mut map, hip, h);
     }
+    complete(skeleton, map)
+}
+
+/// The middle of the body from the limbs found in `map` (the pelvis where
+/// the hips meet, the chest where the shoulders meet, the neck on the way
+/// from the chest to the head), unless `map` has them; every role must
+/// then be found.
+pub fn complete(
+    skeleton: &Skeleton,
+    mut map: BTreeMap<Role, usize>,
+) -> Result<RoleMap, RolesError> {
+    let put = |map: &mut BTreeMap<Role, usize>, role: Role, j: Option<usize>| {
+        if let Some(j) = j {
+            map.entry(role).or_insert(j);
+        }
+    };
     if let (Some(&l), Some(&r)) = (map.get(&Role::LeftHip), map.get(&Role::RightHip)) {
         put(&mut map, Role::Pelvis, Some(skeleton.common_ancestor(l, r)));
     }
@@ -354,24 +370,5 @@ pub fn fill(
         Ok(RoleMap(map))
     } else {
         Err(RolesError::Missing(missing))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn words_split_conventions() {
-        assert_eq!(words("LHipJoint"), ["l", "hip", "joint"]);
-        assert_eq!(words("CC_Base_L_Hand"), ["cc", "base", "l", "hand"]);
-        assert_eq!(words("mixamorig:LeftForeArm"), ["left", "fore", "arm"]);
-        assert_eq!(words("UpperArm_L"), ["upper", "arm", "l"]);
-        assert_eq!(
-            side_and_words("lhand"),
-            (Some(Side::Left), vec!["hand".to_owned()])
-        );
-        assert_eq!(side_and_words("lowerback").0, None);
-        assert_eq!(side_and_words("hand.R").0, Some(Side::Right));
     }
 }

@@ -19,6 +19,12 @@ pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
     {
         return inspect_bvh(file);
     }
+    if file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
+    {
+        return super::motion::inspect_gltf(file);
+    }
     // A motion library, where a recording or a BVH file was meant.
     let library = if file.is_dir() {
         file.join("library.toml").is_file().then(|| file.to_owned())

@@ -128,6 +128,26 @@ pub(super) fn inspect_bvh(file: &Path) -> Result<(), Failure> {
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
+/// `inspect FILE.glb`: what marionette makes of a skinned character.
+pub(super) fn inspect_gltf(file: &Path) -> Result<(), Failure> {
+    let fig = crate::character::gltf::load(file, &std::collections::BTreeMap::new())?;
+    let json = serde_json::json!({
+        "joints": fig.skeleton.len(),
+        "skins": fig.skins,
+        "vertices": fig.vertices(),
+        "triangles": fig.triangles(),
+        "height_m": (fig.height_m * 1e4).round() / 1e4,
+        "scale_to_m": fig.scale_to_m,
+        "up": fig.up,
+        "facing": fig.facing,
+        "roles": fig.roles.names(&fig.skeleton),
+        "roles_from": fig.roles_by,
+        "unmapped": fig.unmapped(),
+        "warnings": fig.warnings,
+    });
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
 pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Result<(), Failure> {
     use crate::character::library::Library;
     use crate::tools::{checks, sheet};

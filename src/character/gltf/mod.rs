@@ -1,0 +1,131 @@
+//! An exhibit's own character: a skinned glTF 2.0 figure (`.glb`, or
+//! `.gltf` with its buffers embedded or beside it), read whole or not at
+//! all. Its skeleton is turned into marionette's conventions (Y up,
+//! facing +Z, metres, feet on the floor) from the skeleton itself,
+//! whatever root transforms the file carries, and its joints are given
+//! the library's roles by their names, else by where they stand.
+
+mod parts;
+mod read;
+mod rig;
+
+use std::path::{Path, PathBuf};
+
+use glam::DMat4;
+use thiserror::Error;
+
+use super::roles::RoleMap;
+use super::skeleton::Skeleton;
+
+/// The largest glTF file read (bytes): a kiosk character is a few MB.
+pub const MAX_FILE_BYTES: u64 = 256 << 20;
+
+/// The most the vertex and index data of a figure may need (bytes),
+/// checked from the accessors' counts before anything is read.
+pub const MAX_DATA_BYTES: u64 = 1 << 30;
+
+/// What is wrong with a glTF file; nothing of it is kept.
+#[derive(Debug, Error)]
+pub enum GltfError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {bytes} bytes, over the {max} bytes a character file may have")]
+    TooBig { path: PathBuf, bytes: u64, max: u64 },
+    #[error("{path}: not a glTF 2.0 file ({why})")]
+    NotGltf { path: PathBuf, why: String },
+    #[error("{path}: {why}")]
+    Buffer { path: PathBuf, why: String },
+    #[error("{path}: {why}")]
+    Data { path: PathBuf, why: String },
+    #[error("{path}: no skin: a character needs a skeleton (a glTF skin with its joints)")]
+    NoSkin { path: PathBuf },
+    #[error(
+        "{path}: its skeleton has {joints} joint(s): a character needs at least a pelvis, spine, head, arms and legs"
+    )]
+    TooFewJoints { path: PathBuf, joints: usize },
+    #[error(
+        "{path}: not a humanoid skeleton: no joint found for {missing} (neither by name nor by where it stands; `RUST_LOG=debug marionette inspect` shows where each joint stands)"
+    )]
+    NotHumanoid { path: PathBuf, missing: String },
+}
+
+/// One drawable part: a primitive's triangles, skinned (joint indices into
+/// [`Figure::skeleton`] and weights per vertex) or carried rigidly by one
+/// joint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    /// Positions in the figure's rest pose (normalised frame, metres).
+    pub positions: Vec<[f32; 3]>,
+    pub joints: Vec<[u16; 4]>,
+    pub weights: Vec<[f32; 4]>,
+    pub indices: Vec<u32>,
+    /// The material's base colour factor (linear RGBA).
+    pub base_colour: [f32; 4],
+}
+
+/// A skinned figure ready to be driven.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// The file's joints as a skeleton (rest offsets in metres, Y up,
+    /// facing +Z, the feet's lowest vertex on the floor).
+    pub skeleton: Skeleton,
+    /// Each joint's rest transform (normalised frame): skinning matrices
+    /// are `world(pose) * rest.inverse()`.
+    pub rest: Vec<DMat4>,
+    /// The roles found, and how (`names` or `places`).
+    pub roles: RoleMap,
+    pub roles_by: &'static str,
+    pub parts: Vec<Part>,
+    pub skins: usize,
+    /// Floor to the top of the rest-pose mesh (m).
+    pub height_m: f64,
+    /// Metres per file unit, as detected from the mesh's height.
+    pub scale_to_m: f64,
+    /// The way the figure faced in the file (`+Z`, `-Y`, ...) and which
+    /// way was up.
+    pub facing: String,
+    pub up: String,
+    /// Things that were fixed while reading (weights that did not sum to
+    /// one, ...).
+    pub warnings: Vec<String>,
+}
+
+impl Figure {
+    /// Vertices over every part.
+    #[must_use]
+    pub fn vertices(&self) -> usize {
+        self.parts.iter().map(|p| p.positions.len()).sum()
+    }
+
+    /// Triangles over every part.
+    #[must_use]
+    pub fn triangles(&self) -> usize {
+        self.parts.iter().map(|p| p.indices.len() / 3).sum()
+    }
+
+    /// Joints no role names (fingers, tails, accessories, IK helpers).
+    #[must_use]
+    pub fn unmapped(&self) -> Vec<String> {
+        let mapped: Vec<usize> = super::roles::Role::ALL
+            .iter()
+            .map(|r| self.roles.get(*r))
+            .collect();
+        (0..self.skeleton.len())
+            .filter(|j| !mapped.contains(j))
+            .map(|j| self.skeleton.joints[j].name.clone())
+            .collect()
+    }
+}
+
+/// Read a figure from `path`; `overrides` name joints for roles (role →
+/// joint name), as a library's `[roles]` table does.
+pub fn load(
+    path: &Path,
+    overrides: &std::collections::BTreeMap<String, String>,
+) -> Result<Figure, GltfError> {
+    let file = read::File::open(path)?;
+    rig::figure(&file, overrides)
+}

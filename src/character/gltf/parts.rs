@@ -1,0 +1,214 @@
+//! The figure's triangles in its rest pose: skinned primitives through
+//! their skin's joints and inverse bind matrices (weights that do not sum
+//! to one normalised, and said), meshes hung rigidly on a joint carried by
+//! it. Every count, index and number is checked before it is used.
+
+use glam::{DMat4, DVec3};
+
+use super::read::File;
+use super::{GltfError, Part};
+
+/// The figure's parts, positions in the file's world frame, and what was
+/// fixed on the way. `joint_of[node]` is the skeleton index of a joint
+/// node; `carrier(node)` the nearest joint above a node.
+pub(super) fn parts(
+    file: &File,
+    world: &[DMat4],
+    joint_of: &[usize],
+    carrier: &dyn Fn(usize) -> Option<usize>,
+) -> Result<(Vec<Part>, Vec<String>), GltfError> {
+    let mut out = Vec::new();
+    let mut warnings = Vec::new();
+    let mut budget = 0u64;
+    let (mut unweighted, mut renormalised, mut worst_sum) = (0usize, 0usize, 1.0f64);
+    for node in file.doc.nodes() {
+        let Some(mesh) = node.mesh() else {
+            continue;
+        };
+        // Skinned: each skin joint's matrix from the bind pose to the rest
+        // pose; rigid: the node's own transform, carried by its joint.
+        let (matrices, skin_joints): (Vec<DMat4>, Vec<usize>) = match node.skin() {
+            Some(skin) => {
+                let joints: Vec<gltf::Node<'_>> = skin.joints().collect();
+                let ibms: Vec<DMat4> = match skin.inverse_bind_matrices() {
+                    Some(a) => {
+                        file.check(&a, "inverse bind matrices", &mut budget)?;
+                        if a.count() < joints.len() {
+                            return Err(file.data_error(format!(
+                                "skin {}: {} inverse bind matrices for {} joints",
+                                skin.index(),
+                                a.count(),
+                                joints.len()
+                            )));
+                        }
+                        skin.reader(|b| file.buffer(b))
+                            .read_inverse_bind_matrices()
+                            .ok_or_else(|| {
+                                file.data_error("unreadable inverse bind matrices".to_owned())
+                            })?
+                            .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
+                            .collect()
+                    }
+                    None => vec![DMat4::IDENTITY; joints.len()],
+                };
+                for (k, m) in ibms.iter().enumerate().take(joints.len()) {
+                    if !m.is_finite() || m.determinant().abs() < 1e-12 {
+                        return Err(file.data_error(format!(
+                            "skin {}: the inverse bind matrix of joint {k} is {}",
+                            skin.index(),
+                            if m.is_finite() {
+                                "singular"
+                            } else {
+                                "not finite"
+                            }
+                        )));
+                    }
+                }
+                (
+                    joints
+                        .iter()
+                        .zip(&ibms)
+                        .map(|(j, ibm)| world[j.index()] * *ibm)
+                        .collect(),
+                    joints.iter().map(|j| joint_of[j.index()]).collect(),
+                )
+            }
+            None => {
+                let Some(j) = carrier(node.index()) else {
+                    warnings.push(format!(
+                        "mesh `{}` hangs on no joint: left out",
+                        mesh.name().unwrap_or("")
+                    ));
+                    continue;
+                };
+                (vec![world[node.index()]], vec![joint_of[j]])
+            }
+        };
+        for prim in mesh.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                warnings.push(format!(
+                    "mesh `{}`: a primitive of {:?} left out (triangles only)",
+                    mesh.name().unwrap_or(""),
+                    prim.mode()
+                ));
+                continue;
+            }
+            let what = |s: &str| format!("mesh `{}` {s}", mesh.name().unwrap_or(""));
+            let pos = prim
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| file.data_error(what("has no positions")))?;
+            file.check(&pos, &what("positions"), &mut budget)?;
+            let n = pos.count();
+            let reader = prim.reader(|b| file.buffer(b));
+            let positions: Vec<[f32; 3]> = reader
+                .read_positions()
+                .ok_or_else(|| file.data_error(what("positions unreadable")))?
+                .collect();
+            if positions.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(file.data_error(what("has positions that are not finite")));
+            }
+            let skinned = node.skin().is_some()
+                && prim.get(&gltf::Semantic::Joints(0)).is_some()
+                && prim.get(&gltf::Semantic::Weights(0)).is_some();
+            let (joints, weights): (Vec<[u16; 4]>, Vec<[f32; 4]>) = if skinned {
+                for sem in [gltf::Semantic::Joints(0), gltf::Semantic::Weights(0)] {
+                    let a = prim
+                        .get(&sem)
+                        .ok_or_else(|| file.data_error(what("lacks skin data")))?;
+                    file.check(&a, &what("skin data"), &mut budget)?;
+                    if a.count() != n {
+                        return Err(file.data_error(what("has skin data for another vertex count")));
+                    }
+                }
+                let j: Vec<[u16; 4]> = reader
+                    .read_joints(0)
+                    .ok_or_else(|| file.data_error(what("joints unreadable")))?
+                    .into_u16()
+                    .collect();
+                let w: Vec<[f32; 4]> = reader
+                    .read_weights(0)
+                    .ok_or_else(|| file.data_error(what("weights unreadable")))?
+                    .into_f32()
+                    .collect();
+                (j, w)
+            } else {
+                (vec![[0; 4]; n], vec![[1.0, 0.0, 0.0, 0.0]; n])
+            };
+            let indices: Vec<u32> = match prim.indices() {
+                Some(a) => {
+                    file.check(&a, &what("indices"), &mut budget)?;
+                    reader
+                        .read_indices()
+                        .ok_or_else(|| file.data_error(what("indices unreadable")))?
+                        .into_u32()
+                        .collect()
+                }
+                None => (0..n as u32).collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+                return Err(
+                    file.data_error(what(&format!("has index {bad}, past its {n} vertices")))
+                );
+            }
+            // Rest-pose positions and the skeleton's joints.
+            let mut part = Part {
+                positions: Vec::with_capacity(n),
+                joints: Vec::with_capacity(n),
+                weights: Vec::with_capacity(n),
+                indices: indices[..indices.len() / 3 * 3].to_vec(),
+                base_colour: prim.material().pbr_metallic_roughness().base_color_factor(),
+            };
+            for ((p, j), w) in positions.iter().zip(&joints).zip(&weights) {
+                let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+                let mut w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
+                let sum: f32 = w.iter().sum();
+                if sum <= 1e-6 {
+                    unweighted += 1;
+                    w = [1.0, 0.0, 0.0, 0.0];
+                } else if (sum - 1.0).abs() > 1e-3 {
+                    renormalised += 1;
+                    worst_sum = if (f64::from(sum) - 1.0).abs() > (worst_sum - 1.0).abs() {
+                        f64::from(sum)
+                    } else {
+                        worst_sum
+                    };
+                    w = w.map(|x| x / sum);
+                }
+                let mut q = DVec3::ZERO;
+                let mut ours = [0u16; 4];
+                for k in 0..4 {
+                    if w[k] == 0.0 {
+                        continue;
+                    }
+                    let s = j[k] as usize;
+                    let (Some(m), Some(&o)) = (matrices.get(s), skin_joints.get(s)) else {
+                        return Err(file.data_error(what(&format!(
+                            "names joint {s} of a skin of {}",
+                            matrices.len()
+                        ))));
+                    };
+                    q += m.transform_point3(v) * f64::from(w[k]);
+                    ours[k] = u16::try_from(o).unwrap_or(0);
+                }
+                part.positions.push([q.x as f32, q.y as f32, q.z as f32]);
+                part.joints.push(ours);
+                part.weights.push(w);
+            }
+            out.push(part);
+        }
+    }
+    if renormalised > 0 {
+        warnings.push(format!(
+            "{renormalised} vertices' skin weights did not sum to 1 (up to {worst_sum:.3}): normalised"
+        ));
+    }
+    if unweighted > 0 {
+        warnings.push(format!(
+            "{unweighted} vertices had no skin weight: carried by their first joint"
+        ));
+    }
+    if out.is_empty() {
+        return Err(file.data_error("no triangles to draw".to_owned()));
+    }
+    Ok((out, warnings))
+}

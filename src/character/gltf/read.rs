@@ -1,0 +1,211 @@
+//! The file and its buffers: the GLB's binary chunk, `data:` URIs, or
+//! files beside the glTF (inside its folder only), each checked against
+//! the length the file declares; accessors checked against their views
+//! before anything is read through them.
+
+use std::path::{Component, Path, PathBuf};
+
+use super::{GltfError, MAX_DATA_BYTES, MAX_FILE_BYTES};
+
+/// A parsed, validated glTF document and its buffers' bytes.
+pub(super) struct File {
+    pub(super) path: PathBuf,
+    pub(super) doc: gltf::Document,
+    pub(super) buffers: Vec<Vec<u8>>,
+}
+
+impl File {
+    pub(super) fn open(path: &Path) -> Result<Self, GltfError> {
+        let io = |source| GltfError::Io {
+            path: path.to_owned(),
+            source,
+        };
+        let bytes = std::fs::metadata(path).map_err(io)?.len();
+        if bytes > MAX_FILE_BYTES {
+            return Err(GltfError::TooBig {
+                path: path.to_owned(),
+                bytes,
+                max: MAX_FILE_BYTES,
+            });
+        }
+        let data = std::fs::read(path).map_err(io)?;
+        let gltf = gltf::Gltf::from_slice(&data).map_err(|e| GltfError::NotGltf {
+            path: path.to_owned(),
+            why: e.to_string(),
+        })?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut buffers = Vec::new();
+        for b in gltf.document.buffers() {
+            let why = |why: String| GltfError::Buffer {
+                path: path.to_owned(),
+                why: format!("buffer {}: {why}", b.index()),
+            };
+            let data = match b.source() {
+                gltf::buffer::Source::Bin => gltf
+                    .blob
+                    .clone()
+                    .ok_or_else(|| why("the GLB has no binary chunk".to_owned()))?,
+                gltf::buffer::Source::Uri(uri) => {
+                    if let Some(rest) = uri.strip_prefix("data:") {
+                        let (_, b64) = rest
+                            .split_once(";base64,")
+                            .ok_or_else(|| why("a data URI that is not base64".to_owned()))?;
+                        base64(b64).ok_or_else(|| why("bad base64 in its data URI".to_owned()))?
+                    } else {
+                        let rel = inside(uri).ok_or_else(|| {
+                            why(format!(
+                                "`{uri}` is not a file beside the glTF (no folders above it, no absolute paths or URLs)"
+                            ))
+                        })?;
+                        let file = dir.join(rel);
+                        let len = std::fs::metadata(&file)
+                            .map_err(|e| why(format!("missing buffer {}: {e}", file.display())))?
+                            .len();
+                        if len > MAX_FILE_BYTES {
+                            return Err(why(format!(
+                                "{} is {len} bytes, over {MAX_FILE_BYTES}",
+                                file.display()
+                            )));
+                        }
+                        std::fs::read(&file)
+                            .map_err(|e| why(format!("cannot read {}: {e}", file.display())))?
+                    }
+                }
+            };
+            if data.len() < b.length() {
+                return Err(why(format!(
+                    "holds {} bytes of the {} the file declares (truncated?)",
+                    data.len(),
+                    b.length()
+                )));
+            }
+            buffers.push(data);
+        }
+        Ok(Self {
+            path: path.to_owned(),
+            doc: gltf.document,
+            buffers,
+        })
+    }
+
+    pub(super) fn data_error(&self, why: String) -> GltfError {
+        GltfError::Data {
+            path: self.path.clone(),
+            why,
+        }
+    }
+
+    /// The bytes of buffer `b`, for the accessor readers.
+    pub(super) fn buffer(&self, b: gltf::Buffer<'_>) -> Option<&[u8]> {
+        self.buffers.get(b.index()).map(Vec::as_slice)
+    }
+
+    /// Checks that accessor `a` can be read whole as it says (dense, at
+    /// least one element, inside its view and its view inside its buffer)
+    /// and adds its size to `budget`, refusing past [`MAX_DATA_BYTES`].
+    pub(super) fn check(
+        &self,
+        a: &gltf::Accessor<'_>,
+        what: &str,
+        budget: &mut u64,
+    ) -> Result<(), GltfError> {
+        let bad = |why: String| self.data_error(format!("{what} (accessor {}): {why}", a.index()));
+        if a.sparse().is_some() {
+            return Err(bad("sparse accessors are not read".to_owned()));
+        }
+        let view = a.view().ok_or_else(|| bad("no buffer view".to_owned()))?;
+        let (count, size) = (a.count() as u64, a.size() as u64);
+        if count == 0 {
+            return Err(bad("no elements".to_owned()));
+        }
+        *budget = budget.saturating_add(count.saturating_mul(size));
+        if *budget > MAX_DATA_BYTES {
+            return Err(bad(format!(
+                "the figure's data would need over {MAX_DATA_BYTES} bytes"
+            )));
+        }
+        let stride = view.stride().map_or(size, |s| s as u64).max(size);
+        let end = (count - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(size))
+            .and_then(|x| x.checked_add(a.offset() as u64));
+        if end.is_none_or(|e| e > view.length() as u64) {
+            return Err(bad(format!(
+                "{count} elements run past its buffer view ({} bytes)",
+                view.length()
+            )));
+        }
+        let buffer = self.buffers.get(view.buffer().index()).map_or(0, Vec::len) as u64;
+        if (view.offset() as u64).saturating_add(view.length() as u64) > buffer {
+            return Err(bad(format!(
+                "its buffer view runs past buffer {} ({buffer} bytes)",
+                view.buffer().index()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A relative path with no folder above its start, no root, no scheme.
+fn inside(uri: &str) -> Option<PathBuf> {
+    if uri.contains("://") || uri.contains('\\') {
+        return None;
+    }
+    let decoded = uri.replace("%20", " ");
+    let p = Path::new(&decoded);
+    p.components()
+        .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
+        .then(|| p.to_owned())
+}
+
+/// Standard base64 (padding optional); `None` on any other character.
+fn base64(s: &str) -> Option<Vec<u8>> {
+    let value = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => u32::from(c - b'A'),
+            b'a'..=b'z' => u32::from(c - b'a') + 26,
+            b'0'..=b'9' => u32::from(c - b'0') + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        })
+    };
+    let s = s.trim_end_matches('=').as_bytes();
+    let mut out = Vec::with_capacity(s.len() * 3 / 4);
+    for chunk in s.chunks(4) {
+        let mut acc = 0u32;
+        for (i, &c) in chunk.iter().enumerate() {
+            acc |= value(c)? << (18 - 6 * i);
+        }
+        let bytes = acc.to_be_bytes();
+        match chunk.len() {
+            4 => out.extend_from_slice(&bytes[1..4]),
+            3 => out.extend_from_slice(&bytes[1..3]),
+            2 => out.push(bytes[1]),
+            _ => return None,
+        }
+    }
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_reads_padded_and_unpadded_text() {
+        assert_eq!(base64("aGVsbG8=").unwrap(), b"hello");
+        assert_eq!(base64("aGVsbG8").unwrap(), b"hello");
+        assert_eq!(base64("aGk=").unwrap(), b"hi");
+        assert!(base64("a$==").is_none());
+    }
+
+    #[test]
+    fn buffer_files_stay_beside_the_gltf() {
+        assert!(inside("body.bin").is_some());
+        assert!(inside("data/body.bin").is_some());
+        for bad in ["../body.bin", "/etc/passwd", "http://x/y.bin", "a/../../b"] {
+            assert!(inside(bad).is_none(), "{bad}");
+        }
+    }
+}

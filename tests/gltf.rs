@@ -1,0 +1,367 @@
+//! Skinned glTF characters: the three shared test characters (very
+//! different rigs) load with every role the method needs, upright, facing
+//! +Z, in metres; the same figure turned and scaled by its root loads the
+//! same; broken files are refused with exit 65 and the reason.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use marionette::character::gltf;
+use marionette::character::roles::Role;
+use serde_json::Value;
+
+fn shared(name: &str) -> PathBuf {
+    common::shared_dir().join("characters").join(name)
+}
+
+fn load(path: &Path) -> Result<gltf::Figure, gltf::GltfError> {
+    gltf::load(path, &std::collections::BTreeMap::new())
+}
+
+fn inspect(path: &Path) -> (Option<i32>, Value, String) {
+    let out = common::marionette(&["inspect", path.to_str().unwrap()]);
+    let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
+    (
+        out.status.code(),
+        json,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn the_shared_characters_load_upright_in_metres_with_every_role() {
+    // (file, joint that must be the left hand, left knee, height from the
+    // file's INDEX.tsv, vertices, triangles)
+    for (file, hand, knee, height, vertices, triangles) in [
+        (
+            "RiggedFigure.glb",
+            "arm_joint_L_3",
+            "leg_joint_L_2",
+            1.450,
+            370,
+            256,
+        ),
+        (
+            "CesiumMan.glb",
+            "Skeleton_arm_joint_L__2_",
+            "leg_joint_L_2",
+            1.507,
+            3273,
+            4672,
+        ),
+        // Stylised, 4.46 units tall in no known unit: made 1.7 m.
+        (
+            "RobotExpressive.glb",
+            "Palm2.L",
+            "LowerLeg.L",
+            1.7,
+            7214,
+            3237,
+        ),
+    ] {
+        let fig = load(&shared(file)).unwrap_or_else(|e| panic!("{e}"));
+        let name = |r: Role| fig.skeleton.joints[fig.roles.get(r)].name.as_str();
+        assert_eq!(name(Role::LeftHand), hand, "{file}");
+        assert_eq!(name(Role::LeftKnee), knee, "{file}");
+        assert!(
+            (fig.height_m - height).abs() < 0.01,
+            "{file}: {}",
+            fig.height_m
+        );
+        assert_eq!(
+            (fig.vertices(), fig.triangles()),
+            (vertices, triangles),
+            "{file}"
+        );
+        assert_eq!(
+            (fig.up.as_str(), fig.facing.as_str()),
+            ("+Y", "+Z"),
+            "{file}"
+        );
+        // Upright and facing +Z, its left at +X: the head above the
+        // pelvis above the feet, the left hand and foot at +X.
+        let w = marionette::character::skeleton::forward_kinematics(
+            &fig.skeleton,
+            &fig.skeleton.rest_pose(),
+        );
+        let at = |r: Role| w.positions[fig.roles.get(r)];
+        assert!(
+            at(Role::Head).y > at(Role::Pelvis).y + 0.3 * fig.height_m,
+            "{file}"
+        );
+        assert!(
+            at(Role::Pelvis).y > at(Role::LeftFoot).y + 0.2 * fig.height_m,
+            "{file}"
+        );
+        assert!(at(Role::LeftFoot).y < 0.12 * fig.height_m, "{file}");
+        for (l, r) in [
+            (Role::LeftHand, Role::RightHand),
+            (Role::LeftFoot, Role::RightFoot),
+            (Role::LeftKnee, Role::RightKnee),
+        ] {
+            assert!(at(l).x > at(r).x, "{file}: {l} is not at +X of {r}");
+        }
+        // The mesh stands on the floor.
+        let lowest = fig
+            .parts
+            .iter()
+            .flat_map(|p| p.positions.iter().map(|v| v[1]))
+            .fold(f32::INFINITY, f32::min);
+        assert!(lowest.abs() < 1e-3, "{file}: lowest vertex at {lowest}");
+    }
+}
+
+#[test]
+fn inspect_prints_what_the_figure_is() {
+    let (code, json, err) = inspect(&shared("RobotExpressive.glb"));
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(json["joints"], 43);
+    assert_eq!(json["skins"], 2);
+    assert_eq!(json["roles"]["left_foot"], "Foot.L");
+    assert_eq!(json["roles"]["pelvis"], "Body");
+    let unmapped: Vec<&str> = json["unmapped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(unmapped.contains(&"PoleTarget.L") && unmapped.contains(&"Thumb.R"));
+    // Its weights sum to up to 1.755: normalised, and said.
+    let warnings = json["warnings"].to_string();
+    assert!(
+        warnings.contains("did not sum to 1 (up to 1.755)"),
+        "{warnings}"
+    );
+}
+
+/// A GLB's JSON and binary chunks.
+fn split_glb(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+    let json_len = u32_at(12);
+    let json = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin_at = 20 + json_len;
+    let bin_len = u32_at(bin_at);
+    (json, bytes[bin_at + 8..bin_at + 8 + bin_len].to_vec())
+}
+
+fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let mut b = bin.to_vec();
+    while b.len() % 4 != 0 {
+        b.push(0);
+    }
+    let total = 12 + 8 + j.len() + 8 + b.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(b.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&b);
+    out
+}
+
+#[test]
+fn a_figure_turned_and_scaled_by_its_root_loads_the_same() {
+    // RiggedFigure's roots under one more node: turned -90° about X (its
+    // up now -Z) and in centimetres (scale 100), as some exporters write.
+    let (mut json, bin) = split_glb(&std::fs::read(shared("RiggedFigure.glb")).unwrap());
+    let nodes = json["nodes"].as_array_mut().unwrap();
+    let wrapper = nodes.len();
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    let scene = json["scene"].as_u64().unwrap_or(0) as usize;
+    let roots = json["scenes"][scene]["nodes"].clone();
+    json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({
+            "name": "exporter_root",
+            "rotation": [-s, 0.0, 0.0, s],
+            "scale": [100.0, 100.0, 100.0],
+            "children": roots,
+        }));
+    json["scenes"][scene]["nodes"] = serde_json::json!([wrapper]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("turned.glb");
+    std::fs::write(&path, glb(&json, &bin)).unwrap();
+    let fig = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let plain = load(&shared("RiggedFigure.glb")).unwrap();
+    assert!(
+        (fig.height_m - plain.height_m).abs() < 1e-3,
+        "{}",
+        fig.height_m
+    );
+    assert!((fig.scale_to_m - 0.01).abs() < 1e-9);
+    assert_eq!(fig.up, "-Z");
+    for r in Role::ALL {
+        assert_eq!(
+            fig.skeleton.joints[fig.roles.get(r)].name,
+            plain.skeleton.joints[plain.roles.get(r)].name,
+            "{r}"
+        );
+    }
+    let (a, b) = (
+        marionette::character::skeleton::forward_kinematics(
+            &fig.skeleton,
+            &fig.skeleton.rest_pose(),
+        ),
+        marionette::character::skeleton::forward_kinematics(
+            &plain.skeleton,
+            &plain.skeleton.rest_pose(),
+        ),
+    );
+    for (p, q) in a.positions.iter().zip(&b.positions) {
+        assert!((*p - *q).length() < 1e-3, "{p} against {q}");
+    }
+}
+
+/// Writes `bytes` as `name` in a fresh folder and inspects it: the exit
+/// code and what was said.
+fn refused(name: &str, bytes: &[u8]) -> (Option<i32>, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let (code, _, err) = inspect(&path);
+    (code, err)
+}
+
+#[test]
+fn broken_files_are_refused_with_the_reason() {
+    let original = std::fs::read(shared("RiggedFigure.glb")).unwrap();
+    let (json, bin) = split_glb(&original);
+    let with = |f: &dyn Fn(&mut Value, &mut Vec<u8>)| {
+        let (mut j, mut b) = (json.clone(), bin.clone());
+        f(&mut j, &mut b);
+        glb(&j, &b)
+    };
+    // Where in the binary chunk an accessor's first element lies.
+    let at = |j: &Value, accessor: usize| -> usize {
+        let a = &j["accessors"][accessor];
+        let v = &j["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        (v["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0)) as usize
+    };
+    let ibm = json["skins"][0]["inverseBindMatrices"].as_u64().unwrap() as usize;
+    let prim = json["meshes"][0]["primitives"][0].clone();
+    let index_acc = prim["indices"].as_u64().unwrap() as usize;
+    let position_acc = prim["attributes"]["POSITION"].as_u64().unwrap() as usize;
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "not glTF",
+            b"solid cube\nfacet normal 0 0 1\n".to_vec(),
+            "not a glTF 2.0 file",
+        ),
+        (
+            "truncated",
+            original[..original.len() / 2].to_vec(),
+            "not a glTF 2.0 file",
+        ),
+        (
+            "no skin",
+            with(&|j, _| {
+                j.as_object_mut().unwrap().remove("skins");
+                for n in j["nodes"].as_array_mut().unwrap() {
+                    n.as_object_mut().unwrap().remove("skin");
+                }
+            }),
+            "no skin",
+        ),
+        (
+            "one joint",
+            with(&|j, _| {
+                let first = j["skins"][0]["joints"][0].clone();
+                j["skins"][0]["joints"] = serde_json::json!([first]);
+            }),
+            "1 joint(s)",
+        ),
+        (
+            "not finite",
+            with(&|j, b| {
+                let o = at(j, ibm);
+                b[o..o + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+            }),
+            "inverse bind matrix of joint 0 is not finite",
+        ),
+        (
+            "singular",
+            with(&|j, b| {
+                let o = at(j, ibm);
+                b[o..o + 64].fill(0);
+            }),
+            "inverse bind matrix of joint 0 is singular",
+        ),
+        (
+            "index past the vertices",
+            with(&|j, b| {
+                let o = at(j, index_acc);
+                let wide = j["accessors"][index_acc]["componentType"] == 5125;
+                if wide {
+                    b[o..o + 4].copy_from_slice(&60000u32.to_le_bytes());
+                } else {
+                    b[o..o + 2].copy_from_slice(&60000u16.to_le_bytes());
+                }
+            }),
+            "index 60000, past its 370 vertices",
+        ),
+        (
+            "over a gigabyte",
+            with(&|j, _| {
+                j["accessors"][position_acc]["count"] = serde_json::json!(200_000_000u64);
+            }),
+            "would need over",
+        ),
+        (
+            "a buffer outside its folder",
+            {
+                let mut j = json.clone();
+                j["buffers"][0]["uri"] = serde_json::json!("../../etc/figure.bin");
+                serde_json::to_vec(&j).unwrap()
+            },
+            "not a file beside the glTF",
+        ),
+        (
+            "a missing buffer",
+            {
+                let mut j = json.clone();
+                j["buffers"][0]["uri"] = serde_json::json!("figure.bin");
+                serde_json::to_vec(&j).unwrap()
+            },
+            "missing buffer",
+        ),
+    ];
+    for (what, bytes, says) in cases {
+        let name = if bytes.starts_with(b"glTF") || what == "truncated" {
+            "figure.glb"
+        } else {
+            "figure.gltf"
+        };
+        let (code, err) = refused(name, &bytes);
+        assert_eq!(code, Some(65), "{what}: {err}");
+        assert!(err.contains(says), "{what}: {err}");
+    }
+    // A file that is not there is missing input.
+    let (code, _, err) = inspect(Path::new("/nonexistent/figure.glb"));
+    assert_eq!(code, Some(66), "{err}");
+}
+
+#[test]
+fn a_gltf_with_its_buffer_beside_it_loads_as_the_glb_does() {
+    let (mut json, bin) = split_glb(&std::fs::read(shared("CesiumMan.glb")).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("man.bin"), &bin).unwrap();
+    json["buffers"][0]["uri"] = serde_json::json!("man.bin");
+    std::fs::write(
+        dir.path().join("man.gltf"),
+        serde_json::to_vec(&json).unwrap(),
+    )
+    .unwrap();
+    let fig = load(&dir.path().join("man.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    let glb = load(&shared("CesiumMan.glb")).unwrap();
+    assert_eq!(fig.parts, glb.parts);
+}
