@@ -3,6 +3,12 @@
 //! +Z, in metres; the same figure turned and scaled by its root loads the
 //! same; broken files are refused with exit 65 and the reason.
 
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
 mod common;
 
 use std::path::{Path, PathBuf};
@@ -364,4 +370,30 @@ fn a_gltf_with_its_buffer_beside_it_loads_as_the_glb_does() {
     let fig = load(&dir.path().join("man.gltf")).unwrap_or_else(|e| panic!("{e}"));
     let glb = load(&shared("CesiumMan.glb")).unwrap();
     assert_eq!(fig.parts, glb.parts);
+}
+
+#[test]
+fn the_shared_characters_play_the_default_library() {
+    // `marionette eval character --mesh FILE`: each mapped part's offset
+    // from its limb's root against the library's scaled to the figure's
+    // limb, in shares of the figure's height.
+    let lib = marionette::character::library::Library::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"),
+    )
+    .unwrap();
+    for (file, mean, max, penetration) in [
+        ("RiggedFigure.glb", 2.754, 11.395, 8.639),
+        ("CesiumMan.glb", 2.357, 10.349, 1.54),
+    ] {
+        let fig = load(&shared(file)).unwrap();
+        let e = marionette::tools::eval::character::eval_character(&fig, &lib, 1);
+        eprintln!("{file}: {e:?}");
+        assert_eq!(e.frames, 4473);
+        assert_eq!(e.bad_frames, 0);
+        assert!(e.mean_pct <= mean * 1.05, "{file}: {e:?}");
+        assert!(e.max_pct <= max * 1.05, "{file}: {e:?}");
+        assert!(e.penetration_mm <= penetration * 1.1 + 0.1, "{file}: {e:?}");
+        // Planted feet slide no more than the library's own.
+        assert!(e.skate_mm <= e.library_skate_mm, "{file}: {e:?}");
+    }
 }

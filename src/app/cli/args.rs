@@ -256,6 +256,19 @@ pub(super) enum EvalCommand {
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
         cells: Option<u32>,
     },
+    /// A skinned glTF character playing the library's clips: prints one
+    /// JSON object (mean_pct, max_pct of body height between its mapped
+    /// parts and the library's, penetration_mm, skate_mm against the
+    /// library's own library_skate_mm, bad_frames)
+    Character {
+        /// The character (.glb or .gltf)
+        #[arg(long)]
+        mesh: PathBuf,
+        /// Library folder (with library.toml) [default: the configuration's
+        /// character.library, else the shipped library]
+        #[arg(long)]
+        library: Option<PathBuf>,
+    },
     /// Action control: replay held-out clips' primary-part paths as drags
     /// through the controller (touch frames, as live input) and print one
     /// JSON object (trials, correct, wrong_action, missed,

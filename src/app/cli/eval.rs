@@ -216,3 +216,12 @@ pub(super) fn eval_pose_leave_one_out(
     })?;
     print_json(&result)
 }
+
+pub(super) fn eval_character(mesh: &Path, library: &Path) -> Result<(), Failure> {
+    use crate::character::library::Library;
+    let fig = crate::character::gltf::load(mesh, &std::collections::BTreeMap::new())?;
+    let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let out = crate::tools::eval::character::eval_character(&fig, &lib, 1);
+    let json = serde_json::to_string_pretty(&out).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}

@@ -5,9 +5,12 @@
 //! whatever root transforms the file carries, and its joints are given
 //! the library's roles by their names, else by where they stand.
 
+mod drive;
 mod parts;
 mod read;
 mod rig;
+
+pub use drive::Drive;
 
 use std::path::{Path, PathBuf};
 

@@ -4,8 +4,10 @@
 //! - [`actions`]: drags replayed as finger trails, recognised or not.
 //! - [`live`]: the same drags through a whole controller.
 //! - [`separation`]: how far apart the actions are, next to the drags' spread.
+//! - [`character`]: a skinned figure playing a library's clips.
 
 pub mod actions;
+pub mod character;
 pub mod live;
 pub mod posing;
 pub mod separation;

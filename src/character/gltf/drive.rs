@@ -1,0 +1,330 @@
+//! Driving a figure from the library's postures (retargeting): each mapped
+//! joint turns as its library joint turns from its rest, after its bone
+//! is laid along the library's rest bone (an A-pose figure under a T-pose
+//! library); unmapped joints (fingers, tails, helpers) keep their rest
+//! pose on their parents; the pelvis goes where the library's goes, its
+//! height and travel scaled by leg length; the figure's own legs and arms
+//! then reach where the library puts feet and hands (two-bone IK); a joint
+//! the rig hangs elsewhere (feet from the root) is hung on its limb.
+
+use glam::{DMat4, DQuat, DVec3};
+
+use super::Figure;
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics};
+
+/// The role a role's bone points to, and the role above it on its limb.
+const CHAIN: [(Role, Option<Role>, Option<Role>); 16] = [
+    (Role::Pelvis, Some(Role::Chest), None),
+    (Role::Chest, Some(Role::Neck), Some(Role::Pelvis)),
+    (Role::Neck, Some(Role::Head), Some(Role::Chest)),
+    (Role::Head, None, Some(Role::Neck)),
+    (Role::LeftShoulder, Some(Role::LeftElbow), Some(Role::Chest)),
+    (
+        Role::LeftElbow,
+        Some(Role::LeftHand),
+        Some(Role::LeftShoulder),
+    ),
+    (Role::LeftHand, None, Some(Role::LeftElbow)),
+    (
+        Role::RightShoulder,
+        Some(Role::RightElbow),
+        Some(Role::Chest),
+    ),
+    (
+        Role::RightElbow,
+        Some(Role::RightHand),
+        Some(Role::RightShoulder),
+    ),
+    (Role::RightHand, None, Some(Role::RightElbow)),
+    (Role::LeftHip, Some(Role::LeftKnee), Some(Role::Pelvis)),
+    (Role::LeftKnee, Some(Role::LeftFoot), Some(Role::LeftHip)),
+    (Role::LeftFoot, None, Some(Role::LeftKnee)),
+    (Role::RightHip, Some(Role::RightKnee), Some(Role::Pelvis)),
+    (Role::RightKnee, Some(Role::RightFoot), Some(Role::RightHip)),
+    (Role::RightFoot, None, Some(Role::RightKnee)),
+];
+
+/// The limbs IK puts on the library's ends: (upper, middle, end) roles.
+const LIMBS: [(Role, Role, Role); 4] = [
+    (Role::LeftHip, Role::LeftKnee, Role::LeftFoot),
+    (Role::RightHip, Role::RightKnee, Role::RightFoot),
+    (Role::LeftShoulder, Role::LeftElbow, Role::LeftHand),
+    (Role::RightShoulder, Role::RightElbow, Role::RightHand),
+];
+
+/// How one figure follows one library's skeleton.
+#[derive(Clone, Debug)]
+pub struct Drive {
+    /// Per figure joint: the library joint it turns with and the turn that
+    /// lays its rest bone along the library's.
+    follow: Vec<Option<(usize, DQuat)>>,
+    /// Per figure joint: the joint it hangs from (its parent, or the joint
+    /// of the role above it on its limb where the rig hangs it elsewhere).
+    hang: Vec<Option<usize>>,
+    /// Figure joints, each after the one it hangs from.
+    order: Vec<usize>,
+    /// The library's rest world rotations, inverted.
+    lib_rest_inv: Vec<DQuat>,
+    /// Figure leg length over the library's.
+    pub scale: f64,
+    /// Ankle heights standing at rest: the library's and the figure's.
+    ankles: (f64, f64),
+    /// Each limb of [`LIMBS`]: the figure's length over the library's.
+    limb_scale: [f64; 4],
+    fig_roles: RoleMap,
+    lib_roles: RoleMap,
+}
+
+fn leg(positions: &[DVec3], roles: &RoleMap) -> f64 {
+    let at = |r: Role| positions[roles.get(r)];
+    [
+        (Role::LeftHip, Role::LeftKnee, Role::LeftFoot),
+        (Role::RightHip, Role::RightKnee, Role::RightFoot),
+    ]
+    .iter()
+    .map(|&(h, k, f)| (at(k) - at(h)).length() + (at(f) - at(k)).length())
+    .sum::<f64>()
+        / 2.0
+}
+
+impl Drive {
+    #[must_use]
+    pub fn new(fig: &Figure, lib: &Skeleton, lib_roles: &RoleMap) -> Self {
+        let n = fig.rest.len();
+        let rest_lib = forward_kinematics(lib, &lib.rest_pose());
+        let fpos: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
+        // The floor under the library's rest pose: its lowest point.
+        let lib_floor = (0..lib.len())
+            .flat_map(|j| std::iter::once(rest_lib.positions[j]).chain(rest_lib.end_site(lib, j)))
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        let mut follow = vec![None; n];
+        let mut hang: Vec<Option<usize>> = fig.skeleton.joints.iter().map(|j| j.parent).collect();
+        let dir =
+            |p: &[DVec3], roles: &RoleMap, a: Role, b: Role| p[roles.get(b)] - p[roles.get(a)];
+        // Rest alignment per role, an end role taking its limb's.
+        let mut align = std::collections::BTreeMap::new();
+        for (role, to, _) in CHAIN {
+            if let Some(to) = to {
+                let (f, l) = (
+                    dir(&fpos, &fig.roles, role, to),
+                    dir(&rest_lib.positions, lib_roles, role, to),
+                );
+                let c = if f.length() > 1e-9 && l.length() > 1e-9 {
+                    DQuat::from_rotation_arc(f.normalize(), l.normalize())
+                } else {
+                    DQuat::IDENTITY
+                };
+                align.insert(role, c);
+            }
+        }
+        for (role, _, up) in CHAIN {
+            let c = align
+                .get(&role)
+                .or_else(|| up.and_then(|u| align.get(&u)))
+                .copied()
+                .unwrap_or(DQuat::IDENTITY);
+            let m = fig.roles.get(role);
+            follow[m] = Some((lib_roles.get(role), c));
+            // Hung elsewhere by the rig: hang it on its limb.
+            if let Some(up) = up {
+                let u = fig.roles.get(up);
+                if u != m && !fig.skeleton.is_ancestor(u, m) && !fig.skeleton.is_ancestor(m, u) {
+                    hang[m] = Some(u);
+                }
+            }
+        }
+        // Parents first, along `hang`.
+        let mut order = Vec::with_capacity(n);
+        let mut done = vec![false; n];
+        let mut stack: Vec<usize> = (0..n).filter(|&j| hang[j].is_none()).collect();
+        stack.reverse();
+        while let Some(j) = stack.pop() {
+            if done[j] {
+                continue;
+            }
+            done[j] = true;
+            order.push(j);
+            for c in (0..n).rev() {
+                if hang[c] == Some(j) && !done[c] {
+                    stack.push(c);
+                }
+            }
+        }
+        // Anything left in a loop of hangings keeps its own parent.
+        for j in 0..n {
+            if !done[j] {
+                hang[j] = fig.skeleton.joints[j].parent;
+                order.push(j);
+            }
+        }
+        Self {
+            follow,
+            hang,
+            order,
+            lib_rest_inv: rest_lib.rotations.iter().map(|q| q.inverse()).collect(),
+            scale: leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9),
+            ankles: (
+                rest_lib.positions[lib_roles.get(Role::LeftFoot)].y - lib_floor,
+                fpos[fig.roles.get(Role::LeftFoot)].y,
+            ),
+            limb_scale: LIMBS.map(|(a, b, c)| {
+                let len = |p: &[DVec3], r: &RoleMap| {
+                    (p[r.get(b)] - p[r.get(a)]).length() + (p[r.get(c)] - p[r.get(b)]).length()
+                };
+                len(&fpos, &fig.roles) / len(&rest_lib.positions, lib_roles).max(1e-9)
+            }),
+            fig_roles: fig.roles.clone(),
+            lib_roles: lib_roles.clone(),
+        }
+    }
+
+    /// The figure's joint transforms for a library posture (world), with
+    /// `fixed[j]` overriding a joint's world rotation.
+    fn place(&self, fig: &Figure, lib: &WorldPose, fixed: &[Option<DQuat>]) -> Vec<DMat4> {
+        let n = fig.rest.len();
+        let mut w = vec![DMat4::IDENTITY; n];
+        for &j in &self.order {
+            let (_, rest_rot, rest_pos) = fig.rest[j].to_scale_rotation_translation();
+            let rot = if let Some(q) = fixed[j] {
+                q
+            } else if let Some((l, c)) = self.follow[j] {
+                (lib.rotations[l] * self.lib_rest_inv[l] * c * rest_rot).normalize()
+            } else if let Some(p) = self.hang[j] {
+                let (_, p_rest, _) = fig.rest[p].to_scale_rotation_translation();
+                let (_, p_now, _) = w[p].to_scale_rotation_translation();
+                (p_now * p_rest.inverse() * rest_rot).normalize()
+            } else {
+                rest_rot
+            };
+            let pos = match self.hang[j] {
+                Some(p) => w[p].transform_point3(fig.rest[p].inverse().transform_point3(rest_pos)),
+                None => rest_pos,
+            };
+            w[j] = DMat4::from_rotation_translation(rot, pos);
+        }
+        // The pelvis where the library's is, scaled by leg length.
+        let pelvis = self.fig_roles.get(Role::Pelvis);
+        let want = lib.positions[self.lib_roles.get(Role::Pelvis)] * self.scale;
+        let shift = want - w[pelvis].w_axis.truncate();
+        for m in &mut w {
+            m.w_axis += shift.extend(0.0);
+        }
+        w
+    }
+
+    /// The figure's joint transforms (world, metres) for the library's
+    /// posture `lib`: turned as the library's joints, then each limb put
+    /// on the library's hand or foot, relative to the hip or shoulder.
+    #[must_use]
+    pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
+        let mut fixed = vec![None; fig.rest.len()];
+        let w = self.place(fig, lib, &fixed);
+        for (k, (a, b, c)) in LIMBS.into_iter().enumerate() {
+            let (fa, fb, fc) = (
+                self.fig_roles.get(a),
+                self.fig_roles.get(b),
+                self.fig_roles.get(c),
+            );
+            let (la, lc) = (self.lib_roles.get(a), self.lib_roles.get(c));
+            // A hand where the library has it from the shoulder, scaled
+            // by the arm's length; an ankle as high above its standing
+            // height as the library's.
+            let root = w[fa].w_axis.truncate();
+            let goal = if matches!(c, Role::LeftFoot | Role::RightFoot) {
+                // Feet where the library's stand, scaled as the pelvis
+                // is: a planted foot stays planted whatever the hips do.
+                let l = lib.positions[lc];
+                DVec3::new(
+                    l.x * self.scale,
+                    self.ankles.1 + (l.y - self.ankles.0) * self.scale,
+                    l.z * self.scale,
+                )
+            } else {
+                root + (lib.positions[lc] - lib.positions[la]) * self.limb_scale[k]
+            };
+            let (pa, pb, pc) = (root, w[fb].w_axis.truncate(), w[fc].w_axis.truncate());
+            if let Some((ta, tb)) = two_bone(pa, pb, pc, goal) {
+                let rot = |m: &DMat4| m.to_scale_rotation_translation().1;
+                let ra = ta * rot(&w[fa]);
+                fixed[fa] = Some(ra.normalize());
+                fixed[fb] = Some((tb * ta * rot(&w[fb])).normalize());
+                // The end keeps the turn the library gave it.
+                fixed[fc] = Some(rot(&w[fc]));
+            }
+        }
+        self.place(fig, lib, &fixed)
+    }
+
+    /// Skinned positions of every part for joint transforms `w`.
+    #[must_use]
+    pub fn skin(fig: &Figure, w: &[DMat4]) -> Vec<Vec<DVec3>> {
+        let skin: Vec<DMat4> = w
+            .iter()
+            .zip(&fig.rest)
+            .map(|(now, rest)| *now * rest.inverse())
+            .collect();
+        fig.parts
+            .iter()
+            .map(|p| {
+                p.positions
+                    .iter()
+                    .zip(&p.joints)
+                    .zip(&p.weights)
+                    .map(|((v, j), wt)| {
+                        let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
+                        (0..4)
+                            .filter(|&k| wt[k] > 0.0)
+                            .map(|k| {
+                                skin.get(usize::from(j[k]))
+                                    .map_or(v, |m| m.transform_point3(v))
+                                    * f64::from(wt[k])
+                            })
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// Two-bone IK on world positions: the turns (world, about `a` and then
+/// about `b`) that bend the limb `a`-`b`-`c` so that `c` reaches `goal`
+/// (as near as the limb's lengths allow), in the plane it bends in.
+fn two_bone(a: DVec3, b: DVec3, c: DVec3, goal: DVec3) -> Option<(DQuat, DQuat)> {
+    let (lab, lbc) = ((b - a).length(), (c - b).length());
+    if lab < 1e-9 || lbc < 1e-9 || !goal.is_finite() {
+        return None;
+    }
+    let reach = (goal - a)
+        .length()
+        .clamp((lab - lbc).abs() + 1e-6, lab + lbc - 1e-6);
+    let angle = |u: DVec3, v: DVec3| u.normalize().dot(v.normalize()).clamp(-1.0, 1.0).acos();
+    let cos = |x: f64| x.clamp(-1.0, 1.0).acos();
+    let (at_a, at_b) = (angle(c - a, b - a), angle(a - b, c - b));
+    let want_a = cos((lbc * lbc - lab * lab - reach * reach) / (-2.0 * lab * reach));
+    let want_b = cos((reach * reach - lab * lab - lbc * lbc) / (-2.0 * lab * lbc));
+    let mut axis = (c - a).cross(b - a);
+    if axis.length() < 1e-9 {
+        axis = (c - a).cross(goal - a);
+        if axis.length() < 1e-9 {
+            axis = (c - a).any_orthonormal_vector();
+        }
+    }
+    let axis = axis.normalize();
+    let bend_b = DQuat::from_axis_angle(axis, want_b - at_b);
+    let bend_a = DQuat::from_axis_angle(axis, want_a - at_a);
+    let bent = a + bend_a * ((b - a) + bend_b * (c - b));
+    let (from, to) = (bent - a, goal - a);
+    let swing = if from.length() > 1e-9 && to.length() > 1e-9 {
+        DQuat::from_rotation_arc(from.normalize(), to.normalize())
+    } else {
+        DQuat::IDENTITY
+    };
+    // World turn of the upper joint; the middle's own bend applies after
+    // it (world frame once the upper has turned).
+    let ta = swing * bend_a;
+    let tb = ta * bend_b * ta.inverse();
+    Some((ta, tb))
+}

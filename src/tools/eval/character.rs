@@ -1,0 +1,178 @@
+//! A skinned figure playing a library's clips: how far its mapped parts
+//! are from where the library puts them (shares of each one's height),
+//! how deep its mesh goes into the floor, how its planted feet slide
+//! against the library's own, and frames whose skinned mesh goes
+//! non-finite.
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::character::gltf::{Drive, Figure};
+use crate::character::library::Library;
+use crate::character::roles::Role;
+use crate::character::skeleton::forward_kinematics;
+
+/// The parts judged (those a figure's fit is asked for), each measured
+/// from the root of its limb: hands and elbows from the shoulder, feet and
+/// knees from the hip, the head from the chest, the chest from the pelvis,
+/// the pelvis from the floor under it.
+const PARTS: [(Role, Option<Role>); 11] = [
+    (Role::Pelvis, None),
+    (Role::Chest, Some(Role::Pelvis)),
+    (Role::Head, Some(Role::Chest)),
+    (Role::LeftHand, Some(Role::LeftShoulder)),
+    (Role::RightHand, Some(Role::RightShoulder)),
+    (Role::LeftFoot, Some(Role::LeftHip)),
+    (Role::RightFoot, Some(Role::RightHip)),
+    (Role::LeftElbow, Some(Role::LeftShoulder)),
+    (Role::RightElbow, Some(Role::RightShoulder)),
+    (Role::LeftKnee, Some(Role::LeftHip)),
+    (Role::RightKnee, Some(Role::RightHip)),
+];
+
+/// The chain whose length scales a part's offset from its root.
+fn span(part: Role) -> [Role; 3] {
+    match part {
+        Role::Pelvis | Role::LeftFoot | Role::LeftKnee => {
+            [Role::LeftHip, Role::LeftKnee, Role::LeftFoot]
+        }
+        Role::RightFoot | Role::RightKnee => [Role::RightHip, Role::RightKnee, Role::RightFoot],
+        Role::Chest => [Role::Pelvis, Role::Pelvis, Role::Chest],
+        Role::Head => [Role::Chest, Role::Chest, Role::Head],
+        Role::LeftHand | Role::LeftElbow => [Role::LeftShoulder, Role::LeftElbow, Role::LeftHand],
+        _ => [Role::RightShoulder, Role::RightElbow, Role::RightHand],
+    }
+}
+
+/// A foot this close above its standing height is planted (m).
+const PLANTED_M: f64 = 0.02;
+
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct CharacterEval {
+    pub clips: usize,
+    pub frames: usize,
+    /// Mapped parts' distance from where the library puts them: each
+    /// part's offset from its limb's root, the library's scaled to the
+    /// figure's limb, in shares of the figure's height (%).
+    pub mean_pct: f64,
+    pub max_pct: f64,
+    pub worst: String,
+    /// Deepest skinned vertex under the floor (mm).
+    pub penetration_mm: f64,
+    /// Mean slide of a planted foot per frame (mm): the figure's, and the
+    /// library's own skeleton's measured the same way.
+    pub skate_mm: f64,
+    pub library_skate_mm: f64,
+    /// Frames whose skinned mesh has a non-finite vertex.
+    pub bad_frames: usize,
+}
+
+/// Plays every clip of `lib` on `fig`, every `step`-th frame.
+#[must_use]
+pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval {
+    let Some(lib_roles) = lib.clips.values().next().map(|c| c.roles.clone()) else {
+        return CharacterEval::default();
+    };
+    let drive = Drive::new(fig, &lib.skeleton, &lib_roles);
+    // Each part's limb length at rest: the figure's and the library's.
+    let lib_rest = forward_kinematics(&lib.skeleton, &lib.skeleton.rest_pose());
+    let fig_rest: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
+    let mut lengths = [(1.0, 1.0); Role::ALL.len()];
+    for (r, _) in PARTS {
+        let [a, b, c] = span(r);
+        let len = |p: &[DVec3], at: &dyn Fn(Role) -> usize| {
+            (p[at(b)] - p[at(a)]).length() + (p[at(c)] - p[at(b)]).length()
+        };
+        lengths[r.index()] = (
+            len(&fig_rest, &|q| fig.roles.get(q)).max(1e-6),
+            len(&lib_rest.positions, &|q| lib_roles.get(q)).max(1e-6),
+        );
+    }
+    let mut out = CharacterEval::default();
+    let (mut sum, mut n) = (0.0, 0usize);
+    let (mut skate, mut skate_n, mut lib_skate, mut lib_skate_n) = (0.0, 0usize, 0.0, 0usize);
+    let feet = [Role::LeftFoot, Role::RightFoot];
+    let fig_rest_ankle = fig.rest[fig.roles.get(Role::LeftFoot)].w_axis.y;
+    // The library's ankles standing: as its clips stand, their lowest.
+    let lib_rest_ankle = lib
+        .clips
+        .values()
+        .flat_map(|c| c.frames.iter().step_by(10))
+        .map(|p| {
+            let w = forward_kinematics(&lib.skeleton, p);
+            w.positions[lib_roles.get(Role::LeftFoot)]
+                .y
+                .min(w.positions[lib_roles.get(Role::RightFoot)].y)
+        })
+        .fold(f64::INFINITY, f64::min);
+    for (name, clip) in &lib.clips {
+        out.clips += 1;
+        let mut last: Option<([DVec3; 2], [DVec3; 2])> = None;
+        for pose in clip.frames.iter().step_by(step.max(1)) {
+            out.frames += 1;
+            let lw = forward_kinematics(&lib.skeleton, pose);
+            let w = drive.pose(fig, &lw);
+            let skinned = Drive::skin(fig, &w);
+            if skinned.iter().flatten().any(|v| !v.is_finite()) {
+                out.bad_frames += 1;
+                last = None;
+                continue;
+            }
+            let lowest = skinned
+                .iter()
+                .flatten()
+                .map(|v| v.y)
+                .fold(f64::INFINITY, f64::min);
+            out.penetration_mm = out.penetration_mm.max(-lowest * 1e3);
+            let floor_at = |p: DVec3| DVec3::new(p.x, 0.0, p.z);
+            for (r, root) in PARTS {
+                let f = w[fig.roles.get(r)].w_axis.truncate();
+                let l = lw.positions[lib_roles.get(r)];
+                let (f0, l0) = match root {
+                    Some(q) => (
+                        w[fig.roles.get(q)].w_axis.truncate(),
+                        lw.positions[lib_roles.get(q)],
+                    ),
+                    None => (floor_at(f), floor_at(l)),
+                };
+                let (fl, ll) = lengths[r.index()];
+                let miss = (f - f0) - (l - l0) * (fl / ll);
+                let pct = miss.length() / fig.height_m * 100.0;
+                sum += pct;
+                n += 1;
+                if pct > out.max_pct {
+                    out.max_pct = pct;
+                    out.worst = format!("{} in {name}", r.name());
+                }
+            }
+            let now = (
+                feet.map(|r| w[fig.roles.get(r)].w_axis.truncate()),
+                feet.map(|r| lw.positions[lib_roles.get(r)]),
+            );
+            if let Some((pf, pl)) = last {
+                for k in 0..2 {
+                    if pf[k].y < fig_rest_ankle + PLANTED_M
+                        && now.0[k].y < fig_rest_ankle + PLANTED_M
+                    {
+                        skate += (now.0[k] - pf[k]).with_y(0.0).length() * 1e3;
+                        skate_n += 1;
+                    }
+                    if pl[k].y < lib_rest_ankle + PLANTED_M
+                        && now.1[k].y < lib_rest_ankle + PLANTED_M
+                    {
+                        lib_skate += (now.1[k] - pl[k]).with_y(0.0).length() * 1e3;
+                        lib_skate_n += 1;
+                    }
+                }
+            }
+            last = Some(now);
+        }
+    }
+    let r3 = |v: f64| (v * 1e3).round() / 1e3;
+    out.mean_pct = r3(sum / n.max(1) as f64);
+    out.max_pct = r3(out.max_pct);
+    out.penetration_mm = r3(out.penetration_mm.max(0.0));
+    out.skate_mm = r3(skate / skate_n.max(1) as f64);
+    out.library_skate_mm = r3(lib_skate / lib_skate_n.max(1) as f64);
+    out
+}
