@@ -7,7 +7,10 @@
 //! both visitors' marks. After criterion's runs, the bare scene, one
 //! character and two are drawn in turn, 12 frames each, 30 rounds, and the
 //! medians and ratios printed: on a shared machine whose speed drifts,
-//! scenes measured minutes apart compare badly.
+//! scenes measured minutes apart compare badly. Where the shared test
+//! characters are beside the checkout, CesiumMan skinned (one, and two
+//! tinted) joins the interleaved scenes and its composing (CPU skinning)
+//! is timed.
 //! `cargo bench --bench render`.
 
 #![allow(
@@ -141,6 +144,7 @@ fn bench(c: &mut Criterion) {
                     world: &world,
                     held: &held,
                     tint: Some([0.62, 0.1, 0.07]),
+                    figure: None,
                 },
                 scene::Body {
                     skeleton: &clip.skeleton,
@@ -148,6 +152,7 @@ fn bench(c: &mut Criterion) {
                     world: &other,
                     held: &held,
                     tint: Some([0.09, 0.26, 0.55]),
+                    figure: None,
                 },
             ],
             &both_marks,
@@ -199,6 +204,44 @@ fn bench(c: &mut Criterion) {
                 )
             })
         });
+        // A skinned figure (the shared CesiumMan, tests only, where it is
+        // beside the checkout): composing it skins every vertex on the CPU.
+        let cesium = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/characters/CesiumMan.glb");
+        let skin = marionette::character::gltf::load(&cesium, &Default::default())
+            .ok()
+            .map(|f| marionette::character::gltf::Skin::new(f, &lib.skeleton, &clip.roles));
+        fn figured<'a>(
+            clip: &'a marionette::character::motion::Clip,
+            w: &'a marionette::character::skeleton::WorldPose,
+            held: &'a [Role],
+            tint: Option<[f32; 3]>,
+            skin: Option<&'a marionette::character::gltf::Skin>,
+        ) -> scene::Body<'a> {
+            scene::Body {
+                skeleton: &clip.skeleton,
+                roles: &clip.roles,
+                world: w,
+                held,
+                tint,
+                figure: skin,
+            }
+        }
+        let one = [figured(clip, &world, &held, None, skin.as_ref())];
+        let skinned = scene::compose_bodies(&v, &one, &marks);
+        let two_skinned = scene::compose_bodies(
+            &v,
+            &[
+                figured(clip, &world, &held, Some([0.62, 0.1, 0.07]), skin.as_ref()),
+                figured(clip, &other, &held, Some([0.09, 0.26, 0.55]), skin.as_ref()),
+            ],
+            &both_marks,
+        );
+        if skin.is_some() {
+            g.bench_function(format!("{w}x{h} compose CesiumMan"), |b| {
+                b.iter(|| scene::compose_bodies(&v, &one, &marks))
+            });
+        }
         // Bare, one, two in turn (same renderer settings as above), unless
         // a filter given to the bench leaves them out.
         let filter = std::env::args().skip(1).find(|a| !a.starts_with('-'));
@@ -206,11 +249,15 @@ fn bench(c: &mut Criterion) {
         if filter.is_some_and(|f| !label.contains(&f)) {
             continue;
         }
-        let scenes = [
+        let mut scenes = vec![
             ("bare 21 boxes", &boxes),
             ("character", &character),
             ("two characters", &two),
         ];
+        if skin.is_some() {
+            scenes.push(("CesiumMan skinned", &skinned));
+            scenes.push(("two CesiumMan skinned", &two_skinned));
+        }
         let mut times = vec![Vec::new(); scenes.len()];
         // Blocks of 12 frames of one scene, the first 2 not counted (the
         // caches warm up again after the other scenes), 30 rounds.

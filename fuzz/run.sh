@@ -32,6 +32,7 @@ seed bvh_parse $(find "$shared/mocap" -name '*.bvh' -size -200k | sort | head -4
 seed evemu_parse "$shared"/recordings/evemu/*.evemu "$root"/assets/recordings/*.evemu
 seed library_toml "$root"/assets/library/library.toml "$root"/tests/libraries/*/library.toml
 seed config "$root"/config/*.toml
+seed gltf "$shared"/characters/RiggedFigure.glb
 mkdir -p corpus/init_names corpus/tracker
 for name in $(find "$shared/mocap" -name '*.bvh' | head -20); do
     printf '%s' "$(basename "$name" .bvh)" >"corpus/init_names/seed-$(basename "$name")"
@@ -39,7 +40,7 @@ done
 printf 'take "one"\n# [x]' >corpus/init_names/seed-quotes
 
 status=0
-for target in bvh_parse evemu_parse tracker library_toml config init_names; do
+for target in bvh_parse evemu_parse tracker library_toml config init_names gltf; do
     echo "== $target: $seconds s"
     if ! cargo +nightly fuzz run "$target" "corpus/$target" -- \
         -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=4096 -print_final_stats=1 \

@@ -397,3 +397,153 @@ fn the_shared_characters_play_the_default_library() {
         assert!(e.skate_mm <= e.library_skate_mm, "{file}: {e:?}");
     }
 }
+
+#[test]
+fn the_shared_characters_render_over_their_skeletons() {
+    // Rendered with lavapipe standing in the default library's stance: the
+    // figure's silhouette (the frame against one without it, shadows left
+    // out) covers its mapped joints as the camera sees them, and its
+    // bounding box is theirs, a head's and a foot's size around them. No
+    // image of these characters is stored.
+    use marionette::character::camera::Camera;
+    use marionette::control::marks::Marks;
+    use marionette::render::gpu::{AdapterChoice, Gpu};
+    use marionette::render::headless::Headless;
+    use marionette::render::scene::{self, Body, View};
+    let lib = marionette::character::library::Library::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"),
+    )
+    .unwrap();
+    let clip = &lib.clips["pose_stance.bvh"];
+    let world =
+        marionette::character::skeleton::forward_kinematics(&clip.skeleton, &clip.frames[0]);
+    let (w, h) = (640u32, 360u32);
+    let target = glam::DVec3::new(0.0, 0.8, 0.0);
+    let dir = glam::DQuat::from_rotation_y(0.45) * glam::DVec3::new(0.0, 0.22, 1.0).normalize();
+    let view = View {
+        camera: Camera {
+            eye: target + dir * 3.6,
+            target,
+            fov_y_deg: 40.0,
+            width: f64::from(w),
+            height: f64::from(h),
+        },
+        rotation: marionette::screen::Rotation::R0,
+    };
+    let gpu = Gpu::new(AdapterChoice::Cpu)
+        .expect("a CPU Vulkan adapter (lavapipe): apt-get install mesa-vulkan-drivers");
+    let mut headless = Headless::new(gpu, w, h, 4).unwrap();
+    let bare = headless.render(&view.empty(true)).unwrap();
+    // The top margin: a head's height over the head joint (the robot's
+    // head is two fifths of it, and wider than its shoulders).
+    for (file, head, side) in [
+        ("RiggedFigure.glb", 0.35, 0.3),
+        ("CesiumMan.glb", 0.35, 0.3),
+        ("RobotExpressive.glb", 0.75, 0.6),
+    ] {
+        let skin = gltf::Skin::new(load(&shared(file)).unwrap(), &lib.skeleton, &clip.roles);
+        let mut list = scene::compose_bodies(
+            &view,
+            &[Body {
+                skeleton: &lib.skeleton,
+                roles: &clip.roles,
+                world: &world,
+                held: &[],
+                tint: None,
+                figure: Some(&skin),
+            }],
+            &Marks::default(),
+        );
+        list.shadow = Default::default();
+        let img = headless.render(&list).unwrap();
+        let inside = |x: i64, y: i64| {
+            (x >= 0 && y >= 0 && x < i64::from(w) && y < i64::from(h)) && {
+                let i = (y as usize * w as usize + x as usize) * 4;
+                (0..3).any(|c| img.rgba[i + c].abs_diff(bare.rgba[i + c]) > 24)
+            }
+        };
+        let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
+        for y in 0..i64::from(h) {
+            for x in 0..i64::from(w) {
+                if inside(x, y) {
+                    lo = (lo.0.min(x), lo.1.min(y));
+                    hi = (hi.0.max(x), hi.1.max(y));
+                }
+            }
+        }
+        let joints = skin.drive.pose(&skin.figure, &world);
+        let seen: Vec<(i64, i64)> = Role::ALL
+            .iter()
+            .map(|r| {
+                let p = joints[skin.figure.roles.get(*r)].w_axis.truncate();
+                let s = view.camera.project(p).unwrap();
+                (s.x.round() as i64, s.y.round() as i64)
+            })
+            .collect();
+        // Covered: the joint's pixel or one within 3 px (a wrist on the
+        // surface of a thin arm).
+        let covered = seen
+            .iter()
+            .filter(|(x, y)| (-3..=3).any(|dy| (-3..=3).any(|dx| inside(x + dx, y + dy))))
+            .count();
+        let (jlo, jhi) = seen.iter().fold(
+            ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN)),
+            |(l, u), &(x, y)| ((l.0.min(x), l.1.min(y)), (u.0.max(x), u.1.max(y))),
+        );
+        let tall = (jhi.1 - jlo.1) as f64;
+        eprintln!(
+            "{file}: {covered} of 16 joints covered; silhouette {lo:?}-{hi:?}, joints {jlo:?}-{jhi:?}"
+        );
+        assert_eq!(covered, 16, "{file}");
+        // Around the joints by at most a head above, a foot below and a
+        // head's or an arm's width aside.
+        for (edge, margin) in [
+            (jlo.1 - lo.1, head * tall),
+            (hi.1 - jhi.1, 0.15 * tall),
+            (jlo.0 - lo.0, side * tall),
+            (hi.0 - jhi.0, side * tall),
+        ] {
+            assert!(
+                (0..=margin as i64).contains(&edge),
+                "{file}: {edge} px past the joints (at most {margin:.0})"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_demo_runs_through_with_a_configured_mesh_and_refuses_a_broken_one() {
+    // `mesh` beside the configuration file, named relatively.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(shared("CesiumMan.glb"), dir.path().join("mascot.glb")).unwrap();
+    let config = dir.path().join("table.toml");
+    std::fs::write(&config, "[character]\nmesh = \"mascot.glb\"\n").unwrap();
+    let out = dir.path().join("demo");
+    let run = common::marionette(&[
+        "demo",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(stdout.contains("actions started by drags: 6"), "{stdout}");
+    assert!(out.join("contact-sheet.png").is_file());
+    // A broken mesh stops the start, saying what and where.
+    std::fs::write(dir.path().join("mascot.glb"), b"glTF\x02\0\0\0").unwrap();
+    let run = common::marionette(&[
+        "demo",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(65), "{err}");
+    assert!(err.contains("mascot.glb: not a glTF 2.0 file"), "{err}");
+}

@@ -336,6 +336,7 @@ fn two_characters_apart_redraw_only_where_they_are_and_were() {
         };
         let held = [Role::RightHand];
         let body = |w, held, tint| scene::Body {
+            figure: None,
             skeleton: &clip.skeleton,
             roles: &clip.roles,
             world: w,

@@ -21,6 +21,37 @@ pub enum LoadError {
     /// The library folder, its `library.toml` or a clip is wrong.
     #[error(transparent)]
     Library(#[from] LibraryError),
+    /// The configured character mesh is wrong.
+    #[error(transparent)]
+    Figure(#[from] crate::character::gltf::GltfError),
+}
+
+/// The skinned figure configured for a character (`mesh`), driven by
+/// `ch`'s library: `None` for the capsule figure.
+pub fn figure(
+    mesh: &Path,
+    ch: &Character,
+) -> Result<Option<Arc<crate::character::gltf::Skin>>, LoadError> {
+    if mesh.as_os_str().is_empty() {
+        return Ok(None);
+    }
+    let fig = crate::character::gltf::load(mesh, &std::collections::BTreeMap::new())?;
+    for w in &fig.warnings {
+        tracing::warn!(mesh = %mesh.display(), "{w}");
+    }
+    tracing::info!(
+        mesh = %mesh.display(),
+        joints = fig.skeleton.len(),
+        vertices = fig.vertices(),
+        height_m = fig.height_m,
+        roles_from = fig.roles_by,
+        "character mesh loaded"
+    );
+    Ok(Some(Arc::new(crate::character::gltf::Skin::new(
+        fig,
+        &ch.lib.skeleton,
+        &ch.roles,
+    ))))
 }
 
 /// A library and its posing model (from the cache when it matches; baked

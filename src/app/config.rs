@@ -139,11 +139,13 @@ impl Config {
             .ok()
             .and_then(|p| p.parent().map(Path::to_path_buf));
         for c in &mut config.character.0 {
-            if !c.library.as_os_str().is_empty()
-                && c.library.is_relative()
-                && let Some(base) = &base
-            {
-                c.library = base.join(&c.library);
+            for p in [&mut c.library, &mut c.mesh] {
+                if !p.as_os_str().is_empty()
+                    && p.is_relative()
+                    && let Some(base) = &base
+                {
+                    *p = base.join(&*p);
+                }
             }
         }
         config.source = path.to_owned();

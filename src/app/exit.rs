@@ -183,6 +183,7 @@ impl ExitStatus for LoadError {
     fn exit_code(&self) -> u8 {
         match self {
             Self::Library(_) => DATAERR,
+            Self::Figure(e) => e.exit_code(),
         }
     }
 }

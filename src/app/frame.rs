@@ -140,6 +140,7 @@ pub fn compose(stage: &Stage, rotation: Rotation, marks: &Marks) -> DrawList {
                 world: a.ctl.world(),
                 held,
                 tint: a.tint,
+                figure: a.figure.as_deref(),
             }
         })
         .collect();

@@ -60,6 +60,9 @@ pub struct CharacterConfig {
     /// Colour of its clothes, linear RGB 0..1; unset: the default shirt
     /// for a lone character, else one of [`TINTS`].
     pub tint: Option<[f64; 3]>,
+    /// A skinned glTF character (`.glb`, `.gltf`) the library drives;
+    /// empty: the capsule figure.
+    pub mesh: PathBuf,
 }
 
 impl Default for CharacterConfig {
@@ -72,6 +75,7 @@ impl Default for CharacterConfig {
             place: None,
             facing_deg: None,
             tint: None,
+            mesh: PathBuf::new(),
         }
     }
 }

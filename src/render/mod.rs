@@ -5,6 +5,7 @@
 
 pub(crate) mod contact;
 pub(crate) mod damage;
+pub(crate) mod figure;
 pub mod gpu;
 pub mod headless;
 pub mod mesh;

@@ -401,6 +401,7 @@ pub fn compose(
             world,
             held,
             tint: None,
+            figure: None,
         }],
         marks,
     )
@@ -415,6 +416,8 @@ pub struct Body<'a> {
     pub world: &'a WorldPose,
     pub held: &'a [Role],
     pub tint: Option<[f32; 3]>,
+    /// A skinned figure shown instead of the capsules.
+    pub figure: Option<&'a crate::character::gltf::Skin>,
 }
 
 /// The draw list of several characters, each with its shadow, and the
@@ -423,6 +426,10 @@ pub struct Body<'a> {
 pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawList {
     let mut list = view.empty(true);
     for b in bodies {
+        if let Some(skin) = b.figure {
+            super::figure::draw(&mut list, skin, b);
+            continue;
+        }
         let mut segs = segments(b.skeleton, b.roles, b.world);
         if let Some(tint) = b.tint {
             for s in &mut segs {

@@ -51,6 +51,11 @@ pub(super) fn cast(
         loaded.push((dir.clone(), ch.clone()));
         out.push(ch);
     }
+    // Each configured mesh is read now: a broken one stops the start here,
+    // as a broken library does.
+    for (c, ch) in config.character.0.iter().zip(&out) {
+        crate::app::character::figure(&c.mesh, ch)?;
+    }
     Ok(out)
 }
 

@@ -382,14 +382,24 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
         .enumerate()
         .map(|(k, ch)| {
             let (x, z, yaw) = places.get(k).copied().unwrap_or((k as f64 * 1.2, 0.0, 0.0));
-            Actor::standing(
+            // Checked when the cast was loaded; should it fail now, the
+            // capsule figure stands in and the log says why.
+            let figure = config.character.0.get(k).and_then(|c| {
+                crate::app::character::figure(&c.mesh, &ch)
+                    .map_err(|e| tracing::error!("{e}: the capsule figure is shown instead"))
+                    .ok()
+                    .flatten()
+            });
+            let mut actor = Actor::standing(
                 ch,
                 settings,
                 (w, h),
                 glam::DVec3::new(x, 0.0, z),
                 yaw,
                 tints.get(k).copied().flatten(),
-            )
+            );
+            actor.figure = figure;
+            actor
         })
         .collect();
     Stage::new(actors, w, h, t)

@@ -12,6 +12,21 @@ mod rig;
 
 pub use drive::Drive;
 
+/// A figure with how it follows one library.
+#[derive(Clone, Debug)]
+pub struct Skin {
+    pub figure: Figure,
+    pub drive: Drive,
+}
+
+impl Skin {
+    #[must_use]
+    pub fn new(figure: Figure, lib: &Skeleton, lib_roles: &RoleMap) -> Self {
+        let drive = Drive::new(&figure, lib, lib_roles);
+        Self { figure, drive }
+    }
+}
+
 use std::path::{Path, PathBuf};
 
 use glam::DMat4;
@@ -130,5 +145,23 @@ pub fn load(
     overrides: &std::collections::BTreeMap<String, String>,
 ) -> Result<Figure, GltfError> {
     let file = read::File::open(path)?;
+    rig::figure(&file, overrides)
+}
+
+/// [`load`] of a file's bytes already read (`path` names it in errors,
+/// and its folder holds any buffer files it names).
+pub fn load_bytes(
+    path: &Path,
+    bytes: &[u8],
+    overrides: &std::collections::BTreeMap<String, String>,
+) -> Result<Figure, GltfError> {
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(GltfError::TooBig {
+            path: path.to_owned(),
+            bytes: bytes.len() as u64,
+            max: MAX_FILE_BYTES,
+        });
+    }
+    let file = read::File::parse(path, bytes)?;
     rig::figure(&file, overrides)
 }

@@ -29,7 +29,13 @@ impl File {
             });
         }
         let data = std::fs::read(path).map_err(io)?;
-        let gltf = gltf::Gltf::from_slice(&data).map_err(|e| GltfError::NotGltf {
+        Self::parse(path, &data)
+    }
+
+    /// The document in `data`, read as the file `path` (whose folder holds
+    /// any buffer files it names).
+    pub(super) fn parse(path: &Path, data: &[u8]) -> Result<Self, GltfError> {
+        let gltf = gltf::Gltf::from_slice(data).map_err(|e| GltfError::NotGltf {
             path: path.to_owned(),
             why: e.to_string(),
         })?;

@@ -47,6 +47,8 @@ pub struct Actor {
     pub ctl: Controller,
     /// Colour of its clothes (`None`: the default).
     pub tint: Option<[f32; 3]>,
+    /// The skinned figure shown for it (`None`: the capsule figure).
+    pub figure: Option<std::sync::Arc<crate::character::gltf::Skin>>,
     /// Hits it landed and took.
     pub hits_landed: usize,
     pub hits_taken: usize,
@@ -68,6 +70,7 @@ impl Actor {
         Self {
             ctl: Controller::standing(ch, settings, width, height, 0.0, at, yaw),
             tint,
+            figure: None,
             hits_landed: 0,
             hits_taken: 0,
         }
@@ -174,6 +177,7 @@ impl Stage {
             vec![Actor {
                 ctl,
                 tint: None,
+                figure: None,
                 hits_landed: 0,
                 hits_taken: 0,
             }],

@@ -1,0 +1,92 @@
+//! A skinned figure in the frame: posed from the character's posture,
+//! skinned on the CPU (linear blend skinning, every vertex each frame),
+//! lit with smooth normals, in its material's colour (the table's tint
+//! blended in), the parts fingers hold glowing, and its shadow cast as the
+//! capsule figure's is.
+
+use glam::DVec3;
+
+use super::mesh::{DrawList, Vertex3};
+use super::scene::Body;
+use crate::character::gltf::Skin;
+
+/// Joints that glow when a finger holds a part: each held part's joint and
+/// the unmapped joints below it (a hand's palm and fingers), down to the
+/// next part.
+fn glowing(skin: &Skin, body: &Body<'_>) -> Vec<bool> {
+    let fig = &skin.figure;
+    let sk = &fig.skeleton;
+    let mapped: Vec<usize> = crate::character::roles::Role::ALL
+        .iter()
+        .map(|r| fig.roles.get(*r))
+        .collect();
+    let mut glow = vec![false; sk.len()];
+    for &r in body.held {
+        glow[fig.roles.get(r)] = true;
+    }
+    // Parents come before children: spread down to unmapped joints.
+    for j in 0..sk.len() {
+        if let Some(p) = sk.joints[j].parent {
+            if glow[p] && !mapped.contains(&j) {
+                glow[j] = true;
+            }
+        }
+    }
+    glow
+}
+
+/// Adds the figure of `body` to the frame's body and shadow meshes.
+pub(crate) fn draw(list: &mut DrawList, skin: &Skin, body: &Body<'_>) {
+    let fig = &skin.figure;
+    let joints = skin.drive.pose(fig, body.world);
+    let posed = crate::character::gltf::Drive::skin(fig, &joints);
+    let glow = glowing(skin, body);
+    for (part, points) in fig.parts.iter().zip(&posed) {
+        if points.iter().any(|p| !p.is_finite()) {
+            continue;
+        }
+        // Smooth normals: each vertex's triangles, weighted by their area.
+        let mut normals = vec![DVec3::ZERO; points.len()];
+        for t in part.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+            let n = (points[b] - points[a]).cross(points[c] - points[a]);
+            for i in [a, b, c] {
+                normals[i] += n;
+            }
+        }
+        let colour = match body.tint {
+            Some(t) => [
+                0.5 * part.base_colour[0] + 0.5 * t[0],
+                0.5 * part.base_colour[1] + 0.5 * t[1],
+                0.5 * part.base_colour[2] + 0.5 * t[2],
+            ],
+            None => [
+                part.base_colour[0],
+                part.base_colour[1],
+                part.base_colour[2],
+            ],
+        };
+        let f = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+        for mesh in [&mut list.body, &mut list.shadow] {
+            let base = mesh.base();
+            mesh.vertices.extend(
+                points
+                    .iter()
+                    .zip(&normals)
+                    .zip(&part.joints)
+                    .zip(&part.weights)
+                    .map(|(((p, n), j), w)| {
+                        // The joint that carries the vertex most.
+                        let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+                        let lit = glow.get(usize::from(j[k])).copied().unwrap_or(false);
+                        Vertex3 {
+                            pos: f(*p),
+                            normal: f(n.normalize_or_zero()),
+                            color: [colour[0], colour[1], colour[2], if lit { 1.0 } else { 0.0 }],
+                        }
+                    }),
+            );
+            mesh.indices.extend(part.indices.iter().map(|i| base + i));
+        }
+    }
+}
