@@ -48,9 +48,7 @@ pub fn figure(
         "character mesh loaded"
     );
     Ok(Some(Arc::new(crate::character::gltf::Skin::new(
-        fig,
-        &ch.lib.skeleton,
-        &ch.roles,
+        fig, &ch.lib, &ch.roles,
     ))))
 }
 

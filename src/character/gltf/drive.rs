@@ -10,8 +10,9 @@
 use glam::{DMat4, DQuat, DVec3};
 
 use super::Figure;
+use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics};
+use crate::character::skeleton::{WorldPose, forward_kinematics};
 
 /// The role a role's bone points to, and the role above it on its limb.
 const CHAIN: [(Role, Option<Role>, Option<Role>); 16] = [
@@ -56,22 +57,24 @@ const LIMBS: [(Role, Role, Role); 4] = [
 /// How one figure follows one library's skeleton.
 #[derive(Clone, Debug)]
 pub struct Drive {
-    /// Per figure joint: the library joint it turns with and the turn that
-    /// lays its rest bone along the library's.
+    /// Per figure joint: the library joint it turns with, and the inverse
+    /// of that joint's reference turn with the turn that lays the figure's
+    /// rest bone along the library's (`lib_now * this * figure_rest`).
     follow: Vec<Option<(usize, DQuat)>>,
     /// Per figure joint: the joint it hangs from (its parent, or the joint
     /// of the role above it on its limb where the rig hangs it elsewhere).
     hang: Vec<Option<usize>>,
     /// Figure joints, each after the one it hangs from.
     order: Vec<usize>,
-    /// The library's rest world rotations, inverted.
-    lib_rest_inv: Vec<DQuat>,
     /// Figure leg length over the library's.
     pub scale: f64,
     /// Ankle heights standing at rest: the library's and the figure's.
     ankles: (f64, f64),
     /// Each limb of [`LIMBS`]: the figure's length over the library's.
     limb_scale: [f64; 4],
+    /// Each foot's mesh points (rest pose): those its joint, or the
+    /// unmapped joints below it, carry most.
+    soles: [Vec<DVec3>; 2],
     fig_roles: RoleMap,
     lib_roles: RoleMap,
 }
@@ -89,16 +92,50 @@ fn leg(positions: &[DVec3], roles: &RoleMap) -> f64 {
 }
 
 impl Drive {
+    /// How `fig` follows the postures of `library` (whose roles are
+    /// `lib_roles`).
     #[must_use]
-    pub fn new(fig: &Figure, lib: &Skeleton, lib_roles: &RoleMap) -> Self {
+    pub fn new(fig: &Figure, library: &Library, lib_roles: &RoleMap) -> Self {
+        let lib = &library.skeleton;
         let n = fig.rest.len();
         let rest_lib = forward_kinematics(lib, &lib.rest_pose());
+        // How high the library's ankles stand: the lower one's median
+        // over its clips (a rest pose may stand otherwise).
+        let feet = [Role::LeftFoot, Role::RightFoot].map(|r| lib_roles.get(r));
+        let standing: Vec<WorldPose> = library
+            .clips
+            .values()
+            .flat_map(|c| c.frames.iter().step_by(5))
+            .map(|p| forward_kinematics(lib, p))
+            .filter(|w| w.positions.iter().all(|p| p.is_finite()))
+            .collect();
+        let mut lows: Vec<f64> = standing
+            .iter()
+            .map(|w| w.positions[feet[0]].y.min(w.positions[feet[1]].y))
+            .collect();
+        lows.sort_by(f64::total_cmp);
+        let stand = lows.get(lows.len() / 2).copied().unwrap_or(0.08);
+        // How a planted foot lies, facing +Z: each foot's turn where it
+        // stands within 1 cm of that, the body's facing taken out,
+        // averaged. A figure's rest foot lies flat; the library's rest
+        // pose need not (a studio's T-pose may point the toes).
+        let planted = feet.map(|f| {
+            let mut sum = glam::DVec4::ZERO;
+            for w in &standing {
+                if (w.positions[f].y - stand).abs() > 0.01 {
+                    continue;
+                }
+                let l = w.positions[lib_roles.get(Role::LeftHip)]
+                    - w.positions[lib_roles.get(Role::RightHip)];
+                let ahead = l.cross(DVec3::Y);
+                let yaw = ahead.x.atan2(ahead.z);
+                let q = DQuat::from_rotation_y(-yaw) * w.rotations[f];
+                let v = glam::DVec4::from(q);
+                sum += if v.dot(sum) < 0.0 { -v } else { v };
+            }
+            (sum.length() > 1e-9).then(|| DQuat::from_vec4(sum.normalize()))
+        });
         let fpos: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
-        // The floor under the library's rest pose: its lowest point.
-        let lib_floor = (0..lib.len())
-            .flat_map(|j| std::iter::once(rest_lib.positions[j]).chain(rest_lib.end_site(lib, j)))
-            .map(|p| p.y)
-            .fold(f64::INFINITY, f64::min);
         let mut follow = vec![None; n];
         let mut hang: Vec<Option<usize>> = fig.skeleton.joints.iter().map(|j| j.parent).collect();
         let dir =
@@ -126,7 +163,18 @@ impl Drive {
                 .copied()
                 .unwrap_or(DQuat::IDENTITY);
             let m = fig.roles.get(role);
-            follow[m] = Some((lib_roles.get(role), c));
+            let l = lib_roles.get(role);
+            // From the library's rest, the bone laid along it; a foot from
+            // how the library's planted foot lies.
+            let from = match role {
+                Role::LeftFoot => planted[0].map(|q| q.inverse()),
+                Role::RightFoot => planted[1].map(|q| q.inverse()),
+                _ => None,
+            };
+            follow[m] = Some((
+                l,
+                from.unwrap_or_else(|| rest_lib.rotations[l].inverse() * c),
+            ));
             // Hung elsewhere by the rig: hang it on its limb.
             if let Some(up) = up {
                 let u = fig.roles.get(up);
@@ -163,18 +211,15 @@ impl Drive {
             follow,
             hang,
             order,
-            lib_rest_inv: rest_lib.rotations.iter().map(|q| q.inverse()).collect(),
             scale: leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9),
-            ankles: (
-                rest_lib.positions[lib_roles.get(Role::LeftFoot)].y - lib_floor,
-                fpos[fig.roles.get(Role::LeftFoot)].y,
-            ),
+            ankles: (stand, fpos[fig.roles.get(Role::LeftFoot)].y),
             limb_scale: LIMBS.map(|(a, b, c)| {
                 let len = |p: &[DVec3], r: &RoleMap| {
                     (p[r.get(b)] - p[r.get(a)]).length() + (p[r.get(c)] - p[r.get(b)]).length()
                 };
                 len(&fpos, &fig.roles) / len(&rest_lib.positions, lib_roles).max(1e-9)
             }),
+            soles: [Role::LeftFoot, Role::RightFoot].map(|r| foot_points(fig, fig.roles.get(r))),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
         }
@@ -189,8 +234,8 @@ impl Drive {
             let (_, rest_rot, rest_pos) = fig.rest[j].to_scale_rotation_translation();
             let rot = if let Some(q) = fixed[j] {
                 q
-            } else if let Some((l, c)) = self.follow[j] {
-                (lib.rotations[l] * self.lib_rest_inv[l] * c * rest_rot).normalize()
+            } else if let Some((l, from)) = self.follow[j] {
+                (lib.rotations[l] * from * rest_rot).normalize()
             } else if let Some(p) = self.hang[j] {
                 let (_, p_rest, _) = fig.rest[p].to_scale_rotation_translation();
                 let (_, p_now, _) = w[p].to_scale_rotation_translation();
@@ -219,8 +264,46 @@ impl Drive {
     /// on the library's hand or foot, relative to the hip or shoulder.
     #[must_use]
     pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
+        let free = vec![None; fig.rest.len()];
+        let w = self.place(fig, lib, &free);
+        let mut lift = [0.0f64; 2];
+        let mut fixed = self.reach(fig, lib, &w, lift);
+        let mut posed = self.place(fig, lib, &fixed);
+        // No sole under the floor: a foot whose lowest point went under is
+        // lifted by as much (the leg bends), once more if need be.
+        for _ in 0..2 {
+            let mut under = false;
+            for (k, f) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+                let m = posed[self.fig_roles.get(f)] * fig.rest[self.fig_roles.get(f)].inverse();
+                let low = self.soles[k]
+                    .iter()
+                    .map(|p| m.transform_point3(*p).y)
+                    .fold(f64::INFINITY, f64::min);
+                if low < -1e-4 {
+                    lift[k] -= low;
+                    under = true;
+                }
+            }
+            if !under {
+                break;
+            }
+            fixed = self.reach(fig, lib, &w, lift);
+            posed = self.place(fig, lib, &fixed);
+        }
+        posed
+    }
+
+    /// The joint turns that put each limb's end where the library has it
+    /// (the feet raised by `lift`), from the posture `w` turned as the
+    /// library's.
+    fn reach(
+        &self,
+        fig: &Figure,
+        lib: &WorldPose,
+        w: &[DMat4],
+        lift: [f64; 2],
+    ) -> Vec<Option<DQuat>> {
         let mut fixed = vec![None; fig.rest.len()];
-        let w = self.place(fig, lib, &fixed);
         for (k, (a, b, c)) in LIMBS.into_iter().enumerate() {
             let (fa, fb, fc) = (
                 self.fig_roles.get(a),
@@ -232,13 +315,13 @@ impl Drive {
             // by the arm's length; an ankle as high above its standing
             // height as the library's.
             let root = w[fa].w_axis.truncate();
-            let goal = if matches!(c, Role::LeftFoot | Role::RightFoot) {
+            let goal = if k < 2 {
                 // Feet where the library's stand, scaled as the pelvis
                 // is: a planted foot stays planted whatever the hips do.
                 let l = lib.positions[lc];
                 DVec3::new(
                     l.x * self.scale,
-                    self.ankles.1 + (l.y - self.ankles.0) * self.scale,
+                    self.ankles.1 + (l.y - self.ankles.0) * self.scale + lift[k],
                     l.z * self.scale,
                 )
             } else {
@@ -246,15 +329,21 @@ impl Drive {
             };
             let (pa, pb, pc) = (root, w[fb].w_axis.truncate(), w[fc].w_axis.truncate());
             if let Some((ta, tb)) = two_bone(pa, pb, pc, goal) {
+                // The knee or elbow turned about the limb's line towards
+                // where the library bends it (from the limb's root).
+                let lb = self.lib_roles.get(b);
+                let pole = pa + (lib.positions[lb] - lib.positions[la]) * self.limb_scale[k];
+                let twist = toward(pa, pa + ta * (pb - pa), goal, pole);
+                let ta = twist * ta;
+                let tb = twist * tb * twist.inverse();
                 let rot = |m: &DMat4| m.to_scale_rotation_translation().1;
-                let ra = ta * rot(&w[fa]);
-                fixed[fa] = Some(ra.normalize());
+                fixed[fa] = Some((ta * rot(&w[fa])).normalize());
                 fixed[fb] = Some((tb * ta * rot(&w[fb])).normalize());
                 // The end keeps the turn the library gave it.
                 fixed[fc] = Some(rot(&w[fc]));
             }
         }
-        self.place(fig, lib, &fixed)
+        fixed
     }
 
     /// Skinned positions of every part for joint transforms `w`.
@@ -327,4 +416,50 @@ fn two_bone(a: DVec3, b: DVec3, c: DVec3, goal: DVec3) -> Option<(DQuat, DQuat)>
     let ta = swing * bend_a;
     let tb = ta * bend_b * ta.inverse();
     Some((ta, tb))
+}
+
+/// The turn about the line from `a` to `goal` that brings `middle` (a knee
+/// or elbow) to the side of it where `pole` is.
+fn toward(a: DVec3, middle: DVec3, goal: DVec3, pole: DVec3) -> DQuat {
+    let u = goal - a;
+    if u.length() < 1e-9 {
+        return DQuat::IDENTITY;
+    }
+    let u = u.normalize();
+    let off = |p: DVec3| {
+        let v = p - a;
+        v - u * v.dot(u)
+    };
+    let (m, p) = (off(middle), off(pole));
+    if m.length() < 1e-6 || p.length() < 1e-6 {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_rotation_arc(m.normalize(), p.normalize())
+}
+
+/// The mesh points (rest pose) that `foot` or the unmapped joints below it
+/// carry most, at most 256 of them spread over the foot.
+fn foot_points(fig: &Figure, foot: usize) -> Vec<DVec3> {
+    let mapped: Vec<usize> = Role::ALL.iter().map(|r| fig.roles.get(*r)).collect();
+    let mut ours = vec![false; fig.skeleton.len()];
+    ours[foot] = true;
+    for j in 0..fig.skeleton.len() {
+        if let Some(p) = fig.skeleton.joints[j].parent {
+            if ours[p] && !mapped.contains(&j) {
+                ours[j] = true;
+            }
+        }
+    }
+    let all: Vec<DVec3> = fig
+        .parts
+        .iter()
+        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
+        .filter(|((_, j), w)| {
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            ours.get(usize::from(j[k])).copied().unwrap_or(false)
+        })
+        .map(|((v, _), _)| DVec3::new(v[0].into(), v[1].into(), v[2].into()))
+        .collect();
+    let step = all.len().div_ceil(256).max(1);
+    all.into_iter().step_by(step).collect()
 }

@@ -21,7 +21,7 @@ pub struct Skin {
 
 impl Skin {
     #[must_use]
-    pub fn new(figure: Figure, lib: &Skeleton, lib_roles: &RoleMap) -> Self {
+    pub fn new(figure: Figure, lib: &super::library::Library, lib_roles: &RoleMap) -> Self {
         let drive = Drive::new(&figure, lib, lib_roles);
         Self { figure, drive }
     }

@@ -73,7 +73,7 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     let Some(lib_roles) = lib.clips.values().next().map(|c| c.roles.clone()) else {
         return CharacterEval::default();
     };
-    let drive = Drive::new(fig, &lib.skeleton, &lib_roles);
+    let drive = Drive::new(fig, lib, &lib_roles);
     // Each part's limb length at rest: the figure's and the library's.
     let lib_rest = forward_kinematics(&lib.skeleton, &lib.skeleton.rest_pose());
     let fig_rest: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
@@ -93,18 +93,21 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     let (mut skate, mut skate_n, mut lib_skate, mut lib_skate_n) = (0.0, 0usize, 0.0, 0usize);
     let feet = [Role::LeftFoot, Role::RightFoot];
     let fig_rest_ankle = fig.rest[fig.roles.get(Role::LeftFoot)].w_axis.y;
-    // The library's ankles standing: as its clips stand, their lowest.
-    let lib_rest_ankle = lib
+    // The library's ankles standing: the lower one's median over its
+    // clips (as the figure follows it).
+    let mut lows: Vec<f64> = lib
         .clips
         .values()
-        .flat_map(|c| c.frames.iter().step_by(10))
+        .flat_map(|c| c.frames.iter().step_by(5))
         .map(|p| {
             let w = forward_kinematics(&lib.skeleton, p);
             w.positions[lib_roles.get(Role::LeftFoot)]
                 .y
                 .min(w.positions[lib_roles.get(Role::RightFoot)].y)
         })
-        .fold(f64::INFINITY, f64::min);
+        .collect();
+    lows.sort_by(f64::total_cmp);
+    let lib_rest_ankle = lows.get(lows.len() / 2).copied().unwrap_or(0.0);
     for (name, clip) in &lib.clips {
         out.clips += 1;
         let mut last: Option<([DVec3; 2], [DVec3; 2])> = None;
