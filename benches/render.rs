@@ -210,7 +210,7 @@ fn bench(c: &mut Criterion) {
             .join("../shared/characters/CesiumMan.glb");
         let skin = marionette::character::gltf::load(&cesium, &Default::default())
             .ok()
-            .map(|f| marionette::character::gltf::Skin::new(f, &lib, &clip.roles));
+            .map(|f| marionette::character::gltf::Skin::life_size(f, &lib, &clip.roles));
         fn figured<'a>(
             clip: &'a marionette::character::motion::Clip,
             w: &'a marionette::character::skeleton::WorldPose,

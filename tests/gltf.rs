@@ -382,8 +382,8 @@ fn the_shared_characters_play_the_default_library() {
     )
     .unwrap();
     for (file, mean, max, penetration) in [
-        ("RiggedFigure.glb", 2.458, 9.126, 0.345),
-        ("CesiumMan.glb", 2.078, 9.094, 0.408),
+        ("RiggedFigure.glb", 1.736, 6.7, 0.327),
+        ("CesiumMan.glb", 1.55, 6.638, 0.38),
     ] {
         let fig = load(&shared(file)).unwrap();
         let e = marionette::tools::eval::character::eval_character(&fig, &lib, 1);

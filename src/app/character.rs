@@ -47,7 +47,7 @@ pub fn figure(
         roles_from = fig.roles_by,
         "character mesh loaded"
     );
-    Ok(Some(Arc::new(crate::character::gltf::Skin::new(
+    Ok(Some(Arc::new(crate::character::gltf::Skin::life_size(
         fig, &ch.lib, &ch.roles,
     ))))
 }

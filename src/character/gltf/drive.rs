@@ -70,6 +70,10 @@ pub struct Drive {
     pub scale: f64,
     /// Ankle heights standing at rest: the library's and the figure's.
     ankles: (f64, f64),
+    /// How far below the pelvis the hips are at rest: the figure's less
+    /// the library's scaled (the pelvis is raised by it, so that the legs
+    /// stand as straight as the library's).
+    hip_drop: f64,
     /// Each limb of [`LIMBS`]: the figure's length over the library's.
     limb_scale: [f64; 4],
     /// Each foot's mesh points (rest pose): those its joint, or the
@@ -136,6 +140,7 @@ impl Drive {
             (sum.length() > 1e-9).then(|| DQuat::from_vec4(sum.normalize()))
         });
         let fpos: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
+        let scale = leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9);
         let mut follow = vec![None; n];
         let mut hang: Vec<Option<usize>> = fig.skeleton.joints.iter().map(|j| j.parent).collect();
         let dir =
@@ -211,7 +216,7 @@ impl Drive {
             follow,
             hang,
             order,
-            scale: leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9),
+            scale,
             ankles: (stand, fpos[fig.roles.get(Role::LeftFoot)].y),
             limb_scale: LIMBS.map(|(a, b, c)| {
                 let len = |p: &[DVec3], r: &RoleMap| {
@@ -220,6 +225,13 @@ impl Drive {
                 len(&fpos, &fig.roles) / len(&rest_lib.positions, lib_roles).max(1e-9)
             }),
             soles: [Role::LeftFoot, Role::RightFoot].map(|r| foot_points(fig, fig.roles.get(r))),
+            hip_drop: {
+                let drop = |p: &[DVec3], r: &RoleMap| {
+                    p[r.get(Role::Pelvis)].y
+                        - (p[r.get(Role::LeftHip)].y + p[r.get(Role::RightHip)].y) / 2.0
+                };
+                drop(&fpos, &fig.roles) - drop(&rest_lib.positions, lib_roles) * scale
+            },
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
         }
@@ -251,7 +263,8 @@ impl Drive {
         }
         // The pelvis where the library's is, scaled by leg length.
         let pelvis = self.fig_roles.get(Role::Pelvis);
-        let want = lib.positions[self.lib_roles.get(Role::Pelvis)] * self.scale;
+        let want =
+            lib.positions[self.lib_roles.get(Role::Pelvis)] * self.scale + DVec3::Y * self.hip_drop;
         let shift = want - w[pelvis].w_axis.truncate();
         for m in &mut w {
             m.w_axis += shift.extend(0.0);

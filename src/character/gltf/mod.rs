@@ -25,6 +25,20 @@ impl Skin {
         let drive = Drive::new(&figure, lib, lib_roles);
         Self { figure, drive }
     }
+
+    /// The figure made as large as the library's character (its legs as
+    /// long), then driven by it: on the table fingers grab and move the
+    /// library's parts, which the figure's then cover.
+    #[must_use]
+    pub fn life_size(figure: Figure, lib: &super::library::Library, lib_roles: &RoleMap) -> Self {
+        let s = Drive::new(&figure, lib, lib_roles).scale;
+        let figure = if s.is_finite() && s > 0.0 {
+            figure.scaled(1.0 / s)
+        } else {
+            figure
+        };
+        Self::new(figure, lib, lib_roles)
+    }
 }
 
 use std::path::{Path, PathBuf};
@@ -122,6 +136,28 @@ impl Figure {
     #[must_use]
     pub fn triangles(&self) -> usize {
         self.parts.iter().map(|p| p.indices.len() / 3).sum()
+    }
+
+    /// The figure made `s` times as large (about the floor under its
+    /// origin).
+    #[must_use]
+    pub fn scaled(mut self, s: f64) -> Self {
+        for j in &mut self.skeleton.joints {
+            j.offset *= s;
+        }
+        for m in &mut self.rest {
+            m.w_axis.x *= s;
+            m.w_axis.y *= s;
+            m.w_axis.z *= s;
+        }
+        for p in &mut self.parts {
+            for v in &mut p.positions {
+                *v = v.map(|x| (f64::from(x) * s) as f32);
+            }
+        }
+        self.height_m *= s;
+        self.scale_to_m *= s;
+        self
     }
 
     /// Joints no role names (fingers, tails, accessories, IK helpers).
