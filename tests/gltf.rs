@@ -303,6 +303,13 @@ fn broken_files_are_refused_with_the_reason() {
             "inverse bind matrix of joint 0 is singular",
         ),
         (
+            "matrices of the wrong type",
+            with(&|j, _| {
+                j["accessors"][ibm]["type"] = serde_json::json!("VEC3");
+            }),
+            "Vec3 of F32, where Mat4 of [F32] is read",
+        ),
+        (
             "index past the vertices",
             with(&|j, b| {
                 let o = at(j, index_acc);

@@ -5,7 +5,7 @@
 
 use glam::{DMat4, DVec3};
 
-use super::read::File;
+use super::read::{File, Kind};
 use super::{GltfError, Part};
 
 /// The figure's parts, positions in the file's world frame, and what was
@@ -32,7 +32,7 @@ pub(super) fn parts(
                 let joints: Vec<gltf::Node<'_>> = skin.joints().collect();
                 let ibms: Vec<DMat4> = match skin.inverse_bind_matrices() {
                     Some(a) => {
-                        file.check(&a, "inverse bind matrices", &mut budget)?;
+                        file.check(&a, "inverse bind matrices", Kind::Matrices, &mut budget)?;
                         if a.count() < joints.len() {
                             return Err(file.data_error(format!(
                                 "skin {}: {} inverse bind matrices for {} joints",
@@ -97,7 +97,7 @@ pub(super) fn parts(
             let pos = prim
                 .get(&gltf::Semantic::Positions)
                 .ok_or_else(|| file.data_error(what("has no positions")))?;
-            file.check(&pos, &what("positions"), &mut budget)?;
+            file.check(&pos, &what("positions"), Kind::Points, &mut budget)?;
             let n = pos.count();
             let reader = prim.reader(|b| file.buffer(b));
             let positions: Vec<[f32; 3]> = reader
@@ -111,11 +111,14 @@ pub(super) fn parts(
                 && prim.get(&gltf::Semantic::Joints(0)).is_some()
                 && prim.get(&gltf::Semantic::Weights(0)).is_some();
             let (joints, weights): (Vec<[u16; 4]>, Vec<[f32; 4]>) = if skinned {
-                for sem in [gltf::Semantic::Joints(0), gltf::Semantic::Weights(0)] {
+                for (sem, kind) in [
+                    (gltf::Semantic::Joints(0), Kind::Joints),
+                    (gltf::Semantic::Weights(0), Kind::Weights),
+                ] {
                     let a = prim
                         .get(&sem)
                         .ok_or_else(|| file.data_error(what("lacks skin data")))?;
-                    file.check(&a, &what("skin data"), &mut budget)?;
+                    file.check(&a, &what("skin data"), kind, &mut budget)?;
                     if a.count() != n {
                         return Err(file.data_error(what("has skin data for another vertex count")));
                     }
@@ -136,7 +139,7 @@ pub(super) fn parts(
             };
             let indices: Vec<u32> = match prim.indices() {
                 Some(a) => {
-                    file.check(&a, &what("indices"), &mut budget)?;
+                    file.check(&a, &what("indices"), Kind::Indices, &mut budget)?;
                     reader
                         .read_indices()
                         .ok_or_else(|| file.data_error(what("indices unreadable")))?

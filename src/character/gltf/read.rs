@@ -113,9 +113,27 @@ impl File {
         &self,
         a: &gltf::Accessor<'_>,
         what: &str,
+        kind: Kind,
         budget: &mut u64,
     ) -> Result<(), GltfError> {
         let bad = |why: String| self.data_error(format!("{what} (accessor {}): {why}", a.index()));
+        // The element type the reader of this data expects: any other is
+        // read at the wrong size.
+        use gltf::accessor::{DataType as T, Dimensions as D};
+        let (dims, types): (D, &[T]) = match kind {
+            Kind::Points => (D::Vec3, &[T::F32]),
+            Kind::Joints => (D::Vec4, &[T::U8, T::U16]),
+            Kind::Weights => (D::Vec4, &[T::F32, T::U8, T::U16]),
+            Kind::Indices => (D::Scalar, &[T::U8, T::U16, T::U32]),
+            Kind::Matrices => (D::Mat4, &[T::F32]),
+        };
+        if a.dimensions() != dims || !types.contains(&a.data_type()) {
+            return Err(bad(format!(
+                "{:?} of {:?}, where {dims:?} of {types:?} is read",
+                a.dimensions(),
+                a.data_type()
+            )));
+        }
         if a.sparse().is_some() {
             return Err(bad("sparse accessors are not read".to_owned()));
         }
@@ -150,6 +168,16 @@ impl File {
         }
         Ok(())
     }
+}
+
+/// What an accessor holds, for the element type it must have.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Kind {
+    Points,
+    Joints,
+    Weights,
+    Indices,
+    Matrices,
 }
 
 /// A relative path with no folder above its start, no root, no scheme.
