@@ -35,6 +35,21 @@ impl File {
     /// The document in `data`, read as the file `path` (whose folder holds
     /// any buffer files it names).
     pub(super) fn parse(path: &Path, data: &[u8]) -> Result<Self, GltfError> {
+        // A GLB header whose length is under its own 12 bytes would
+        // underflow in the reader's arithmetic.
+        if let Some(len) = data
+            .strip_prefix(b"glTF")
+            .and_then(|rest| rest.get(4..8))
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .filter(|&len| len < 12)
+        {
+            return Err(GltfError::NotGltf {
+                path: path.to_owned(),
+                why: format!(
+                    "its GLB header gives a length of {len} bytes, less than the header's own 12"
+                ),
+            });
+        }
         let gltf = gltf::Gltf::from_slice(data).map_err(|e| GltfError::NotGltf {
             path: path.to_owned(),
             why: e.to_string(),
