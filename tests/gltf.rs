@@ -269,6 +269,11 @@ fn broken_files_are_refused_with_the_reason() {
             "not a glTF 2.0 file",
         ),
         (
+            "a header shorter than itself",
+            [b"glTF".as_slice(), &2u32.to_le_bytes(), &8u32.to_le_bytes()].concat(),
+            "a length of 8 bytes",
+        ),
+        (
             "no skin",
             with(&|j, _| {
                 j.as_object_mut().unwrap().remove("skins");
