@@ -315,6 +315,14 @@ fn broken_files_are_refused_with_the_reason() {
             "Vec3 of F32, where Mat4 of [F32] is read",
         ),
         (
+            "a stride shorter than an element",
+            with(&|j, _| {
+                let v = j["accessors"][position_acc]["bufferView"].as_u64().unwrap() as usize;
+                j["bufferViews"][v]["byteStride"] = serde_json::json!(8);
+            }),
+            "stride (8 bytes) is shorter than an element (12 bytes)",
+        ),
+        (
             "index past the vertices",
             with(&|j, b| {
                 let o = at(j, index_acc);

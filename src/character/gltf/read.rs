@@ -163,7 +163,12 @@ impl File {
                 "the figure's data would need over {MAX_DATA_BYTES} bytes"
             )));
         }
-        let stride = view.stride().map_or(size, |s| s as u64).max(size);
+        let stride = view.stride().map_or(size, |s| s as u64);
+        if stride < size {
+            return Err(bad(format!(
+                "its view's stride ({stride} bytes) is shorter than an element ({size} bytes)"
+            )));
+        }
         let end = (count - 1)
             .checked_mul(stride)
             .and_then(|x| x.checked_add(size))
