@@ -315,6 +315,13 @@ fn broken_files_are_refused_with_the_reason() {
             "Vec3 of F32, where Mat4 of [F32] is read",
         ),
         (
+            "a position accessor that is not there",
+            with(&|j, _| {
+                j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = serde_json::json!(999);
+            }),
+            "POSITION names accessor 999",
+        ),
+        (
             "a stride shorter than an element",
             with(&|j, _| {
                 let v = j["accessors"][position_acc]["bufferView"].as_u64().unwrap() as usize;

@@ -50,6 +50,29 @@ impl File {
                 ),
             });
         }
+        // The reader's own validation indexes a primitive's POSITION
+        // accessor before checking that it exists.
+        let not = |why: String| GltfError::NotGltf {
+            path: path.to_owned(),
+            why,
+        };
+        let unchecked =
+            gltf::Gltf::from_slice_without_validation(data).map_err(|e| not(e.to_string()))?;
+        let root = unchecked.document.as_json();
+        for (m, mesh) in root.meshes.iter().enumerate() {
+            for p in &mesh.primitives {
+                let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+                if let Some(a) = p.attributes.get(&pos) {
+                    if a.value() >= root.accessors.len() {
+                        return Err(not(format!(
+                            "mesh {m}: POSITION names accessor {}, of {}",
+                            a.value(),
+                            root.accessors.len()
+                        )));
+                    }
+                }
+            }
+        }
         let gltf = gltf::Gltf::from_slice(data).map_err(|e| GltfError::NotGltf {
             path: path.to_owned(),
             why: e.to_string(),
