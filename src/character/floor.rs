@@ -48,19 +48,28 @@ pub fn standing_sole(clips: &BTreeMap<String, Clip>) -> Option<f64> {
 }
 
 /// Moves every clip up or down so that the library stands on the floor,
-/// when its standing sole is outside [`STANDING_BAND_M`]; returns the
-/// standing height found and the shift made (m, 0 when none).
-pub fn settle(clips: &mut BTreeMap<String, Clip>) -> Option<(f64, f64)> {
-    let h = standing_sole(clips)?;
+/// when its standing sole is outside [`STANDING_BAND_M`], and says so;
+/// returns the shift made (m, 0 when none).
+pub fn settle(clips: &mut BTreeMap<String, Clip>) -> f64 {
+    let Some(h) = standing_sole(clips) else {
+        return 0.0;
+    };
     let (lo, hi) = STANDING_BAND_M;
     if (lo..=hi).contains(&h) {
-        return Some((h, 0.0));
+        return 0.0;
     }
     let dy = STANDING_SOLE_M - h;
     for clip in clips.values_mut() {
         shift(clip, dy);
     }
-    Some((h, dy))
+    tracing::info!(
+        standing_sole_m = h,
+        moved_m = dy,
+        "the takes' feet stand {:.1} cm {} their floor: the clips are moved onto it",
+        h.abs() * 100.0,
+        if h > 0.0 { "above" } else { "below" }
+    );
+    dy
 }
 
 /// Moves a clip up by `dy` metres (down if negative).

@@ -357,16 +357,7 @@ impl Library {
             }
             clips.insert(name.clone(), clip);
         }
-        let settled = floor::settle(&mut clips);
-        if let Some((stood, dy)) = settled.filter(|s| s.1 != 0.0) {
-            tracing::info!(
-                standing_sole_m = stood,
-                moved_m = dy,
-                "the takes' feet stand {:.1} cm {} their floor: the clips are moved onto it",
-                stood.abs() * 100.0,
-                if stood > 0.0 { "above" } else { "below" }
-            );
-        }
+        let floor_shift_m = floor::settle(&mut clips);
         let mut actions = Vec::new();
         let mut seen = BTreeMap::new();
         let mirrors = file.action.iter().filter(|a| a.mirror).count();
@@ -488,7 +479,7 @@ impl Library {
             posing: file.posing.clips,
             actions,
             action_lead_in: lead_in,
-            floor_shift_m: settled.map_or(0.0, |s| s.1),
+            floor_shift_m,
         })
     }
 }

@@ -7,21 +7,19 @@
 use glam::DVec3;
 
 use super::mesh::{DrawList, Vertex3};
-use super::scene::Body;
 use crate::character::gltf::Skin;
+use crate::character::roles::Role;
+use crate::character::skeleton::WorldPose;
 
 /// Joints that glow when a finger holds a part: each held part's joint and
 /// the unmapped joints below it (a hand's palm and fingers), down to the
 /// next part.
-fn glowing(skin: &Skin, body: &Body<'_>) -> Vec<bool> {
+fn glowing(skin: &Skin, held: &[Role]) -> Vec<bool> {
     let fig = &skin.figure;
     let sk = &fig.skeleton;
-    let mapped: Vec<usize> = crate::character::roles::Role::ALL
-        .iter()
-        .map(|r| fig.roles.get(*r))
-        .collect();
+    let mapped: Vec<usize> = Role::ALL.iter().map(|r| fig.roles.get(*r)).collect();
     let mut glow = vec![false; sk.len()];
-    for &r in body.held {
+    for &r in held {
         glow[fig.roles.get(r)] = true;
     }
     // Parents come before children: spread down to unmapped joints.
@@ -35,12 +33,19 @@ fn glowing(skin: &Skin, body: &Body<'_>) -> Vec<bool> {
     glow
 }
 
-/// Adds the figure of `body` to the frame's body and shadow meshes.
-pub(crate) fn draw(list: &mut DrawList, skin: &Skin, body: &Body<'_>) {
+/// Adds the figure, posed as the library's `world`, to the frame's body
+/// and shadow meshes; the parts in `held` glow, `tint` is blended in.
+pub(crate) fn draw(
+    list: &mut DrawList,
+    skin: &Skin,
+    world: &WorldPose,
+    held: &[Role],
+    tint: Option<[f32; 3]>,
+) {
     let fig = &skin.figure;
-    let joints = skin.drive.pose(fig, body.world);
+    let joints = skin.drive.pose(fig, world);
     let posed = crate::character::gltf::Drive::skin(fig, &joints);
-    let glow = glowing(skin, body);
+    let glow = glowing(skin, held);
     for (part, points) in fig.parts.iter().zip(&posed) {
         if points.iter().any(|p| !p.is_finite()) {
             continue;
@@ -54,7 +59,7 @@ pub(crate) fn draw(list: &mut DrawList, skin: &Skin, body: &Body<'_>) {
                 normals[i] += n;
             }
         }
-        let colour = match body.tint {
+        let colour = match tint {
             Some(t) => [
                 0.5 * part.base_colour[0] + 0.5 * t[0],
                 0.5 * part.base_colour[1] + 0.5 * t[1],

@@ -427,7 +427,7 @@ pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawLi
     let mut list = view.empty(true);
     for b in bodies {
         if let Some(skin) = b.figure {
-            super::figure::draw(&mut list, skin, b);
+            super::figure::draw(&mut list, skin, b.world, b.held, b.tint);
             continue;
         }
         let mut segs = segments(b.skeleton, b.roles, b.world);
