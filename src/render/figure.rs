@@ -1,8 +1,8 @@
 //! A skinned figure in the frame: posed from the character's posture,
 //! skinned on the CPU (linear blend skinning, every vertex each frame),
 //! lit with smooth normals, in its material's colour (the table's tint
-//! blended in), the parts fingers hold glowing, and its shadow cast as the
-//! capsule figure's is.
+//! blended in), the parts fingers hold glowing (its shadow is the capsule
+//! figure's, see `scene`).
 
 use glam::DVec3;
 
@@ -72,7 +72,8 @@ pub(crate) fn draw(
             ],
         };
         let f = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
-        for mesh in [&mut list.body, &mut list.shadow] {
+        {
+            let mesh = &mut list.body;
             let base = mesh.base();
             mesh.vertices.extend(
                 points

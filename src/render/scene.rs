@@ -426,11 +426,15 @@ pub struct Body<'a> {
 pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawList {
     let mut list = view.empty(true);
     for b in bodies {
+        let mut segs = segments(b.skeleton, b.roles, b.world);
         if let Some(skin) = b.figure {
+            // Shown as large as the library's character, the figure casts
+            // about the capsules' shadow: the coarse one, at a fraction of
+            // drawing its every triangle twice.
             super::figure::draw(&mut list, skin, b.world, b.held, b.tint);
+            shadow_into(&mut list.shadow, &segs);
             continue;
         }
-        let mut segs = segments(b.skeleton, b.roles, b.world);
         if let Some(tint) = b.tint {
             for s in &mut segs {
                 s.color = tinted(s.color, tint);
