@@ -166,8 +166,12 @@ marionette --config /bad.toml run > /tmp/bad.log 2>&1 &
 bad=$!
 sleep 4; echo "MARK cannot-start"
 wait $bad; echo "bad library rc=$?" >> /tmp/rc
+# A character mesh that is no glTF: the reason on the display, then 65.
+printf 'glTF\002\000\000\000' > /bad.glb
+printf '[character]\nlibrary = "/library"\nmesh = "/bad.glb"\n[kiosk]\nerror_screen_s = 2\n[display]\nstatus_line = false\n' > /badmesh.toml
+marionette --config /badmesh.toml run > /tmp/badmesh.log 2>&1; echo "bad mesh rc=$?" >> /tmp/rc
 cp /tmp/marionette.prom /tmp/prom.txt 2>/dev/null
-for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log svc.log prom.txt; do
+for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log badmesh.log svc.log prom.txt; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f

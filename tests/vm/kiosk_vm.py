@@ -123,6 +123,12 @@ if "bad library rc=78" not in rc:
 bad = open(os.path.join(out, "bad.log")).read() if os.path.exists(os.path.join(out, "bad.log")) else ""
 if "the reason is on the display" not in bad:
     failures.append("the error screen was not shown:\n" + bad[-1500:])
+# So does one whose character mesh is broken, with the file and reason.
+if "bad mesh rc=65" not in rc:
+    failures.append("a broken character mesh should exit 65 after the error screen")
+badmesh = open(os.path.join(out, "badmesh.log")).read() if os.path.exists(os.path.join(out, "badmesh.log")) else ""
+if "bad.glb: not a glTF 2.0 file" not in badmesh or "the reason is on the display" not in badmesh:
+    failures.append("the broken mesh was not reported on the display:\n" + badmesh[-1500:])
 path = os.path.join(out, "cannot-start.ppm")
 if not os.path.exists(path):
     failures.append("no screen grabbed at 'cannot-start'")
