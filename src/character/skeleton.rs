@@ -197,6 +197,50 @@ pub fn sole(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> DVec3 {
     best
 }
 
+/// Two-bone IK on world positions, the turns only: for the limb `a`-`b`-`c`
+/// to reach `goal` (as near as its lengths allow) in the plane it bends
+/// in, the bend at `a` and at `b` (world, about one axis across the limb)
+/// and then the swing about `a` onto the goal. `None` for a limb with a
+/// bone of no length.
+#[must_use]
+pub fn two_bone_turns(a: DVec3, b: DVec3, c: DVec3, goal: DVec3) -> Option<(DQuat, DQuat, DQuat)> {
+    let (lab, lbc) = ((b - a).length(), (c - b).length());
+    if lab < 1e-9 || lbc < 1e-9 {
+        return None;
+    }
+    let reach = (goal - a)
+        .length()
+        .clamp((lab - lbc).abs() + 1e-6, lab + lbc - 1e-6);
+    let angle = |u: DVec3, v: DVec3| u.normalize().dot(v.normalize()).clamp(-1.0, 1.0).acos();
+    // Interior angles now and wanted (law of cosines).
+    let at_a = angle(c - a, b - a);
+    let at_b = angle(a - b, c - b);
+    let cos = |x: f64| x.clamp(-1.0, 1.0).acos();
+    let want_a = cos((lbc * lbc - lab * lab - reach * reach) / (-2.0 * lab * reach));
+    let want_b = cos((reach * reach - lab * lab - lbc * lbc) / (-2.0 * lab * lbc));
+    let mut axis = (c - a).cross(b - a);
+    if axis.length() < 1e-9 {
+        // A straight limb bends about any axis across it; take one across
+        // the goal too.
+        axis = (c - a).cross(goal - a);
+        if axis.length() < 1e-9 {
+            axis = (c - a).any_orthonormal_vector();
+        }
+    }
+    let axis = axis.normalize();
+    let bend_b = DQuat::from_axis_angle(axis, want_b - at_b);
+    let bend_a = DQuat::from_axis_angle(axis, want_a - at_a);
+    // Where the end lies after both bends, then the swing onto the goal.
+    let bent = a + bend_a * ((b - a) + bend_b * (c - b));
+    let (from, to) = (bent - a, goal - a);
+    let swing = if from.length() > 1e-9 && to.length() > 1e-9 {
+        DQuat::from_rotation_arc(from.normalize(), to.normalize())
+    } else {
+        DQuat::IDENTITY
+    };
+    Some((bend_a, bend_b, swing))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

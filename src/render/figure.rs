@@ -44,7 +44,7 @@ pub(crate) fn draw(
 ) {
     let fig = &skin.figure;
     let joints = skin.drive.pose(fig, world);
-    let posed = crate::character::gltf::Drive::skin(fig, &joints);
+    let posed = skin.drive.skin(fig, &joints);
     let glow = glowing(skin, held);
     for (part, points) in fig.parts.iter().zip(&posed) {
         if points.iter().any(|p| !p.is_finite()) {

@@ -12,7 +12,7 @@ use glam::{DMat4, DQuat, DVec3};
 use super::Figure;
 use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{WorldPose, forward_kinematics};
+use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics, two_bone_turns};
 
 /// The role a role's bone points to, and the role above it on its limb.
 const CHAIN: [(Role, Option<Role>, Option<Role>); 16] = [
@@ -68,6 +68,10 @@ pub struct Drive {
     order: Vec<usize>,
     /// Figure leg length over the library's.
     pub scale: f64,
+    /// Each figure joint's rest turn and place, and the inverse of its
+    /// rest transform (taken apart once, not every frame).
+    rest: Vec<(DQuat, DVec3)>,
+    rest_inv: Vec<DMat4>,
     /// Ankle heights standing at rest: the library's and the figure's.
     ankles: (f64, f64),
     /// How far below the pelvis the hips are at rest: the figure's less
@@ -140,7 +144,7 @@ impl Drive {
             (sum.length() > 1e-9).then(|| DQuat::from_vec4(sum.normalize()))
         });
         let fpos: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
-        let scale = leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9);
+        let scale = Self::leg_ratio(fig, lib, lib_roles);
         let mut follow = vec![None; n];
         let mut hang: Vec<Option<usize>> = fig.skeleton.joints.iter().map(|j| j.parent).collect();
         let dir =
@@ -234,7 +238,25 @@ impl Drive {
             },
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
+            rest: fig
+                .rest
+                .iter()
+                .map(|m| {
+                    let (_, r, t) = m.to_scale_rotation_translation();
+                    (r, t)
+                })
+                .collect(),
+            rest_inv: fig.rest.iter().map(DMat4::inverse).collect(),
         }
+    }
+
+    /// The figure's leg length over the library's (`lib_roles` naming the
+    /// library skeleton's joints).
+    #[must_use]
+    pub fn leg_ratio(fig: &Figure, lib: &Skeleton, lib_roles: &RoleMap) -> f64 {
+        let fpos: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
+        let rest_lib = forward_kinematics(lib, &lib.rest_pose());
+        leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9)
     }
 
     /// The figure's joint transforms for a library posture (world), with
@@ -243,20 +265,20 @@ impl Drive {
         let n = fig.rest.len();
         let mut w = vec![DMat4::IDENTITY; n];
         for &j in &self.order {
-            let (_, rest_rot, rest_pos) = fig.rest[j].to_scale_rotation_translation();
+            let (rest_rot, rest_pos) = self.rest[j];
             let rot = if let Some(q) = fixed[j] {
                 q
             } else if let Some((l, from)) = self.follow[j] {
                 (lib.rotations[l] * from * rest_rot).normalize()
             } else if let Some(p) = self.hang[j] {
-                let (_, p_rest, _) = fig.rest[p].to_scale_rotation_translation();
+                let p_rest = self.rest[p].0;
                 let (_, p_now, _) = w[p].to_scale_rotation_translation();
                 (p_now * p_rest.inverse() * rest_rot).normalize()
             } else {
                 rest_rot
             };
             let pos = match self.hang[j] {
-                Some(p) => w[p].transform_point3(fig.rest[p].inverse().transform_point3(rest_pos)),
+                Some(p) => w[p].transform_point3(self.rest_inv[p].transform_point3(rest_pos)),
                 None => rest_pos,
             };
             w[j] = DMat4::from_rotation_translation(rot, pos);
@@ -287,7 +309,7 @@ impl Drive {
         for _ in 0..2 {
             let mut under = false;
             for (k, f) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
-                let m = posed[self.fig_roles.get(f)] * fig.rest[self.fig_roles.get(f)].inverse();
+                let m = posed[self.fig_roles.get(f)] * self.rest_inv[self.fig_roles.get(f)];
                 let low = self.soles[k]
                     .iter()
                     .map(|p| m.transform_point3(*p).y)
@@ -361,11 +383,11 @@ impl Drive {
 
     /// Skinned positions of every part for joint transforms `w`.
     #[must_use]
-    pub fn skin(fig: &Figure, w: &[DMat4]) -> Vec<Vec<DVec3>> {
+    pub fn skin(&self, fig: &Figure, w: &[DMat4]) -> Vec<Vec<DVec3>> {
         let skin: Vec<DMat4> = w
             .iter()
-            .zip(&fig.rest)
-            .map(|(now, rest)| *now * rest.inverse())
+            .zip(&self.rest_inv)
+            .map(|(now, rest_inv)| *now * *rest_inv)
             .collect();
         fig.parts
             .iter()
@@ -395,35 +417,10 @@ impl Drive {
 /// about `b`) that bend the limb `a`-`b`-`c` so that `c` reaches `goal`
 /// (as near as the limb's lengths allow), in the plane it bends in.
 fn two_bone(a: DVec3, b: DVec3, c: DVec3, goal: DVec3) -> Option<(DQuat, DQuat)> {
-    let (lab, lbc) = ((b - a).length(), (c - b).length());
-    if lab < 1e-9 || lbc < 1e-9 || !goal.is_finite() {
+    if !goal.is_finite() {
         return None;
     }
-    let reach = (goal - a)
-        .length()
-        .clamp((lab - lbc).abs() + 1e-6, lab + lbc - 1e-6);
-    let angle = |u: DVec3, v: DVec3| u.normalize().dot(v.normalize()).clamp(-1.0, 1.0).acos();
-    let cos = |x: f64| x.clamp(-1.0, 1.0).acos();
-    let (at_a, at_b) = (angle(c - a, b - a), angle(a - b, c - b));
-    let want_a = cos((lbc * lbc - lab * lab - reach * reach) / (-2.0 * lab * reach));
-    let want_b = cos((reach * reach - lab * lab - lbc * lbc) / (-2.0 * lab * lbc));
-    let mut axis = (c - a).cross(b - a);
-    if axis.length() < 1e-9 {
-        axis = (c - a).cross(goal - a);
-        if axis.length() < 1e-9 {
-            axis = (c - a).any_orthonormal_vector();
-        }
-    }
-    let axis = axis.normalize();
-    let bend_b = DQuat::from_axis_angle(axis, want_b - at_b);
-    let bend_a = DQuat::from_axis_angle(axis, want_a - at_a);
-    let bent = a + bend_a * ((b - a) + bend_b * (c - b));
-    let (from, to) = (bent - a, goal - a);
-    let swing = if from.length() > 1e-9 && to.length() > 1e-9 {
-        DQuat::from_rotation_arc(from.normalize(), to.normalize())
-    } else {
-        DQuat::IDENTITY
-    };
+    let (bend_a, bend_b, swing) = two_bone_turns(a, b, c, goal)?;
     // World turn of the upper joint; the middle's own bend applies after
     // it (world frame once the upper has turned).
     let ta = swing * bend_a;

@@ -31,7 +31,7 @@ impl Skin {
     /// library's parts, which the figure's then cover.
     #[must_use]
     pub fn life_size(figure: Figure, lib: &super::library::Library, lib_roles: &RoleMap) -> Self {
-        let s = Drive::new(&figure, lib, lib_roles).scale;
+        let s = Drive::leg_ratio(&figure, &lib.skeleton, lib_roles);
         let figure = if s.is_finite() && s > 0.0 {
             figure.scaled(1.0 / s)
         } else {

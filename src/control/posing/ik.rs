@@ -6,7 +6,7 @@ use glam::{DQuat, DVec3};
 
 use super::constraint::Constraint;
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
+use crate::character::skeleton::{Pose, Skeleton, forward_kinematics, two_bone_turns};
 
 /// The joints CCD turns to move a body part: the limb's own joints (elbow
 /// and shoulder for a hand, knee and hip for a foot, neck and chest for the
@@ -173,39 +173,8 @@ pub fn two_bone(
 ) {
     let w = forward_kinematics(skeleton, pose);
     let (a, b, c) = (w.positions[upper], w.positions[middle], w.positions[end]);
-    let (lab, lbc) = ((b - a).length(), (c - b).length());
-    if lab < 1e-9 || lbc < 1e-9 {
+    let Some((bend_a, bend_b, swing)) = two_bone_turns(a, b, c, goal) else {
         return;
-    }
-    let reach = (goal - a)
-        .length()
-        .clamp((lab - lbc).abs() + 1e-6, lab + lbc - 1e-6);
-    let angle = |u: DVec3, v: DVec3| u.normalize().dot(v.normalize()).clamp(-1.0, 1.0).acos();
-    // Interior angles now and wanted (law of cosines).
-    let at_a = angle(c - a, b - a);
-    let at_b = angle(a - b, c - b);
-    let cos = |x: f64| x.clamp(-1.0, 1.0).acos();
-    let want_a = cos((lbc * lbc - lab * lab - reach * reach) / (-2.0 * lab * reach));
-    let want_b = cos((reach * reach - lab * lab - lbc * lbc) / (-2.0 * lab * lbc));
-    let mut axis = (c - a).cross(b - a);
-    if axis.length() < 1e-9 {
-        // A straight limb bends about any axis across it; take one across
-        // the goal too.
-        axis = (c - a).cross(goal - a);
-        if axis.length() < 1e-9 {
-            axis = (c - a).any_orthonormal_vector();
-        }
-    }
-    let axis = axis.normalize();
-    let bend_b = DQuat::from_axis_angle(axis, want_b - at_b);
-    let bend_a = DQuat::from_axis_angle(axis, want_a - at_a);
-    // Where the end lies after both bends, then the swing onto the goal.
-    let bent = a + bend_a * ((b - a) + bend_b * (c - b));
-    let (from, to) = (bent - a, goal - a);
-    let swing = if from.length() > 1e-9 && to.length() > 1e-9 {
-        DQuat::from_rotation_arc(from.normalize(), to.normalize())
-    } else {
-        DQuat::IDENTITY
     };
     turn_joint(skeleton, pose, &w.rotations, middle, bend_b);
     turn_joint(skeleton, pose, &w.rotations, upper, swing * bend_a);

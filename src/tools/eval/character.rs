@@ -115,7 +115,7 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
             out.frames += 1;
             let lw = forward_kinematics(&lib.skeleton, pose);
             let w = drive.pose(fig, &lw);
-            let skinned = Drive::skin(fig, &w);
+            let skinned = drive.skin(fig, &w);
             if skinned.iter().flatten().any(|v| !v.is_finite()) {
                 out.bad_frames += 1;
                 last = None;
