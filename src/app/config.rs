@@ -211,7 +211,7 @@ impl Config {
             return Err(invalid(
                 "display.presenter",
                 format!(
-                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (frames written into gbm's scanout buffers: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found \"{}\"",
+                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (gbm's scanout buffers, rendered into where the Vulkan driver imports them, else written into: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found \"{}\"",
                     d.presenter
                 ),
             ));

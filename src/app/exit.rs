@@ -94,6 +94,7 @@ impl ExitStatus for PresentError {
             | Self::Master { .. }
             | Self::LostMaster(_)
             | Self::Direct { .. }
+            | Self::ZeroCopy { .. }
             | Self::Gbm { .. } => UNAVAILABLE,
             Self::Gpu(e) if e.is_configuration() => CONFIG,
             Self::Gpu(_) => UNAVAILABLE,

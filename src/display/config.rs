@@ -34,7 +34,8 @@ pub struct DisplayConfig {
     /// Its mode, `WIDTHxHEIGHT` or `WIDTHxHEIGHT@HZ`; empty: the preferred.
     pub mode: String,
     /// How frames reach the output: `auto` (direct where the Vulkan driver
-    /// can drive the display, else copy), `direct` or `copy`.
+    /// can drive the display, else gbm, else copy), `direct`, `gbm` or
+    /// `copy`.
     pub presenter: String,
 }
 

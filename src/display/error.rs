@@ -40,6 +40,9 @@ pub enum PresentError {
         #[source]
         source: std::io::Error,
     },
+    /// gbm's buffers cannot be rendered into directly here.
+    #[error("{path}: the renderer cannot draw straight into gbm's scanout buffers: {why}")]
+    ZeroCopy { path: PathBuf, why: String },
     /// The direct presenter cannot drive this output.
     #[error("{path}: Vulkan cannot drive the display directly: {why}")]
     Direct { path: PathBuf, why: String },

@@ -48,13 +48,15 @@ pub(crate) fn connector_name(info: &connector::Info) -> String {
 /// How frames reach the output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PresenterKind {
-    /// Direct where the Vulkan driver can drive the display, else gbm,
-    /// else copy.
+    /// Direct where the Vulkan driver can drive the display, else gbm
+    /// (zero copy, else copied into), else copy.
     #[default]
     Auto,
     /// Vulkan drives the display (VK_EXT_acquire_drm_display).
     Direct,
-    /// Frames rendered offscreen and copied into gbm's scanout buffers.
+    /// gbm's scanout buffers: rendered into where the Vulkan driver
+    /// imports them (zero copy), else frames rendered offscreen written
+    /// into them.
     Gbm,
     /// Frames rendered offscreen and copied into dumb buffers.
     Copy,
@@ -79,6 +81,9 @@ impl PresenterKind {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Attempt {
     Direct,
+    /// gbm's buffers rendered into (zero copy).
+    GbmZeroCopy,
+    /// gbm's buffers written into.
     Gbm,
     Dumb,
 }
@@ -89,6 +94,7 @@ impl Attempt {
     pub fn name(self) -> &'static str {
         match self {
             Self::Direct => "direct",
+            Self::GbmZeroCopy => "gbm zero-copy",
             Self::Gbm => "gbm",
             Self::Dumb => "copy",
         }
@@ -97,17 +103,23 @@ impl Attempt {
 
 impl PresenterKind {
     /// The presenters to try, in order, until one opens: `auto` tries
-    /// direct (unless the frames are rendered on the CPU, which only a
-    /// copy presenter can show), then gbm's buffers, then dumb buffers;
-    /// a presenter asked for by name is the only one tried.
+    /// direct (unless the frames are rendered on the CPU, which cannot
+    /// drive a display), then gbm's buffers rendered into, then written
+    /// into, then dumb buffers; `gbm` tries its two ways; `direct` and
+    /// `copy` are the only one tried.
     #[must_use]
     pub fn attempts(self, cpu_rendering: bool) -> &'static [Attempt] {
         match (self, cpu_rendering) {
             (Self::Direct, _) => &[Attempt::Direct],
-            (Self::Gbm, _) => &[Attempt::Gbm],
+            (Self::Gbm, _) => &[Attempt::GbmZeroCopy, Attempt::Gbm],
             (Self::Copy, _) => &[Attempt::Dumb],
-            (Self::Auto, true) => &[Attempt::Gbm, Attempt::Dumb],
-            (Self::Auto, false) => &[Attempt::Direct, Attempt::Gbm, Attempt::Dumb],
+            (Self::Auto, true) => &[Attempt::GbmZeroCopy, Attempt::Gbm, Attempt::Dumb],
+            (Self::Auto, false) => &[
+                Attempt::Direct,
+                Attempt::GbmZeroCopy,
+                Attempt::Gbm,
+                Attempt::Dumb,
+            ],
         }
     }
 }
@@ -256,18 +268,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn auto_tries_direct_then_gbm_then_dumb_buffers() {
-        use Attempt::{Direct, Dumb, Gbm};
-        assert_eq!(PresenterKind::Auto.attempts(false), &[Direct, Gbm, Dumb]);
-        // Frames drawn on the CPU never go to a Vulkan display.
-        assert_eq!(PresenterKind::Auto.attempts(true), &[Gbm, Dumb]);
-        for (kind, only) in [
-            (PresenterKind::Direct, Direct),
-            (PresenterKind::Gbm, Gbm),
-            (PresenterKind::Copy, Dumb),
-        ] {
-            assert_eq!(kind.attempts(false), &[only]);
-            assert_eq!(kind.attempts(true), &[only]);
+    fn auto_tries_direct_then_gbm_zero_copy_then_gbm_then_dumb_buffers() {
+        use Attempt::{Direct, Dumb, Gbm, GbmZeroCopy};
+        assert_eq!(
+            PresenterKind::Auto.attempts(false),
+            &[Direct, GbmZeroCopy, Gbm, Dumb]
+        );
+        // Frames drawn on the CPU never go to a Vulkan display, but may be
+        // drawn into gbm's buffers.
+        assert_eq!(
+            PresenterKind::Auto.attempts(true),
+            &[GbmZeroCopy, Gbm, Dumb]
+        );
+        for cpu in [false, true] {
+            assert_eq!(PresenterKind::Direct.attempts(cpu), &[Direct]);
+            assert_eq!(PresenterKind::Gbm.attempts(cpu), &[GbmZeroCopy, Gbm]);
+            assert_eq!(PresenterKind::Copy.attempts(cpu), &[Dumb]);
         }
         assert_eq!(PresenterKind::parse("gbm"), Some(PresenterKind::Gbm));
     }

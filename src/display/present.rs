@@ -1,7 +1,8 @@
-//! Showing frames on a KMS output. The copy presenter renders offscreen
-//! (any Vulkan adapter, lavapipe included), copies each frame into one of
-//! two scanout buffers (gbm's where gbm opens the card, else dumb buffers)
-//! and page-flips to it on vblank: it works on every KMS driver.
+//! Showing frames on a KMS output through two scanout buffers, page-flipped
+//! on vblank. Either the renderer draws straight into gbm's buffers (zero
+//! copy, where the Vulkan driver imports dma-bufs), or frames rendered
+//! offscreen (any Vulkan adapter, lavapipe included) are copied into them
+//! (gbm's where gbm opens the card, else dumb buffers: every KMS driver).
 //! marionette becomes DRM master for the output it drives, and gives the
 //! CRTC back as it found it when it stops.
 
@@ -28,17 +29,16 @@ pub struct CopyPresenter {
     crtc: crtc::Handle,
     mode: Mode,
     buffers: Buffers,
-    /// The buffer on screen (or queued to be).
-    front: usize,
-    /// A page flip is queued and its event not yet read.
-    pending: bool,
+    /// Which buffer is on screen, and whether a flip is queued.
+    flips: super::flips::Flips,
     /// The CRTC as it was, to give back.
     saved: Option<crtc::Info>,
-    flips: u64,
     /// Time spent writing frames into the buffers (s), and how many: the
     /// copy's cost, said when the presenter stops.
     copy_s: f64,
     copies: u64,
+    /// The renderer drawing into the buffers themselves (zero copy).
+    imported: Option<Box<super::zero_copy::Imported>>,
 }
 
 /// Where the frames are copied to.
@@ -56,13 +56,20 @@ impl Buffers {
     }
 }
 
-/// Which buffers the copy presenter copies frames into.
+/// Which buffers frames reach the output through.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Via {
     /// Dumb buffers (every KMS driver has them).
     Dumb,
     /// gbm's scanout buffers (refused where gbm cannot open the card).
     Gbm,
+    /// gbm's scanout buffers, rendered into on a GPU from `adapter` with
+    /// up to `samples` per pixel (refused where the Vulkan driver cannot
+    /// import them, or no layout suits both it and the plane).
+    GbmZeroCopy {
+        adapter: crate::render::gpu::AdapterChoice,
+        samples: u32,
+    },
 }
 
 impl CopyPresenter {
@@ -95,13 +102,21 @@ impl CopyPresenter {
             source,
         };
         let (w, h) = mode.size();
+        let mut imported = None;
         let buffers = match via {
             Via::Gbm => Buffers::Gbm(Box::new(super::gbm::GbmBuffers::allocate(
                 &card,
                 &path,
                 u32::from(w),
                 u32::from(h),
+                &[],
             )?)),
+            Via::GbmZeroCopy { adapter, samples } => {
+                let (buffers, renderer) =
+                    super::zero_copy::open(&card, &path, crtc, (w, h), adapter, samples)?;
+                imported = Some(Box::new(renderer));
+                Buffers::Gbm(Box::new(buffers))
+            }
             Via::Dumb => Buffers::Dumb(dumb_buffers(&card, &path, w, h)?),
         };
         let saved = card.get_crtc(crtc).ok();
@@ -114,6 +129,18 @@ impl CopyPresenter {
         )
         .map_err(|e| io("setting the mode", e))?;
         match &buffers {
+            Buffers::Gbm(g) if imported.is_some() => tracing::info!(
+                card = %path.display(),
+                output = %name,
+                width = w,
+                height = h,
+                refresh_hz = mode.vrefresh(),
+                presenter = "gbm",
+                gbm_backend = g.backend(),
+                modifier = %super::modifiers::name(g.modifier()),
+                zero_copy = true,
+                "driving the display (frames rendered straight into gbm scanout buffers, page-flipped on vblank)"
+            ),
             Buffers::Gbm(g) => tracing::info!(
                 card = %path.display(),
                 output = %name,
@@ -142,12 +169,11 @@ impl CopyPresenter {
             crtc,
             mode,
             buffers,
-            front: 0,
-            pending: false,
+            flips: super::flips::Flips::default(),
             saved,
-            flips: 0,
             copy_s: 0.0,
             copies: 0,
+            imported,
         })
     }
 }
@@ -208,13 +234,13 @@ impl CopyPresenter {
     /// Page flips completed.
     #[must_use]
     pub fn flips(&self) -> u64 {
-        self.flips
+        self.flips.completed()
     }
 
     /// Whether a flip is queued (the next frame waits for it).
     #[must_use]
     pub fn flip_pending(&self) -> bool {
-        self.pending
+        self.flips.pending()
     }
 
     /// The card's descriptor, readable when a flip completed.
@@ -244,8 +270,7 @@ impl CopyPresenter {
             }
         }
         if flipped {
-            self.pending = false;
-            self.flips += 1;
+            self.flips.flipped();
         }
         Ok(flipped)
     }
@@ -253,7 +278,7 @@ impl CopyPresenter {
     /// Wait up to `timeout` for the queued flip: whether it completed.
     pub fn wait_flip(&mut self, timeout: Duration) -> Result<bool, PresentError> {
         use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
-        if !self.pending {
+        if !self.flips.pending() {
             return Ok(true);
         }
         let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
@@ -274,20 +299,82 @@ impl CopyPresenter {
         if ready {
             self.dispatch()?;
         }
-        Ok(!self.pending)
+        Ok(!self.flips.pending())
+    }
+
+    /// Whether the renderer draws into the scanout buffers themselves
+    /// ([`CopyPresenter::draw`]); otherwise frames come as images
+    /// ([`CopyPresenter::present`]).
+    #[must_use]
+    pub fn renders(&self) -> bool {
+        self.imported.is_some()
+    }
+
+    /// Samples per pixel of the renderer drawing into the buffers.
+    #[must_use]
+    pub fn samples(&self) -> Option<u32> {
+        self.imported.as_ref().map(|i| i.samples())
+    }
+
+    /// The buffer not on screen, free to draw into: a flip still queued
+    /// is waited for first (the back buffer is on screen until it
+    /// completes).
+    fn back(&mut self) -> Result<usize, PresentError> {
+        if self.flips.pending() && !self.wait_flip(Duration::from_millis(250))? {
+            // The flip never came (a stalled driver): start over with a
+            // mode set rather than queue behind it.
+            tracing::warn!(output = %self.name, "page flip did not complete in 250 ms; setting the mode again");
+            self.flips.abandoned();
+            self.restore()?;
+        }
+        // Nothing is queued any more.
+        Ok(self.flips.free().unwrap_or(1 - self.flips.front()))
+    }
+
+    /// Draw `list` straight into the back buffer and flip to it at the
+    /// next vblank (zero copy; [`CopyPresenter::renders`]).
+    pub fn draw(&mut self, list: &crate::render::mesh::DrawList) -> Result<(), PresentError> {
+        let back = self.back()?;
+        let Some(imported) = self.imported.as_mut() else {
+            return Err(crate::render::gpu::GpuError::Lost(
+                "the presenter copies frames; it has no renderer of its own".to_owned(),
+            )
+            .into());
+        };
+        #[allow(
+            clippy::disallowed_methods,
+            reason = "the frame's cost is measured for the journal, not used to decide anything"
+        )]
+        let started = std::time::Instant::now();
+        imported.draw(back, list)?;
+        self.copy_s += started.elapsed().as_secs_f64();
+        self.copies += 1;
+        self.flip(back)
+    }
+
+    /// The imported buffers again on a new GPU device after the old one
+    /// was lost.
+    pub fn rebuild_gpu(
+        &mut self,
+        adapter: crate::render::gpu::AdapterChoice,
+    ) -> Result<(), PresentError> {
+        let (Some(imported), Buffers::Gbm(buffers)) = (self.imported.as_mut(), &self.buffers)
+        else {
+            return Ok(());
+        };
+        let gpu = crate::render::gpu::Gpu::new(adapter)?;
+        imported
+            .rebuild(gpu, &self.card, buffers)
+            .map_err(|why| PresentError::ZeroCopy {
+                path: self.path.clone(),
+                why,
+            })
     }
 
     /// Copy `img` (RGBA, the output's size) into the back buffer and flip
     /// to it at the next vblank. A flip still queued is waited for first.
     pub fn present(&mut self, img: &Image) -> Result<(), PresentError> {
-        if self.pending && !self.wait_flip(Duration::from_millis(250))? {
-            // The flip never came (a stalled driver): start over with a
-            // mode set rather than queue behind it.
-            tracing::warn!(output = %self.name, "page flip did not complete in 250 ms; setting the mode again");
-            self.pending = false;
-            self.restore()?;
-        }
-        let back = 1 - self.front;
+        let back = self.back()?;
         let (w, h) = self.size();
         let mapping = |source| PresentError::Io {
             path: self.path.clone(),
@@ -310,6 +397,11 @@ impl CopyPresenter {
         }
         self.copy_s += started.elapsed().as_secs_f64();
         self.copies += 1;
+        self.flip(back)
+    }
+
+    /// Flip to buffer `back` at the next vblank.
+    fn flip(&mut self, back: usize) -> Result<(), PresentError> {
         match self.card.page_flip(
             self.crtc,
             self.buffers.framebuffer(back),
@@ -317,8 +409,7 @@ impl CopyPresenter {
             None,
         ) {
             Ok(()) => {
-                self.front = back;
-                self.pending = true;
+                self.flips.queued(back);
                 Ok(())
             }
             Err(e) if matches!(e.raw_os_error(), Some(libc::EACCES | libc::EPERM)) => {
@@ -340,7 +431,7 @@ impl CopyPresenter {
         {
             return false;
         }
-        self.pending = false;
+        self.flips.abandoned();
         self.restore().is_ok()
     }
 
@@ -348,7 +439,7 @@ impl CopyPresenter {
         self.card
             .set_crtc(
                 self.crtc,
-                Some(self.buffers.framebuffer(self.front)),
+                Some(self.buffers.framebuffer(self.flips.front())),
                 (0, 0),
                 &[self.connector],
                 Some(self.mode),
@@ -370,7 +461,14 @@ impl CopyPresenter {
 impl Drop for CopyPresenter {
     /// Give the CRTC back as it was and stop being master.
     fn drop(&mut self) {
-        if self.copies > 0 {
+        if self.copies > 0 && self.imported.is_some() {
+            tracing::info!(
+                buffers = "gbm",
+                frames = self.copies,
+                draw_ms_mean = self.copy_s / self.copies as f64 * 1e3,
+                "frames rendered straight into scanout buffers (zero copy)"
+            );
+        } else if self.copies > 0 {
             tracing::info!(
                 buffers = match self.buffers {
                     Buffers::Gbm(_) => "gbm",
@@ -381,7 +479,7 @@ impl Drop for CopyPresenter {
                 "frames written into scanout buffers"
             );
         }
-        if self.pending {
+        if self.flips.pending() {
             let _ = self.wait_flip(Duration::from_millis(100));
         }
         if let Some(s) = &self.saved {

@@ -1,8 +1,10 @@
 //! The KMS output behind one interface, whichever presenter drives it:
 //! direct (Vulkan renders into the display's swapchain), gbm (rendered
-//! offscreen, written into gbm's scanout buffers) or copy (the same into
-//! dumb buffers). `auto` tries direct, then gbm, then copy, and the journal
-//! says which and why each earlier one was refused.
+//! straight into gbm's scanout buffers where the Vulkan driver imports
+//! them, else rendered offscreen and written into them) or copy (the same
+//! into dumb buffers). `auto` tries direct, then gbm zero-copy, then gbm,
+//! then copy, and the journal says which and why each earlier one was
+//! refused.
 
 use std::os::fd::BorrowedFd;
 use std::path::Path;
@@ -77,6 +79,18 @@ impl Screen {
             let opened = match attempt {
                 Attempt::Direct => DirectPresenter::open(dir, choice, samples)
                     .map(|d| Presenter::Direct(Box::new(d))),
+                // Only a renderer draws into the buffers: pictures drawn on
+                // the CPU are written into them.
+                Attempt::GbmZeroCopy => match renderer {
+                    Some(adapter) => Self::copy(
+                        dir,
+                        choice,
+                        None,
+                        samples,
+                        Via::GbmZeroCopy { adapter, samples },
+                    ),
+                    None => Self::copy(dir, choice, None, samples, Via::Gbm),
+                },
                 Attempt::Gbm => Self::copy(dir, choice, renderer, samples, Via::Gbm),
                 Attempt::Dumb => Self::copy(dir, choice, renderer, samples, Via::Dumb),
             };
@@ -84,10 +98,19 @@ impl Screen {
                 Ok(p) => {
                     match attempt {
                         Attempt::Direct => tracing::info!("presenter: direct ({why})"),
-                        Attempt::Gbm => tracing::info!(
-                            zero_copy = "not built: rendering straight into gbm buffers needs their dma-bufs imported into Vulkan (VK_EXT_external_memory_dma_buf, VK_EXT_image_drm_format_modifier); frames are written into them",
-                            "presenter: gbm ({why})"
-                        ),
+                        Attempt::GbmZeroCopy if renderer.is_some() => {
+                            let samples = match &p {
+                                Presenter::Copy { presenter, .. } => presenter.samples(),
+                                Presenter::Direct(_) => None,
+                            };
+                            tracing::info!(
+                                samples = samples.unwrap_or(1),
+                                "presenter: gbm, zero copy ({why})"
+                            );
+                        }
+                        Attempt::GbmZeroCopy | Attempt::Gbm => {
+                            tracing::info!("presenter: gbm ({why})");
+                        }
                         Attempt::Dumb => tracing::info!("presenter: copy ({why})"),
                     }
                     presenter = Some(p);
@@ -99,7 +122,7 @@ impl Screen {
                 }
                 Err(e) if n + 1 == attempts.len() => return Err(e),
                 Err(e) => {
-                    tracing::info!(reason = %e, "the {} presenter is not available here", attempt.name())
+                    tracing::info!(reason = %e, "the {} presenter is not available here", attempt.name());
                 }
             }
         }
@@ -225,6 +248,10 @@ impl Screen {
     pub fn draw(&mut self, list: &DrawList) -> Result<bool, PresentError> {
         match &mut self.presenter {
             Presenter::Direct(d) => d.draw(list),
+            Presenter::Copy { presenter, .. } if presenter.renders() => {
+                presenter.draw(list)?;
+                Ok(true)
+            }
             Presenter::Copy {
                 presenter,
                 headless,
@@ -259,6 +286,9 @@ impl Screen {
     /// the copy presenter, the whole output for the direct one.
     pub fn rebuild(&mut self) -> Result<(), PresentError> {
         match &mut self.presenter {
+            Presenter::Copy { presenter, .. } if presenter.renders() => {
+                presenter.rebuild_gpu(self.adapter)?;
+            }
             Presenter::Copy {
                 presenter,
                 headless,

@@ -19,32 +19,61 @@ modules="evdev uinput virtio_ring virtio virtio_pci_modern_dev virtio_pci_legacy
 # And for a root file system on a virtio disk (ext4), in load order.
 root_modules="virtio_blk crc16 mbcache jbd2 crc32c_generic ext4"
 
-# Fetch the kernel and the modules into $cache (once).
+# Fetch the kernel and the modules into $kcache (once): Debian's
+# (bookworm), or with an argument the kernel of that suite
+# (bookworm-backports: 6.12, whose virtio core is built in and which has
+# udmabuf). Modules a kernel has built in are left out of $modules.
 vm_kernel() {
-    mkdir -p "$cache"
-    local have=1
-    for m in $modules $root_modules; do [ -f "$cache/$m.ko" ] || have=0; done
-    if [ -f "$cache/vmlinuz" ] && [ $have = 1 ]; then
+    local suite=${1:-}
+    kcache=$cache${suite:+/kernel-$suite}
+    mkdir -p "$kcache"
+    if [ -f "$kcache/vmlinuz" ] && [ -f "$kcache/modules" ]; then
+        modules=$(cat "$kcache/modules")
         return
     fi
-    local pkg tmp f m
+    local pkg tmp f m kept=""
     # awk reads to the end (leaving early would end apt-cache with
     # SIGPIPE, an exit status of 141 under pipefail).
-    pkg=$(apt-cache depends linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ && !found {found = $2} END {print found}')
-    [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package (apt-get update first)" >&2; exit 69; }
+    pkg=$(apt-cache depends ${suite:+-t "$suite"} linux-image-amd64 | awk '/Depends: linux-image-[0-9]/ && !found {found = $2} END {print found}')
+    [ -n "$pkg" ] || { echo "vm test: cannot find Debian's kernel package${suite:+ in $suite} (apt-get update first)" >&2; exit 69; }
     tmp=$(mktemp -d)
-    (cd "$tmp" && apt-get download "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
+    (cd "$tmp" && apt-get download ${suite:+-t "$suite"} "$pkg" >/dev/null 2>&1) || { echo "vm test: cannot download $pkg" >&2; exit 69; }
     dpkg -x "$tmp"/*.deb "$tmp/x"
-    cp "$tmp"/x/boot/vmlinuz-* "$cache/vmlinuz"
     for m in $modules $root_modules; do
         f=$(find "$tmp/x/lib/modules" -name "$m.ko*" -print -quit)
-        [ -n "$f" ] || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
+        if [ -z "$f" ]; then
+            grep -q "/$m\.ko$" "$tmp"/x/lib/modules/*/modules.builtin \
+                || { echo "vm test: $pkg has no $m module" >&2; exit 69; }
+            continue   # built in
+        fi
+        case " $modules " in *" $m "*) kept="$kept $m" ;; esac
         case "$f" in
-            *.xz) xz -dc "$f" > "$cache/$m.ko" ;;
-            *.zst) zstd -qdc "$f" > "$cache/$m.ko" ;;
-            *) cp "$f" "$cache/$m.ko" ;;
+            *.xz) xz -dc "$f" > "$kcache/$m.ko" ;;
+            *.zst) zstd -qdc "$f" > "$kcache/$m.ko" ;;
+            *) cp "$f" "$kcache/$m.ko" ;;
         esac
     done
+    cp "$tmp"/x/boot/vmlinuz-* "$kcache/vmlinuz"
+    modules=${kept# }
+    echo "$modules" > "$kcache/modules"
+    rm -rf "$tmp"
+}
+
+# Mesa 25's lavapipe and the libdrm it needs, from bookworm-backports, into
+# $cache/mesa25 (once).
+vm_mesa_backport() {
+    local tmp
+    [ -f "$cache/mesa25/libvulkan_lvp.so" ] && [ -f "$cache/mesa25/libdrm.so.2" ] && return
+    tmp=$(mktemp -d)
+    if ! (cd "$tmp" && apt-get download -t bookworm-backports mesa-vulkan-drivers libdrm2 >/dev/null 2>&1); then
+        rm -rf "$tmp"
+        echo "vm test: the zero-copy run needs Mesa 25's lavapipe from bookworm-backports:" >&2
+        echo "  echo 'deb http://deb.debian.org/debian bookworm-backports main' > /etc/apt/sources.list.d/backports.list && apt-get update" >&2
+        exit 69
+    fi
+    for d in "$tmp"/*.deb; do dpkg -x "$d" "$tmp/x"; done
+    mkdir -p "$cache/mesa25"
+    cp -L "$tmp"/x/usr/lib/x86_64-linux-gnu/libvulkan_lvp.so "$tmp"/x/usr/lib/x86_64-linux-gnu/libdrm.so.2 "$cache/mesa25/"
     rm -rf "$tmp"
 }
 
@@ -75,7 +104,7 @@ vm_initrd_base() {
     else
         mv "$ird$bin" "$ird/bin/marionette"
     fi
-    for m in $modules; do cp "$cache/$m.ko" "$ird/modules/"; done
+    for m in $modules; do cp "$kcache/$m.ko" "$ird/modules/"; done
     echo "$modules" > "$ird/modules/order"
 }
 

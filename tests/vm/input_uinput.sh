@@ -80,7 +80,7 @@ chmod +x "$ird/init"
 timeout 300 qemu-system-x86_64 -accel tcg -cpu max -m 1024 -smp 1 -nic none -display none \
     -device virtio-vga \
     -serial "file:$work/console.log" -monitor none -no-reboot \
-    -kernel "$cache/vmlinuz" -initrd "$work/initrd.gz" \
+    -kernel "$kcache/vmlinuz" -initrd "$work/initrd.gz" \
     -append "console=ttyS0 quiet panic=-1 rdinit=/init" || true
 
 out=${MARIONETTE_VM_OUT:-$work/out}

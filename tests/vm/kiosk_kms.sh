@@ -1,17 +1,21 @@
 #!/usr/bin/env bash
 # The kiosk on real KMS and real evdev.
 #
-# Boots Debian's kernel under qemu (TCG, no network) with a virtio-vga
-# display at 640x360 (a small picture keeps the CPU renderer quick under
-# emulation) and a busybox initramfs holding marionette, Mesa's
-# lavapipe and the demo recording's first seconds. Inside, `marionette run`
-# drives the display (copy presenter: offscreen render, dumb buffers, page
+# Boots Debian's kernel (bookworm-backports' 6.12) under qemu (TCG, no
+# network) with a virtio-vga display at 640x360 (a small picture keeps the
+# CPU renderer quick under emulation) and a busybox initramfs holding
+# marionette, Mesa's lavapipe (Debian's 22.3, and 25.0 from backports) and
+# the demo recording's first seconds. Inside, `marionette run` drives the
+# display (frames rendered offscreen, written into gbm's buffers, page
 # flips); `marionette play` recreates the demo panel through uinput and
 # drags the character's hand, the panel goes away (unplug) and comes back
 # as a new node (replug) and drags again; then SIGTERM. The host grabs the
 # screen through QMP at marks the guest prints and checks that the picture
 # shows the character, that it moved under the fingers both times, and
-# that the kiosk stopped cleanly within a second.
+# that the kiosk stopped cleanly within a second. Then the service view on
+# dumb buffers, calibration, the kiosk on lavapipe 25.0 drawing straight
+# into gbm's buffers (zero copy: their dma-bufs imported into Vulkan), the
+# frame's cost with and without the copy, and kiosks that cannot start.
 #
 # usage: tests/vm/kiosk_kms.sh
 # env:   MARIONETTE_BIN (default target/debug/marionette),
@@ -35,7 +39,9 @@ if [ ! -f "$icd" ] || [ -z "$loader" ]; then
     exit 69
 fi
 . "$here/common.sh"
-vm_kernel
+# bookworm-backports' kernel (6.12): its udmabuf lets lavapipe import
+# dma-bufs (the zero-copy run below).
+vm_kernel bookworm-backports
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 ird="$work/initrd"
@@ -55,6 +61,20 @@ for d in kms_swrast_dri.so virtio_gpu_dri.so; do
     [ -f "$dri/$d" ] || { echo "vm test: $dri/$d is missing: apt-get install libgl1-mesa-dri" >&2; exit 69; }
     vm_copy_with_libs "$ird" "$dri/$d"
 done
+# A newer lavapipe (Mesa 25, bookworm-backports) that imports dma-bufs
+# (VK_EXT_external_memory_dma_buf, VK_EXT_image_drm_format_modifier): with
+# it the kiosk renders straight into gbm's scanout buffers (zero copy).
+# At /opt/mesa25 with the libdrm it needs; the other kiosk runs keep
+# Debian's lavapipe 22.3, which offers neither (gbm copy).
+vm_mesa_backport
+mkdir -p "$ird/opt/mesa25"
+cp -L "$cache/mesa25/libvulkan_lvp.so" "$cache/mesa25/libdrm.so.2" "$ird/opt/mesa25/"
+# Its other libraries are Debian's (LLVM 15, as lavapipe 22.3's).
+LD_LIBRARY_PATH="$cache/mesa25" ldd "$cache/mesa25/libvulkan_lvp.so" | awk '/=> \// {print $3}' | while read -r lib; do
+    case "$lib" in "$cache"/*) continue ;; esac
+    [ -f "$ird$lib" ] || { mkdir -p "$ird$(dirname "$lib")"; cp -L "$lib" "$ird$lib"; }
+done
+printf '{"file_format_version": "1.0.0", "ICD": {"library_path": "/opt/mesa25/libvulkan_lvp.so", "api_version": "1.3.0"}}\n' > "$ird/opt/mesa25/lvp_icd.json"
 # The motion library the kiosk loads (next to the binary's source tree is
 # not in the guest).
 mkdir -p "$ird/library"
@@ -159,6 +179,33 @@ sleep 1
 $m play /drag.evemu --settle-ms 800 2> /tmp/play4.log &
 sleep 2; echo "MARK service"
 wait $!; sleep 1; kill -TERM $svc; wait $svc; echo "service rc=$?" >> /tmp/rc
+# Zero copy: with Mesa 25's lavapipe, `auto` renders straight into gbm's
+# scanout buffers (dma-bufs imported into Vulkan); dragged as above (its
+# metrics in a file of their own).
+sed 's#/tmp/marionette.prom#/tmp/zc.prom#' /m.orig.toml > /zc.toml
+RUST_LOG=info,wgpu_hal=warn VK_DRIVER_FILES=/opt/mesa25/lvp_icd.json LD_LIBRARY_PATH=/opt/mesa25 \
+    marionette --config /zc.toml run > /tmp/zc.log 2>&1 &
+zc=$!
+i=0
+while ! grep -q "first frame on screen" /tmp/zc.log; do
+    sleep 0.5; i=$((i + 1))
+    if [ $i -gt 200 ] || ! kill -0 $zc 2>/dev/null; then break; fi
+done
+sleep 3; echo "MARK zc-rest"; sleep 2
+$m play /drag.evemu --settle-ms 800 2> /tmp/play5.log &
+sleep 2; echo "MARK zc-posed1"; sleep 1; echo "MARK zc-posed2"; sleep 1; echo "MARK zc-posed3"
+wait $!; echo "play5 rc=$?" >> /tmp/rc
+sleep 1; echo "MARK zc-posed4"
+sleep 1; kill -TERM $zc; wait $zc; echo "zero copy rc=$?" >> /tmp/rc
+# The frame's cost at rest on one lavapipe (Mesa 25): drawn straight into
+# gbm's buffers, and copied into dumb buffers.
+{ cat /zc.toml; echo 'presenter = "copy"'; } > /zcc.toml   # [display] is last
+for run in zcr zcc; do
+    cfg=/zc.toml; [ $run = zcc ] && cfg=/zcc.toml
+    VK_DRIVER_FILES=/opt/mesa25/lvp_icd.json LD_LIBRARY_PATH=/opt/mesa25 \
+        marionette --config $cfg run --seconds 25 > /tmp/$run.log 2>&1
+    echo "$run rc=$?" >> /tmp/rc
+done
 # A library folder that does not exist: the reason on the display for
 # kiosk.error_screen_s, then exit 78.
 printf '[character]\nlibrary = "/no-such-library"\n[kiosk]\nerror_screen_s = 8\n[display]\nstatus_line = false\n' > /bad.toml
@@ -171,7 +218,7 @@ printf 'glTF\002\000\000\000' > /bad.glb
 printf '[character]\nlibrary = "/library"\nmesh = "/bad.glb"\n[kiosk]\nerror_screen_s = 2\n[display]\nstatus_line = false\n' > /badmesh.toml
 marionette --config /badmesh.toml run > /tmp/badmesh.log 2>&1; echo "bad mesh rc=$?" >> /tmp/rc
 cp /tmp/marionette.prom /tmp/prom.txt 2>/dev/null
-for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log badmesh.log svc.log prom.txt; do
+for f in rc direct.log run.log play1.log play2.log cal.out cal.log m.toml bad.log badmesh.log svc.log prom.txt zc.log play5.log zcr.log zcc.log; do
     echo "=== BEGIN $f"; cat /tmp/$f; echo "=== END $f"
 done
 poweroff -f
@@ -181,4 +228,4 @@ chmod +x "$ird/init"
 
 out=${MARIONETTE_VM_OUT:-$work/out}
 mkdir -p "$out"
-python3 "$here/kiosk_vm.py" "$work" "$cache/vmlinuz" "$out"
+python3 "$here/kiosk_vm.py" "$work" "$kcache/vmlinuz" "$out"

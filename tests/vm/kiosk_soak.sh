@@ -102,4 +102,4 @@ chmod +x "$ird/init"
 (cd "$ird" && find . | cpio -o -H newc --quiet | gzip -1 > "$work/initrd.gz")
 out=${MARIONETTE_VM_OUT:-$work/out}
 mkdir -p "$out"
-python3 "$here/soak_vm.py" "$work" "$cache/vmlinuz" "$out" "$soak_s"
+python3 "$here/soak_vm.py" "$work" "$kcache/vmlinuz" "$out" "$soak_s"

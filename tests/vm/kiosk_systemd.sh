@@ -138,7 +138,7 @@ rm -rf "$rootfs"
 ird="$work/initrd"
 mkdir -p "$ird"/{bin,dev,proc,sys,newroot,modules}
 cp "$busybox" "$ird/bin/busybox"
-for m in $modules $root_modules; do cp "$cache/$m.ko" "$ird/modules/"; done
+for m in $modules $root_modules; do cp "$kcache/$m.ko" "$ird/modules/"; done
 echo "$modules $root_modules" > "$ird/modules/order"
 cat > "$ird/init" <<'INIT'
 #!/bin/busybox sh
@@ -155,4 +155,4 @@ chmod +x "$ird/init"
 
 out=${MARIONETTE_VM_OUT:-$work/out}
 mkdir -p "$out"
-python3 "$here/systemd_vm.py" "$work" "$cache/vmlinuz" "$out"
+python3 "$here/systemd_vm.py" "$work" "$kcache/vmlinuz" "$out"

@@ -85,6 +85,10 @@ pub struct RunStats {
     /// Render plus readback plus copy, per frame (ms).
     pub render_ms_mean: f64,
     pub render_ms_max: f64,
+    /// From a touch to the flip that first showed it, over the run (ms),
+    /// and how many touches that is of.
+    pub touch_to_flip_ms_mean: f64,
+    pub touch_to_flip_n: u64,
 }
 
 fn load_attract(config: &Config) -> Result<Option<Vec<ScreenFrame>>, RunError> {
@@ -203,8 +207,10 @@ pub fn run_with_clock(
         input,
         screen,
         mut stats,
+        vitals,
         ..
     } = kiosk;
+    (stats.touch_to_flip_ms_mean, stats.touch_to_flip_n) = vitals.run_latency();
     input.stop();
     stats.seconds = frames.now();
     stats.flips = screen.flips();
@@ -220,6 +226,8 @@ pub fn run_with_clock(
         display_losses = stats.display_losses,
         render_ms_mean = stats.render_ms_mean,
         render_ms_max = stats.render_ms_max,
+        touch_to_flip_ms_mean = stats.touch_to_flip_ms_mean,
+        touch_to_flip_n = stats.touch_to_flip_n,
         "stopped"
     );
     Ok(stats)

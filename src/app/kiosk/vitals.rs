@@ -56,6 +56,9 @@ pub struct Vitals {
     pub totals: Totals,
     /// The last complete window's figures.
     pub last: Option<Summary>,
+    /// Touch-to-flip latencies over the whole run: their sum (ms) and
+    /// count, said when the kiosk stops.
+    run_latency: (f64, u64),
 }
 
 impl Vitals {
@@ -99,8 +102,19 @@ impl Vitals {
     pub fn flipped(&mut self, t: f64) {
         self.flips += 1;
         if let Some(te) = self.in_flight.take() {
-            self.latency_ms.push(((t - te) * 1e3).max(0.0));
+            let ms = ((t - te) * 1e3).max(0.0);
+            self.latency_ms.push(ms);
+            self.run_latency.0 += ms;
+            self.run_latency.1 += 1;
         }
+    }
+
+    /// The mean touch-to-flip latency over the whole run (ms) and how many
+    /// touches it is of.
+    #[must_use]
+    pub fn run_latency(&self) -> (f64, u64) {
+        let (sum, n) = self.run_latency;
+        (if n > 0 { sum / n as f64 } else { 0.0 }, n)
     }
 
     /// The figures of the window so far, at `t`.
@@ -264,6 +278,11 @@ mod tests {
         assert!((s.frame_ms_p50 - 4.0).abs() < 1e-9);
         assert!((s.fps - 1.5).abs() < 1e-9);
         assert_eq!(v.totals.touches, 3);
+        // The whole run's mean outlives the window.
+        let _ = v.window_due(100.0);
+        let (mean, n) = v.run_latency();
+        assert_eq!(n, 2);
+        assert!((mean - 22.0).abs() < 1e-6, "{mean}");
     }
 
     #[test]
