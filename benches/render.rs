@@ -10,7 +10,8 @@
 //! scenes measured minutes apart compare badly. Where the shared test
 //! characters are beside the checkout, CesiumMan skinned (one, and two
 //! tinted) joins the interleaved scenes and its composing (CPU skinning)
-//! is timed.
+//! is timed; so does the project's own skinned body (the default look),
+//! always.
 //! `cargo bench --bench render`.
 
 #![allow(
@@ -237,6 +238,21 @@ fn bench(c: &mut Criterion) {
             ],
             &both_marks,
         );
+        // The project's own skinned body (the default look).
+        let own = marionette::render::body::own_body(&lib, &clip.roles);
+        let own_one = [figured(clip, &world, &held, None, Some(&own))];
+        let own_skinned = scene::compose_bodies(&v, &own_one, &marks);
+        let two_own = scene::compose_bodies(
+            &v,
+            &[
+                figured(clip, &world, &held, Some([0.62, 0.1, 0.07]), Some(&own)),
+                figured(clip, &other, &held, Some([0.09, 0.26, 0.55]), Some(&own)),
+            ],
+            &both_marks,
+        );
+        g.bench_function(format!("{w}x{h} compose own skinned body"), |b| {
+            b.iter(|| scene::compose_bodies(&v, &own_one, &marks))
+        });
         if skin.is_some() {
             g.bench_function(format!("{w}x{h} compose CesiumMan"), |b| {
                 b.iter(|| scene::compose_bodies(&v, &one, &marks))
@@ -253,6 +269,8 @@ fn bench(c: &mut Criterion) {
             ("bare 21 boxes", &boxes),
             ("character", &character),
             ("two characters", &two),
+            ("own skinned body", &own_skinned),
+            ("two own skinned bodies", &two_own),
         ];
         if skin.is_some() {
             scenes.push(("CesiumMan skinned", &skinned));

@@ -369,3 +369,44 @@ fn two_characters_apart_redraw_only_where_they_are_and_were() {
         assert!(tinted(red) && tinted(blue), "frame {k}: both tints show");
     }
 }
+
+/// The project's own skinned body (the default look), at rest and with a
+/// hand and a foot held (those parts glow whole), tinted as a second
+/// character is.
+#[test]
+fn the_own_skinned_body_at_rest_and_held() {
+    let lib = library();
+    let rest = &lib.clips["pose_stance.bvh"];
+    let skin = marionette::render::body::own_body(&lib, &rest.roles);
+    let view = View {
+        camera: camera(640.0, 360.0),
+        rotation: Rotation::R0,
+    };
+    let mut h = headless(640, 360);
+    for (name, clip, held, tint) in [
+        ("own_body_rest", "pose_stance.bvh", vec![], None),
+        (
+            "own_body_held",
+            "pose_reach_front_right.bvh",
+            vec![Role::RightHand, Role::LeftFoot],
+            Some([0.55, 0.12, 0.1]),
+        ),
+    ] {
+        let clip = &lib.clips[clip];
+        let world = forward_kinematics(&clip.skeleton, &clip.frames[clip.frames.len() / 2]);
+        let list = scene::compose_bodies(
+            &view,
+            &[scene::Body {
+                skeleton: &clip.skeleton,
+                roles: &clip.roles,
+                world: &world,
+                held: &held,
+                tint,
+                figure: Some(&skin),
+            }],
+            &Marks::default(),
+        );
+        let img = h.render(&list).unwrap();
+        compare(name, &img);
+    }
+}

@@ -52,6 +52,14 @@ pub fn figure(
     ))))
 }
 
+/// The project's own skinned body for `ch`, where `[display] body` asks
+/// for it (`skinned`, the default); `None` for the capsule figure.
+#[must_use]
+pub fn own_body(body: &str, ch: &Character) -> Option<Arc<crate::character::gltf::Skin>> {
+    (body == crate::display::config::BODY_SKINNED)
+        .then(|| Arc::new(crate::render::body::own_body(&ch.lib, &ch.roles)))
+}
+
 /// A library and its posing model (from the cache when it matches; baked
 /// when it does not, or when `force_bake`). Baking reports its progress on
 /// a terminal, or in the log.

@@ -207,6 +207,20 @@ impl Config {
                 ),
             ));
         }
+        if ![
+            crate::display::config::BODY_SKINNED,
+            crate::display::config::BODY_CAPSULES,
+        ]
+        .contains(&d.body.as_str())
+        {
+            return Err(invalid(
+                "display.body",
+                format!(
+                    "must be \"skinned\" (one smooth skinned body) or \"capsules\" (the mannequin of capsules), found \"{}\"",
+                    d.body
+                ),
+            ));
+        }
         if crate::display::present::PresenterKind::parse(&d.presenter).is_none() {
             return Err(invalid(
                 "display.presenter",

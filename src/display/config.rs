@@ -37,7 +37,16 @@ pub struct DisplayConfig {
     /// can drive the display, else gbm, else copy), `direct`, `gbm` or
     /// `copy`.
     pub presenter: String,
+    /// How the character looks: `skinned` (one smooth skinned body, the
+    /// default) or `capsules` (the mannequin of capsules). A configured
+    /// `[character] mesh` is shown instead of either.
+    pub body: String,
 }
+
+/// `[display] body` for the project's own skinned body.
+pub const BODY_SKINNED: &str = "skinned";
+/// `[display] body` for the mannequin of capsules.
+pub const BODY_CAPSULES: &str = "capsules";
 
 impl Default for DisplayConfig {
     fn default() -> Self {
@@ -52,6 +61,7 @@ impl Default for DisplayConfig {
             output: String::new(),
             mode: String::new(),
             presenter: "auto".to_owned(),
+            body: BODY_SKINNED.to_owned(),
         }
     }
 }

@@ -43,7 +43,15 @@ pub(crate) fn draw(
     tint: Option<[f32; 3]>,
 ) {
     let fig = &skin.figure;
-    let joints = skin.drive.pose(fig, world);
+    // The own body stands on the library's skeleton: its joints are the
+    // library's, as posed.
+    let joints = if fig.own {
+        (0..fig.skeleton.len().min(world.positions.len()))
+            .map(|j| glam::DMat4::from_rotation_translation(world.rotations[j], world.positions[j]))
+            .collect()
+    } else {
+        skin.drive.pose(fig, world)
+    };
     let posed = skin.drive.skin(fig, &joints);
     let glow = glowing(skin, held);
     for (part, points) in fig.parts.iter().zip(&posed) {
@@ -59,7 +67,13 @@ pub(crate) fn draw(
                 normals[i] += n;
             }
         }
+        let rgb = [
+            part.base_colour[0],
+            part.base_colour[1],
+            part.base_colour[2],
+        ];
         let colour = match tint {
+            Some(t) if fig.own => super::scene::tinted(rgb, t),
             Some(t) => [
                 0.5 * part.base_colour[0] + 0.5 * t[0],
                 0.5 * part.base_colour[1] + 0.5 * t[1],
@@ -84,7 +98,10 @@ pub(crate) fn draw(
                     .map(|(((p, n), j), w)| {
                         // The joint that carries the vertex most.
                         let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                        let lit = glow.get(usize::from(j[k])).copied().unwrap_or(false);
+                        let lit = match part.role {
+                            Some(r) => held.contains(&r),
+                            None => glow.get(usize::from(j[k])).copied().unwrap_or(false),
+                        };
                         Vertex3 {
                             pos: f(*p),
                             normal: f(n.normalize_or_zero()),

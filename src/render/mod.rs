@@ -3,6 +3,7 @@
 //! ([`scene`]), the pipelines ([`renderer`], WGSL in `shaders/`) and
 //! offscreen output read back as images ([`headless`]).
 
+pub mod body;
 pub(crate) mod contact;
 pub(crate) mod damage;
 pub(crate) mod figure;

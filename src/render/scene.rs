@@ -95,12 +95,12 @@ impl View {
 }
 
 /// A body segment: which part it belongs to, for highlighting.
-struct Segment {
-    part: Role,
-    a: DVec3,
-    b: DVec3,
-    r: f64,
-    color: [f32; 3],
+pub(super) struct Segment {
+    pub(super) part: Role,
+    pub(super) a: DVec3,
+    pub(super) b: DVec3,
+    pub(super) r: f64,
+    pub(super) color: [f32; 3],
 }
 
 impl Segment {
@@ -143,7 +143,7 @@ fn tip(skeleton: &Skeleton, world: &WorldPose, joint: usize, fallback: DVec3) ->
         .unwrap_or(world.positions[joint] + fallback)
 }
 
-fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> Vec<Segment> {
+pub(super) fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> Vec<Segment> {
     let p = |r: Role| world.positions[roles.get(r)];
     let mut out = Vec::new();
     let push_chain =
@@ -286,7 +286,7 @@ fn shadow_into(mesh: &mut Mesh, segments: &[Segment]) {
     mesh.keep_facing(LIGHT, from);
 }
 
-fn body_into(mesh: &mut Mesh, segments: &[Segment], held: &[Role]) {
+pub(super) fn body_into(mesh: &mut Mesh, segments: &[Segment], held: &[Role]) {
     let parts: Vec<CapsulePart> = segments
         .iter()
         .map(|s| {
@@ -449,7 +449,7 @@ pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawLi
 
 /// Clothes take the tint (the shirt, the tint itself; trousers, a dark
 /// shade of it); skin and shoes stay as they are.
-fn tinted(color: [f32; 3], tint: [f32; 3]) -> [f32; 3] {
+pub(super) fn tinted(color: [f32; 3], tint: [f32; 3]) -> [f32; 3] {
     if color == SHIRT {
         tint
     } else if color == TROUSERS {

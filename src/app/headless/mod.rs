@@ -384,12 +384,17 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
             let (x, z, yaw) = places.get(k).copied().unwrap_or((k as f64 * 1.2, 0.0, 0.0));
             // Checked when the cast was loaded; should it fail now, the
             // capsule figure stands in and the log says why.
-            let figure = config.character.0.get(k).and_then(|c| {
-                crate::app::character::figure(&c.mesh, &ch)
-                    .map_err(|e| tracing::error!("{e}: the capsule figure is shown instead"))
-                    .ok()
-                    .flatten()
-            });
+            let figure = config
+                .character
+                .0
+                .get(k)
+                .and_then(|c| {
+                    crate::app::character::figure(&c.mesh, &ch)
+                        .map_err(|e| tracing::error!("{e}: the capsule figure is shown instead"))
+                        .ok()
+                        .flatten()
+                })
+                .or_else(|| crate::app::character::own_body(&config.display.body, &ch));
             let mut actor = Actor::standing(
                 ch,
                 settings,

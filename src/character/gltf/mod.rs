@@ -96,6 +96,9 @@ pub struct Part {
     pub indices: Vec<u32>,
     /// The material's base colour factor (linear RGBA).
     pub base_colour: [f32; 4],
+    /// The body part it shows, where it is one (the project's own body):
+    /// it glows whole while a finger holds that part.
+    pub role: Option<super::roles::Role>,
 }
 
 /// A skinned figure ready to be driven.
@@ -123,6 +126,9 @@ pub struct Figure {
     /// Things that were fixed while reading (weights that did not sum to
     /// one, ...).
     pub warnings: Vec<String>,
+    /// The project's own body (`render::body`): its parts are the capsule
+    /// figure's clothes, tinted as those are.
+    pub own: bool,
 }
 
 impl Figure {

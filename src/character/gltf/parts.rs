@@ -160,6 +160,7 @@ pub(super) fn parts(
                 weights: Vec::with_capacity(n),
                 indices: indices[..indices.len() / 3 * 3].to_vec(),
                 base_colour: prim.material().pbr_metallic_roughness().base_color_factor(),
+                role: None,
             };
             for ((p, j), w) in positions.iter().zip(&joints).zip(&weights) {
                 let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());

@@ -260,6 +260,7 @@ pub(super) fn figure(
         facing: facing_name,
         up: up_name,
         warnings,
+        own: false,
     })
 }
 
