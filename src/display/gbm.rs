@@ -14,9 +14,16 @@ use gbm::{BufferObject, BufferObjectFlags, Format, Modifier};
 
 use super::error::{PresentError, copy_rgba_to_xrgb};
 use super::modifiers::{INVALID, LINEAR};
-use super::zero_copy::DmaBuf;
 use crate::platform::kms::Card;
 use crate::render::headless::Image;
+
+/// One scanout buffer's memory, as the display engine lays it out.
+pub struct DmaBuf {
+    pub fd: OwnedFd,
+    pub modifier: u64,
+    pub stride: u32,
+    pub offset: u32,
+}
 
 /// The buffers of one output.
 pub(crate) struct GbmBuffers {

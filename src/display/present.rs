@@ -20,6 +20,9 @@ use super::output::{Found, become_master, find_output};
 use crate::platform::kms::Card;
 use crate::render::headless::Image;
 
+/// How many frame costs are kept for their median.
+const COSTS_KEPT: usize = 4096;
+
 /// The output being driven, with its two buffers.
 pub struct CopyPresenter {
     card: Card,
@@ -37,6 +40,9 @@ pub struct CopyPresenter {
     /// copy's cost, said when the presenter stops.
     copy_s: f64,
     copies: u64,
+    /// The last [`COSTS_KEPT`] of those times (ms), for their median: a
+    /// mean follows the few frames another program slowed.
+    costs_ms: Vec<f32>,
     /// The renderer drawing into the buffers themselves (zero copy).
     imported: Option<Box<super::zero_copy::Imported>>,
 }
@@ -173,6 +179,7 @@ impl CopyPresenter {
             saved,
             copy_s: 0.0,
             copies: 0,
+            costs_ms: Vec::new(),
             imported,
         })
     }
@@ -347,8 +354,7 @@ impl CopyPresenter {
         )]
         let started = std::time::Instant::now();
         imported.draw(back, list)?;
-        self.copy_s += started.elapsed().as_secs_f64();
-        self.copies += 1;
+        self.cost(started.elapsed().as_secs_f64());
         self.flip(back)
     }
 
@@ -395,9 +401,26 @@ impl CopyPresenter {
             }
             Buffers::Gbm(g) => g.write(back, img, w, h).map_err(mapping)?,
         }
-        self.copy_s += started.elapsed().as_secs_f64();
-        self.copies += 1;
+        self.cost(started.elapsed().as_secs_f64());
         self.flip(back)
+    }
+
+    /// One frame's drawing or writing took `s` seconds.
+    fn cost(&mut self, s: f64) {
+        self.copy_s += s;
+        if self.costs_ms.len() < COSTS_KEPT {
+            self.costs_ms.push((s * 1e3) as f32);
+        } else {
+            self.costs_ms[(self.copies as usize) % COSTS_KEPT] = (s * 1e3) as f32;
+        }
+        self.copies += 1;
+    }
+
+    /// The median of the kept frame costs (ms).
+    fn cost_median_ms(&self) -> f64 {
+        let mut c = self.costs_ms.clone();
+        c.sort_by(f32::total_cmp);
+        c.get(c.len() / 2).map_or(0.0, |m| f64::from(*m))
     }
 
     /// Flip to buffer `back` at the next vblank.
@@ -466,6 +489,7 @@ impl Drop for CopyPresenter {
                 buffers = "gbm",
                 frames = self.copies,
                 draw_ms_mean = self.copy_s / self.copies as f64 * 1e3,
+                draw_ms_median = self.cost_median_ms(),
                 "frames rendered straight into scanout buffers (zero copy)"
             );
         } else if self.copies > 0 {
@@ -476,6 +500,7 @@ impl Drop for CopyPresenter {
                 },
                 frames = self.copies,
                 copy_ms_mean = self.copy_s / self.copies as f64 * 1e3,
+                copy_ms_median = self.cost_median_ms(),
                 "frames written into scanout buffers"
             );
         }

@@ -5,7 +5,6 @@
 //! wgpu's hal), so frames are drawn straight into the buffer the display
 //! engine scans out: no read-back, no copy on the CPU.
 
-use std::os::fd::OwnedFd;
 use std::path::Path;
 
 use drm::control::crtc;
@@ -14,7 +13,7 @@ use ash::vk;
 use wgpu::hal::api::Vulkan;
 
 use super::error::PresentError;
-use super::gbm::GbmBuffers;
+use super::gbm::{DmaBuf, GbmBuffers};
 use super::modifiers;
 use crate::platform::kms::Card;
 use crate::render::gpu::{AdapterChoice, Gpu, GpuError};
@@ -136,14 +135,6 @@ pub(crate) fn open(
     let imported =
         Imported::new(gpu, card, &buffers, u32::from(w), u32::from(h), samples).map_err(refused)?;
     Ok((buffers, imported))
-}
-
-/// One scanout buffer's memory, as the display engine lays it out.
-pub struct DmaBuf {
-    pub fd: OwnedFd,
-    pub modifier: u64,
-    pub stride: u32,
-    pub offset: u32,
 }
 
 /// The renderer drawing into the imported buffers.

@@ -34,13 +34,15 @@ fn glowing(skin: &Skin, held: &[Role]) -> Vec<bool> {
 }
 
 /// Adds the figure, posed as the library's `world`, to the frame's body
-/// and shadow meshes; the parts in `held` glow, `tint` is blended in.
+/// and shadow meshes; the parts in `held` glow, `tint` is blended in (into
+/// the own body's clothes by `clothes`, as the capsule figure's are).
 pub(crate) fn draw(
     list: &mut DrawList,
     skin: &Skin,
     world: &WorldPose,
     held: &[Role],
     tint: Option<[f32; 3]>,
+    clothes: fn([f32; 3], [f32; 3]) -> [f32; 3],
 ) {
     let fig = &skin.figure;
     // The own body stands on the library's skeleton: its joints are the
@@ -73,7 +75,7 @@ pub(crate) fn draw(
             part.base_colour[2],
         ];
         let colour = match tint {
-            Some(t) if fig.own => super::scene::tinted(rgb, t),
+            Some(t) if fig.own => clothes(rgb, t),
             Some(t) => [
                 0.5 * part.base_colour[0] + 0.5 * t[0],
                 0.5 * part.base_colour[1] + 0.5 * t[1],

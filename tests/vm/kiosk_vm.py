@@ -104,10 +104,12 @@ for want in ["presenter: copy (as configured)", "presenter=\"copy\""]:
 # (the service view), the same output and picture size.
 costs = {}
 for name, text in [("gbm", log), ("dumb", svc)]:
-    m = re.search(r'buffers="' + name + r'" frames=(\d+) copy_ms_mean=([0-9.]+)', text)
+    m = re.search(r'buffers="' + name + r'" frames=(\d+) copy_ms_mean=([0-9.]+) copy_ms_median=([0-9.]+)', text)
     if m:
-        costs[name] = float(m.group(2))
-        print(f"copy into {name} buffers: {float(m.group(2)):.3f} ms a frame over {m.group(1)} frames")
+        # The median: a build or another guest beside the test slows a few
+        # frames by whole milliseconds, which a mean follows.
+        costs[name] = float(m.group(3))
+        print(f"copy into {name} buffers: {float(m.group(3)):.3f} ms a frame (median; mean {float(m.group(2)):.3f}) over {m.group(1)} frames")
     else:
         failures.append(f"no copy cost said for the {name} buffers")
 if len(costs) == 2:
@@ -146,9 +148,9 @@ if "zc-rest" in screens and "rest" in screens:
     if not 0.8 * blue <= zc_blue <= 1.25 * blue:
         failures.append(f"zero copy: {zc_blue} shirt-blue pixels at rest against {blue} through the copy")
 check_moved(screens, "zc-rest", "zc-posed", failures)
-m = re.search(r"frames=(\d+) draw_ms_mean=([0-9.]+)", zc)
+m = re.search(r"frames=(\d+) draw_ms_mean=([0-9.]+) draw_ms_median=([0-9.]+)", zc)
 if m:
-    print(f"zero copy: {float(m.group(2)):.3f} ms to draw a frame into the scanout buffer over {m.group(1)} frames")
+    print(f"zero copy: {float(m.group(3)):.1f} ms to draw a frame into the scanout buffer (median; mean {float(m.group(2)):.1f}) over {m.group(1)} frames")
 # The frame's cost per presenter: the kiosk's mean time to draw and show a
 # frame, the first frame (shaders compiled under emulation) left out, and
 # the latency from a touch to the flip that first showed it.
