@@ -574,3 +574,48 @@ fn the_demo_runs_through_with_a_configured_mesh_and_refuses_a_broken_one() {
     assert_eq!(run.status.code(), Some(65), "{err}");
     assert!(err.contains("mascot.glb: not a glTF 2.0 file"), "{err}");
 }
+
+#[test]
+fn mesh_roles_name_joints_for_roles_and_a_wrong_one_is_refused() {
+    // CesiumMan's head by its name is the upper neck joint; the
+    // configuration may name the lower one instead.
+    let path = shared("CesiumMan.glb");
+    let roles =
+        std::collections::BTreeMap::from([("head".to_owned(), "Skeleton_neck_joint_1".to_owned())]);
+    let fig = gltf::load(&path, &roles).unwrap();
+    assert_eq!(
+        fig.skeleton.joints[fig.roles.get(marionette::character::roles::Role::Head)].name,
+        "Skeleton_neck_joint_1"
+    );
+    // In the configuration: a joint the mesh lacks stops the demo with 65,
+    // naming the role and joint; a key that is no role is the
+    // configuration's error (78), naming the key.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(&path, dir.path().join("mascot.glb")).unwrap();
+    let config = dir.path().join("table.toml");
+    let out = dir.path().join("demo");
+    let run = |text: &str| {
+        std::fs::write(&config, text).unwrap();
+        common::marionette(&[
+            "demo",
+            "--config",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let r = run("[character]\nmesh = \"mascot.glb\"\n[character.mesh_roles]\nhead = \"Skull\"\n");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(65), "{err}");
+    assert!(
+        err.contains(
+            "mascot.glb: mesh_roles: head = \"Skull\": the skeleton has no joint of that name"
+        ),
+        "{err}"
+    );
+    let r = run("[character]\nmesh = \"mascot.glb\"\n[character.mesh_roles]\nnose = \"Skull\"\n");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(78), "{err}");
+    assert!(err.contains("character.mesh_roles.nose"), "{err}");
+    assert!(err.contains("is not a role; roles are"), "{err}");
+}

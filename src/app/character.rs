@@ -26,16 +26,18 @@ pub enum LoadError {
     Figure(#[from] crate::character::gltf::GltfError),
 }
 
-/// The skinned figure configured for a character (`mesh`), driven by
-/// `ch`'s library: `None` for the capsule figure.
+/// The skinned figure configured for a character (`mesh`, with `roles`
+/// naming its joints for roles: role → joint), driven by `ch`'s library:
+/// `None` where no mesh is configured.
 pub fn figure(
     mesh: &Path,
+    roles: &std::collections::BTreeMap<String, String>,
     ch: &Character,
 ) -> Result<Option<Arc<crate::character::gltf::Skin>>, LoadError> {
     if mesh.as_os_str().is_empty() {
         return Ok(None);
     }
-    let fig = crate::character::gltf::load(mesh, &std::collections::BTreeMap::new())?;
+    let fig = crate::character::gltf::load(mesh, roles)?;
     for w in &fig.warnings {
         tracing::warn!(mesh = %mesh.display(), "{w}");
     }

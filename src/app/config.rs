@@ -399,6 +399,24 @@ impl Config {
                     range("tint", v, 0.0, 1.0)?;
                 }
             }
+            for role in c.mesh_roles.keys() {
+                if crate::character::roles::Role::from_name(role).is_none() {
+                    let all: Vec<&str> = crate::character::roles::Role::ALL
+                        .iter()
+                        .map(|r| r.name())
+                        .collect();
+                    return Err(invalid(
+                        &key(k, &format!("mesh_roles.{role}")),
+                        format!("is not a role; roles are {}", all.join(", ")),
+                    ));
+                }
+            }
+            if !c.mesh_roles.is_empty() && c.mesh.as_os_str().is_empty() {
+                return Err(invalid(
+                    &key(k, "mesh_roles"),
+                    "names joints of a mesh, but no `mesh` is set".to_owned(),
+                ));
+            }
         }
         let places = all.placements();
         for (i, a) in places.iter().enumerate() {

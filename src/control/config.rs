@@ -61,8 +61,12 @@ pub struct CharacterConfig {
     /// for a lone character, else one of [`TINTS`].
     pub tint: Option<[f64; 3]>,
     /// A skinned glTF character (`.glb`, `.gltf`) the library drives;
-    /// empty: the capsule figure.
+    /// empty: the project's own body (`[display] body`).
     pub mesh: PathBuf,
+    /// The mesh's joints for roles its names and places do not find, or
+    /// find wrongly: role → joint name (`left_hand = "Wrist.L"`), as a
+    /// library's `[roles]` table.
+    pub mesh_roles: std::collections::BTreeMap<String, String>,
 }
 
 impl Default for CharacterConfig {
@@ -76,6 +80,7 @@ impl Default for CharacterConfig {
             facing_deg: None,
             tint: None,
             mesh: PathBuf::new(),
+            mesh_roles: std::collections::BTreeMap::new(),
         }
     }
 }

@@ -54,7 +54,7 @@ pub(super) fn cast(
     // Each configured mesh is read now: a broken one stops the start here,
     // as a broken library does.
     for (c, ch) in config.character.0.iter().zip(&out) {
-        crate::app::character::figure(&c.mesh, ch)?;
+        crate::app::character::figure(&c.mesh, &c.mesh_roles, ch)?;
     }
     Ok(out)
 }

@@ -389,7 +389,7 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
                 .0
                 .get(k)
                 .and_then(|c| {
-                    crate::app::character::figure(&c.mesh, &ch)
+                    crate::app::character::figure(&c.mesh, &c.mesh_roles, &ch)
                         .map_err(|e| tracing::error!("{e}: the capsule figure is shown instead"))
                         .ok()
                         .flatten()

@@ -240,13 +240,32 @@ pub(super) fn figure(
     let height_m = height_units * scale;
     let (roles, roles_by) = match roles::fill(&skeleton, overrides) {
         Ok(r) => (r, "names"),
-        Err(_) => (
-            by_places(&skeleton, height_m).map_err(|missing| GltfError::NotHumanoid {
+        // A joint named for a role that the skeleton lacks is the
+        // configuration's mistake: said, not guessed around.
+        Err(e @ (roles::RolesError::UnknownRole(_) | roles::RolesError::UnknownJoint { .. })) => {
+            return Err(GltfError::Data {
                 path: file.path.clone(),
-                missing,
-            })?,
-            "places",
-        ),
+                why: format!(
+                    "mesh_roles: {}",
+                    e.to_string().trim_start_matches("[roles] ")
+                ),
+            });
+        }
+        Err(_) => {
+            let mut by =
+                by_places(&skeleton, height_m).map_err(|missing| GltfError::NotHumanoid {
+                    path: file.path.clone(),
+                    missing,
+                })?;
+            // The configured joints over where joints stand (their names
+            // were checked above).
+            for (role, joint) in overrides {
+                if let (Some(r), Some(j)) = (roles::Role::from_name(role), skeleton.find(joint)) {
+                    by.0.insert(r, j);
+                }
+            }
+            (by, "places")
+        }
     };
     Ok(Figure {
         skeleton,
