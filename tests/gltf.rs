@@ -619,3 +619,53 @@ fn mesh_roles_name_joints_for_roles_and_a_wrong_one_is_refused() {
     assert!(err.contains("character.mesh_roles.nose"), "{err}");
     assert!(err.contains("is not a role; roles are"), "{err}");
 }
+
+#[test]
+fn a_base_colour_texture_colours_each_vertex_and_a_broken_one_is_said() {
+    // CesiumMan wears its (JPEG) texture: white with the blue and green of
+    // its logo, and not the white of its base colour factor alone.
+    let bytes = std::fs::read(shared("CesiumMan.glb")).unwrap();
+    let fig = load(&shared("CesiumMan.glb")).unwrap();
+    let colours: Vec<[f32; 4]> = fig.parts.iter().flat_map(|p| p.colours.clone()).collect();
+    assert_eq!(colours.len(), fig.vertices());
+    let blue = colours.iter().filter(|c| c[2] > c[0] + 0.15).count();
+    let green = colours
+        .iter()
+        .filter(|c| c[1] > c[0] + 0.1 && c[1] > c[2])
+        .count();
+    let white = colours
+        .iter()
+        .filter(|c| c[0].min(c[1]).min(c[2]) > 0.7)
+        .count();
+    let n = colours.len();
+    assert!(
+        blue > n / 20 && green > n / 50 && white > n / 3,
+        "{blue} blue, {green} green, {white} white of {n}"
+    );
+    assert!(
+        fig.warnings.iter().all(|w| !w.contains("texture")),
+        "{:?}",
+        fig.warnings
+    );
+    // Its image's bytes spoilt: the figure loads in its base colour, and
+    // says why.
+    let (json, mut bin) = split_glb(&bytes);
+    let view = json["images"][0]["bufferView"].as_u64().unwrap() as usize;
+    let at = json["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap_or(0) as usize;
+    bin[at..at + 16].copy_from_slice(b"not an image....");
+    let dir = tempfile::tempdir().unwrap();
+    let spoilt = dir.path().join("spoilt.glb");
+    std::fs::write(&spoilt, glb(&json, &bin)).unwrap();
+    let fig = load(&spoilt).unwrap();
+    assert!(fig.parts.iter().all(|p| p.colours.is_empty()));
+    assert!(
+        fig.warnings
+            .iter()
+            .any(|w| w
+                .contains("image 0 (a base colour texture) cannot be read: neither PNG nor JPEG")),
+        "{:?}",
+        fig.warnings
+    );
+}

@@ -164,6 +164,7 @@ pub fn own_figure(lib: &Library, roles: &RoleMap) -> Figure {
                     weights: Vec::new(),
                     indices: Vec::new(),
                     base_colour: rgb,
+                    colours: Vec::new(),
                     role: Some(role),
                 });
                 parts.len() - 1

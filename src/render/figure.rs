@@ -1,7 +1,7 @@
 //! A skinned figure in the frame: posed from the character's posture,
 //! skinned on the CPU (linear blend skinning, every vertex each frame),
-//! lit with smooth normals, in its material's colour (the table's tint
-//! blended in), the parts fingers hold glowing (its shadow is the capsule
+//! lit with smooth normals, in its material's colour or its base colour
+//! texture's at each vertex (the table's tint blended in), the parts fingers hold glowing (its shadow is the capsule
 //! figure's, see `scene`).
 
 use glam::DVec3;
@@ -69,23 +69,20 @@ pub(crate) fn draw(
                 normals[i] += n;
             }
         }
-        let rgb = [
-            part.base_colour[0],
-            part.base_colour[1],
-            part.base_colour[2],
-        ];
-        let colour = match tint {
-            Some(t) if fig.own => clothes(rgb, t),
-            Some(t) => [
-                0.5 * part.base_colour[0] + 0.5 * t[0],
-                0.5 * part.base_colour[1] + 0.5 * t[1],
-                0.5 * part.base_colour[2] + 0.5 * t[2],
-            ],
-            None => [
-                part.base_colour[0],
-                part.base_colour[1],
-                part.base_colour[2],
-            ],
+        // The vertex's own colour (its texture's) or the part's, with the
+        // table's tint.
+        let colour = |i: usize| -> [f32; 3] {
+            let c = part.colours.get(i).unwrap_or(&part.base_colour);
+            let rgb = [c[0], c[1], c[2]];
+            match tint {
+                Some(t) if fig.own => clothes(rgb, t),
+                Some(t) => [
+                    0.5 * rgb[0] + 0.5 * t[0],
+                    0.5 * rgb[1] + 0.5 * t[1],
+                    0.5 * rgb[2] + 0.5 * t[2],
+                ],
+                None => rgb,
+            }
         };
         let f = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
         {
@@ -97,17 +94,19 @@ pub(crate) fn draw(
                     .zip(&normals)
                     .zip(&part.joints)
                     .zip(&part.weights)
-                    .map(|(((p, n), j), w)| {
+                    .enumerate()
+                    .map(|(i, (((p, n), j), w))| {
                         // The joint that carries the vertex most.
                         let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
                         let lit = match part.role {
                             Some(r) => held.contains(&r),
                             None => glow.get(usize::from(j[k])).copied().unwrap_or(false),
                         };
+                        let c = colour(i);
                         Vertex3 {
                             pos: f(*p),
                             normal: f(n.normalize_or_zero()),
-                            color: [colour[0], colour[1], colour[2], if lit { 1.0 } else { 0.0 }],
+                            color: [c[0], c[1], c[2], if lit { 1.0 } else { 0.0 }],
                         }
                     }),
             );

@@ -9,6 +9,7 @@ mod drive;
 mod parts;
 mod read;
 mod rig;
+mod texture;
 
 pub use drive::Drive;
 
@@ -96,6 +97,9 @@ pub struct Part {
     pub indices: Vec<u32>,
     /// The material's base colour factor (linear RGBA).
     pub base_colour: [f32; 4],
+    /// Each vertex's colour (linear RGBA): the base colour texture at its
+    /// texture coordinates times the factor; empty: the factor alone.
+    pub colours: Vec<[f32; 4]>,
     /// The body part it shows, where it is one (the project's own body):
     /// it glows whole while a finger holds that part.
     pub role: Option<super::roles::Role>,

@@ -20,6 +20,9 @@ pub(super) fn parts(
     let mut out = Vec::new();
     let mut warnings = Vec::new();
     let mut budget = 0u64;
+    // Decoded images by index (`None`: could not be read, said once).
+    let mut textures: Vec<Option<Option<super::texture::Texture>>> =
+        vec![None; file.doc.images().len()];
     let (mut unweighted, mut renormalised, mut worst_sum) = (0usize, 0usize, 1.0f64);
     for node in file.doc.nodes() {
         let Some(mesh) = node.mesh() else {
@@ -160,8 +163,10 @@ pub(super) fn parts(
                 weights: Vec::with_capacity(n),
                 indices: indices[..indices.len() / 3 * 3].to_vec(),
                 base_colour: prim.material().pbr_metallic_roughness().base_color_factor(),
+                colours: Vec::new(),
                 role: None,
             };
+            part.colours = colours(file, &prim, n, &mut budget, &mut textures, &mut warnings)?;
             for ((p, j), w) in positions.iter().zip(&joints).zip(&weights) {
                 let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
                 let mut w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
@@ -215,4 +220,72 @@ pub(super) fn parts(
         return Err(file.data_error("no triangles to draw".to_owned()));
     }
     Ok((out, warnings))
+}
+
+/// Each vertex's colour from the primitive's base colour texture (times
+/// the factor), where it has one and the texture coordinates it names;
+/// empty otherwise, or where the image cannot be read (said once in
+/// `warnings`).
+fn colours(
+    file: &File,
+    prim: &gltf::Primitive<'_>,
+    n: usize,
+    budget: &mut u64,
+    textures: &mut [Option<Option<super::texture::Texture>>],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<[f32; 4]>, GltfError> {
+    let pbr = prim.material().pbr_metallic_roughness();
+    let Some(info) = pbr.base_color_texture() else {
+        return Ok(Vec::new());
+    };
+    let set = info.tex_coord();
+    let Some(a) = prim.get(&gltf::Semantic::TexCoords(set)) else {
+        return Ok(Vec::new());
+    };
+    file.check(&a, "texture coordinates", Kind::Uvs, budget)?;
+    if a.count() != n {
+        return Err(file.data_error(format!(
+            "texture coordinates (accessor {}) for {} vertices of {n}",
+            a.index(),
+            a.count()
+        )));
+    }
+    let image = info.texture().source().index();
+    let Some(slot) = textures.get_mut(image) else {
+        return Ok(Vec::new());
+    };
+    if slot.is_none() {
+        *slot = Some(match super::texture::load(file, image) {
+            Ok(t) => Some(t),
+            Err(why) => {
+                warnings.push(format!(
+                    "image {image} (a base colour texture) cannot be read: {why}; its material's base colour is used"
+                ));
+                None
+            }
+        });
+    }
+    let Some(Some(texture)) = slot.as_ref() else {
+        return Ok(Vec::new());
+    };
+    let uvs: Vec<[f32; 2]> = prim
+        .reader(|b| file.buffer(b))
+        .read_tex_coords(set)
+        .ok_or_else(|| file.data_error("texture coordinates unreadable".to_owned()))?
+        .into_f32()
+        .collect();
+    let factor = pbr.base_color_factor();
+    Ok(uvs
+        .iter()
+        .map(|uv| {
+            let uv = uv.map(|x| if x.is_finite() { x } else { 0.0 });
+            let t = texture.sample(uv);
+            [
+                t[0] * factor[0],
+                t[1] * factor[1],
+                t[2] * factor[2],
+                t[3] * factor[3],
+            ]
+        })
+        .collect())
 }

@@ -164,6 +164,7 @@ impl File {
             Kind::Weights => (D::Vec4, &[T::F32, T::U8, T::U16]),
             Kind::Indices => (D::Scalar, &[T::U8, T::U16, T::U32]),
             Kind::Matrices => (D::Mat4, &[T::F32]),
+            Kind::Uvs => (D::Vec2, &[T::F32, T::U8, T::U16]),
         };
         if a.dimensions() != dims || !types.contains(&a.data_type()) {
             return Err(bad(format!(
@@ -221,10 +222,12 @@ pub(super) enum Kind {
     Weights,
     Indices,
     Matrices,
+    /// Texture coordinates.
+    Uvs,
 }
 
 /// A relative path with no folder above its start, no root, no scheme.
-fn inside(uri: &str) -> Option<PathBuf> {
+pub(super) fn inside(uri: &str) -> Option<PathBuf> {
     if uri.contains("://") || uri.contains('\\') {
         return None;
     }
@@ -236,7 +239,7 @@ fn inside(uri: &str) -> Option<PathBuf> {
 }
 
 /// Standard base64 (padding optional); `None` on any other character.
-fn base64(s: &str) -> Option<Vec<u8>> {
+pub(super) fn base64(s: &str) -> Option<Vec<u8>> {
     let value = |c: u8| -> Option<u32> {
         Some(match c {
             b'A'..=b'Z' => u32::from(c - b'A'),
