@@ -713,3 +713,72 @@ fn a_spoilt_texture_never_stops_the_figure_loading() {
     }
     assert_eq!(coloured + said, 200);
 }
+
+#[test]
+fn a_touch_on_a_figures_surface_grabs_the_part_under_it() {
+    use marionette::control::posing::pick::{pick, pick_with};
+    // The robot's head is far larger than the library's: its crown lies
+    // beyond the pick radius of every joint, and a finger there still
+    // takes the head. Off the figure, nothing.
+    let lib = marionette::character::library::Library::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"),
+    )
+    .unwrap();
+    let clip = &lib.clips["pose_stance.bvh"];
+    let world =
+        marionette::character::skeleton::forward_kinematics(&clip.skeleton, &clip.frames[0]);
+    let target = glam::DVec3::new(0.0, 1.0, 0.0);
+    let camera = marionette::character::camera::Camera {
+        eye: target + glam::DVec3::new(0.0, 0.22, 1.0).normalize() * 6.0,
+        target,
+        fov_y_deg: 40.0,
+        width: 1280.0,
+        height: 720.0,
+    };
+    let radius = 45.0;
+    for file in ["RobotExpressive.glb", "CesiumMan.glb"] {
+        let skin = gltf::Skin::life_size(load(&shared(file)).unwrap(), &lib, &clip.roles);
+        let points: Vec<glam::DVec3> = skin.posed(&world).into_iter().flatten().collect();
+        // The highest point of the figure whose spot on the screen no
+        // joint's pick reaches.
+        let mut by_height = points.clone();
+        by_height.sort_by(|a, b| b.y.total_cmp(&a.y));
+        let beyond = by_height.iter().find_map(|p| {
+            let s = camera.project(*p).filter(|s| s.y > 0.0)?;
+            pick(&camera, &clip.skeleton, &clip.roles, &world, s, radius)
+                .is_none()
+                .then_some(s)
+        });
+        let grabbed = beyond.map(|s| {
+            pick_with(
+                &camera,
+                &clip.skeleton,
+                &clip.roles,
+                &world,
+                Some(&skin),
+                s,
+                radius,
+            )
+        });
+        println!("{file}: crown beyond the joints' reach at {beyond:?}: {grabbed:?}");
+        if file == "RobotExpressive.glb" {
+            assert_eq!(grabbed, Some(Some(Role::Head)), "{file}");
+        } else if let Some(g) = grabbed {
+            // CesiumMan's crown may lie within the head's reach.
+            assert_eq!(g, Some(Role::Head), "{file}");
+        }
+        let corner = marionette::screen::ScreenPoint::new(20.0, 20.0);
+        assert_eq!(
+            pick_with(
+                &camera,
+                &clip.skeleton,
+                &clip.roles,
+                &world,
+                Some(&skin),
+                corner,
+                radius
+            ),
+            None
+        );
+    }
+}

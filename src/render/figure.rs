@@ -45,16 +45,7 @@ pub(crate) fn draw(
     clothes: fn([f32; 3], [f32; 3]) -> [f32; 3],
 ) {
     let fig = &skin.figure;
-    // The own body stands on the library's skeleton: its joints are the
-    // library's, as posed.
-    let joints = if fig.own {
-        (0..fig.skeleton.len().min(world.positions.len()))
-            .map(|j| glam::DMat4::from_rotation_translation(world.rotations[j], world.positions[j]))
-            .collect()
-    } else {
-        skin.drive.pose(fig, world)
-    };
-    let posed = skin.drive.skin(fig, &joints);
+    let posed = skin.posed(world);
     let glow = glowing(skin, held);
     for (part, points) in fig.parts.iter().zip(&posed) {
         if points.iter().any(|p| !p.is_finite()) {

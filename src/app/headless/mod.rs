@@ -403,7 +403,7 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
                 yaw,
                 tints.get(k).copied().flatten(),
             );
-            actor.figure = figure;
+            actor.set_figure(figure);
             actor
         })
         .collect();

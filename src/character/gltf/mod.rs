@@ -40,6 +40,21 @@ impl Skin {
         };
         Self::new(figure, lib, lib_roles)
     }
+
+    /// The figure's vertices, part by part, posed as the library's
+    /// `world` (the own body's joints are the library's, as posed).
+    #[must_use]
+    pub fn posed(&self, world: &super::skeleton::WorldPose) -> Vec<Vec<glam::DVec3>> {
+        let fig = &self.figure;
+        let joints = if fig.own {
+            (0..fig.skeleton.len().min(world.positions.len()))
+                .map(|j| DMat4::from_rotation_translation(world.rotations[j], world.positions[j]))
+                .collect()
+        } else {
+            self.drive.pose(fig, world)
+        };
+        self.drive.skin(fig, &joints)
+    }
 }
 
 use std::path::{Path, PathBuf};

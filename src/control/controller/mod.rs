@@ -18,6 +18,7 @@ mod contact;
 mod effects;
 mod feet;
 mod stance;
+mod surface;
 
 use self::feet::FootHold;
 use super::character::Character;
@@ -29,7 +30,6 @@ use crate::control::action::recogniser::DragMatch;
 use crate::control::action::timeline::{ActionEvent, Status};
 use crate::control::action::trail::{StartRule, TrailPoint};
 use crate::control::posing::constraint::{Constraint, SynthOptions, Target};
-use crate::control::posing::pick::pick;
 use crate::control::posing::sample::{Anchor, Placement};
 use crate::control::posing::synth::synthesize;
 use crate::control::tracking::accel::{AccelTracker, Gains};
@@ -156,6 +156,8 @@ pub struct Controller {
     effects: Effects,
     /// The target switched controllers this step (its feet jumped).
     switched: bool,
+    /// A glTF figure shown over the body: a touch on its surface grabs.
+    surface: Option<Arc<crate::character::gltf::Skin>>,
     time: f64,
     last_touch: f64,
     events: Vec<ActionEvent>,
@@ -251,6 +253,7 @@ impl Controller {
             target: pose,
             world,
             switched: false,
+            surface: None,
             time: t,
             last_touch: t,
             events: Vec::new(),
@@ -381,14 +384,7 @@ impl Controller {
             let p = c.screen;
             if c.phase == crate::input::touch::Phase::Down {
                 let camera = self.rig.camera();
-                let role = pick(
-                    &camera,
-                    &self.ch.lib.skeleton,
-                    &self.ch.roles,
-                    &self.world,
-                    p,
-                    self.settings.pick_radius_px,
-                );
+                let role = self.pick_part(&camera, p);
                 let grab = match role {
                     Some(role) => {
                         if matches!(self.mode, Mode::Posing) && self.held().is_empty() {

@@ -36,7 +36,7 @@ use super::rig::{Orbit, Rig};
 use crate::character::roles::Role;
 use crate::character::skeleton::Pose;
 use crate::control::action::timeline::ActionEvent;
-use crate::control::posing::pick::pick;
+use crate::control::posing::pick::pick_with;
 use crate::input::touch::{ContactId, Phase, ScreenFrame, Tool};
 use crate::physics::ragdoll::Capsule;
 use crate::screen::ScreenPoint;
@@ -55,6 +55,13 @@ pub struct Actor {
 }
 
 impl Actor {
+    /// Show `figure` for it (`None`: the capsule figure); a touch on a
+    /// glTF figure's surface grabs the part nearest it.
+    pub fn set_figure(&mut self, figure: Option<std::sync::Arc<crate::character::gltf::Skin>>) {
+        self.ctl.set_surface(figure.clone());
+        self.figure = figure;
+    }
+
     /// A character of `ch` at rest at floor point `at` facing `yaw`
     /// (see [`Controller::standing`]), in `tint`, in a picture of
     /// `width` x `height` pixels.
@@ -411,11 +418,12 @@ impl Stage {
             .enumerate()
             .filter_map(|(k, a)| {
                 let ch = a.ctl.character();
-                let role = pick(
+                let role = pick_with(
                     camera,
                     &ch.lib.skeleton,
                     &ch.roles,
                     a.ctl.world(),
+                    a.figure.as_deref(),
                     p,
                     a.ctl.settings.pick_radius_px,
                 )?;
