@@ -25,6 +25,21 @@ fn load(path: &Path) -> Result<gltf::Figure, gltf::GltfError> {
     gltf::load(path, &std::collections::BTreeMap::new())
 }
 
+/// The default library, and its character standing in its stance.
+fn stance() -> (
+    marionette::character::library::Library,
+    marionette::character::skeleton::WorldPose,
+) {
+    let lib = marionette::character::library::Library::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"),
+    )
+    .unwrap();
+    let clip = &lib.clips["pose_stance.bvh"];
+    let world =
+        marionette::character::skeleton::forward_kinematics(&clip.skeleton, &clip.frames[0]);
+    (lib, world)
+}
+
 fn inspect(path: &Path) -> (Option<i32>, Value, String) {
     let out = common::marionette(&["inspect", path.to_str().unwrap()]);
     let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
@@ -437,13 +452,8 @@ fn the_shared_characters_render_over_their_skeletons() {
     use marionette::render::gpu::{AdapterChoice, Gpu};
     use marionette::render::headless::Headless;
     use marionette::render::scene::{self, Body, View};
-    let lib = marionette::character::library::Library::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"),
-    )
-    .unwrap();
+    let (lib, world) = stance();
     let clip = &lib.clips["pose_stance.bvh"];
-    let world =
-        marionette::character::skeleton::forward_kinematics(&clip.skeleton, &clip.frames[0]);
     let (w, h) = (640u32, 360u32);
     let target = glam::DVec3::new(0.0, 0.8, 0.0);
     let dir = glam::DQuat::from_rotation_y(0.45) * glam::DVec3::new(0.0, 0.22, 1.0).normalize();
@@ -720,13 +730,8 @@ fn a_touch_on_a_figures_surface_grabs_the_part_under_it() {
     // The robot's head is far larger than the library's: its crown lies
     // beyond the pick radius of every joint, and a finger there still
     // takes the head. Off the figure, nothing.
-    let lib = marionette::character::library::Library::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library"),
-    )
-    .unwrap();
+    let (lib, world) = stance();
     let clip = &lib.clips["pose_stance.bvh"];
-    let world =
-        marionette::character::skeleton::forward_kinematics(&clip.skeleton, &clip.frames[0]);
     let target = glam::DVec3::new(0.0, 1.0, 0.0);
     let camera = marionette::character::camera::Camera {
         eye: target + glam::DVec3::new(0.0, 0.22, 1.0).normalize() * 6.0,

@@ -3,7 +3,7 @@
 //! XRGB8888 (its `IN_FORMATS` property) that the Vulkan driver can also
 //! render into, linear when nothing else fits.
 
-use drm::control::{Device as _, crtc, plane};
+use drm::control::{Device as _, crtc};
 
 use crate::platform::kms::Card;
 
@@ -91,34 +91,29 @@ pub fn primary_plane_modifiers(card: &Card, crtc: crtc::Handle) -> Option<Vec<u6
         if !resources
             .filter_crtcs(info.possible_crtcs())
             .contains(&crtc)
-            || !is_primary(card, handle)
         {
             continue;
         }
-        let props = card.get_properties(handle).ok()?;
-        for (id, value) in &props {
-            let Ok(p) = card.get_property(*id) else {
-                continue;
-            };
-            if p.name().to_bytes() == b"IN_FORMATS" {
-                let blob = card.get_property_blob(*value).ok()?;
-                return parse_in_formats(&blob, XRGB8888);
-            }
+        // The plane's properties by name, read once: its `type` (1 is
+        // primary) and its `IN_FORMATS` blob.
+        let Ok(props) = card.get_properties(handle) else {
+            continue;
+        };
+        let named: Vec<(Vec<u8>, u64)> = props
+            .iter()
+            .filter_map(|(id, value)| {
+                let p = card.get_property(*id).ok()?;
+                Some((p.name().to_bytes().to_vec(), *value))
+            })
+            .collect();
+        let value = |name: &[u8]| named.iter().find(|(n, _)| n == name).map(|(_, v)| *v);
+        if value(b"type") != Some(1) {
+            continue;
         }
-        return None;
+        let blob = card.get_property_blob(value(b"IN_FORMATS")?).ok()?;
+        return parse_in_formats(&blob, XRGB8888);
     }
     None
-}
-
-/// Whether `plane`'s `type` is primary (1).
-fn is_primary(card: &Card, plane: plane::Handle) -> bool {
-    let Ok(props) = card.get_properties(plane) else {
-        return false;
-    };
-    props.iter().any(|(id, value)| {
-        card.get_property(*id)
-            .is_ok_and(|p| p.name().to_bytes() == b"type" && *value == 1)
-    })
 }
 
 /// A name for a modifier in the journal (`linear`, or its hexadecimal).
