@@ -430,7 +430,7 @@ fn the_shared_characters_play_the_default_library() {
         let fig = load(&shared(file)).unwrap();
         let e = marionette::tools::eval::character::eval_character(&fig, &lib, 1);
         eprintln!("{file}: {e:?}");
-        assert_eq!(e.frames, 4473);
+        assert_eq!(e.frames, 5006);
         assert_eq!(e.bad_frames, 0);
         assert!(e.mean_pct <= mean * 1.05, "{file}: {e:?}");
         assert!(e.max_pct <= max * 1.05, "{file}: {e:?}");

@@ -19,6 +19,9 @@
 //! # (counted from 0 in the file's MOTION section, both included), so
 //! # one long take can give several actions.
 //!
+//! [locomotion]              # optional: clips that travel, for walking where a finger leads
+//! clips = ["walk.bvh", "run.bvh#0-240"]
+//!
 //! [[action]]
 //! name = "punch"
 //! clips = ["punch_1.bvh", "punch_2.bvh"]
@@ -40,6 +43,7 @@ use thiserror::Error;
 
 use super::bvh;
 pub use super::clip_ref::{ClipRef, ClipRefError};
+pub use super::digest::Fnv;
 use super::floor;
 use super::motion::{Clip, ImportSettings};
 use super::roles::Role;
@@ -117,6 +121,10 @@ struct LibraryFile {
     roles: BTreeMap<String, String>,
     #[serde(default)]
     posing: PosingFile,
+    /// Clips that travel: the character walks along a finger's path with
+    /// them (the same shape as `[posing]`).
+    #[serde(default)]
+    locomotion: PosingFile,
     #[serde(default)]
     action: Vec<ActionFile>,
 }
@@ -167,6 +175,9 @@ pub struct Library {
     /// and every clip's file): equal keys, equal libraries.
     pub content_key: u64,
     pub posing: Vec<String>,
+    /// Clips that travel, for walking along a finger's path (may be
+    /// empty: the character then only poses and acts where it stands).
+    pub locomotion: Vec<String>,
     pub actions: Vec<ActionDef>,
     /// Fraction (generalized time) of each action clip that also feeds the
     /// posing model.
@@ -259,7 +270,12 @@ impl Library {
             ));
         }
         // Every clip named anywhere, once.
-        let mut names: Vec<&String> = file.posing.clips.iter().collect();
+        let mut names: Vec<&String> = file
+            .posing
+            .clips
+            .iter()
+            .chain(&file.locomotion.clips)
+            .collect();
         for a in &file.action {
             names.extend(a.clips.iter());
         }
@@ -477,6 +493,7 @@ impl Library {
             clips,
             content_key: key.finish(),
             posing: file.posing.clips,
+            locomotion: file.locomotion.clips,
             actions,
             action_lead_in: lead_in,
             floor_shift_m,
@@ -507,43 +524,6 @@ pub fn mirrored_name(name: &str) -> String {
         format!("{name}_mirror")
     } else {
         swapped
-    }
-}
-
-/// FNV-1a, 64 bits: stable across builds and platforms.
-#[derive(Clone, Copy, Debug)]
-pub struct Fnv(u64);
-
-impl Fnv {
-    #[must_use]
-    pub fn new() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-
-    pub fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.0 ^= u64::from(*b);
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-
-    #[must_use]
-    pub fn finish(self) -> u64 {
-        self.0
-    }
-
-    /// The digest of `bytes` alone.
-    #[must_use]
-    pub fn digest(bytes: &[u8]) -> u64 {
-        let mut h = Self::new();
-        h.write(bytes);
-        h.finish()
-    }
-}
-
-impl Default for Fnv {
-    fn default() -> Self {
-        Self::new()
     }
 }
 

@@ -13,6 +13,7 @@
 pub mod bvh;
 pub mod camera;
 pub mod clip_ref;
+pub mod digest;
 pub mod floor;
 pub mod gltf;
 pub mod library;

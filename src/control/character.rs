@@ -7,6 +7,7 @@ use crate::character::skeleton::Pose;
 use crate::control::action::calibrate::calibrate;
 use crate::control::action::model::ActionModel;
 use crate::control::action::recogniser::{Recogniser, TemplateRule};
+use crate::control::locomotion::gait::{self, Gait};
 use crate::control::posing::model::{LearnedModel, posing_samples};
 use crate::control::posing::sample::{Placement, pose_of, samples_of};
 
@@ -21,6 +22,12 @@ pub struct Character {
     /// The template recogniser with the thresholds calibrated for this
     /// library.
     pub recogniser: Recogniser,
+    /// The locomotion frames, for walking along a finger's path (empty
+    /// when the library has no `[locomotion]` clips).
+    pub gait: Gait,
+    /// Which actions travel (a walk, a run): with locomotion clips, their
+    /// drag walks along the finger's path instead.
+    pub travels: Vec<bool>,
 }
 
 impl Character {
@@ -62,12 +69,30 @@ impl Character {
             .and_then(|n| lib.clips.get(n))
             .map(|c| c.roles.clone())
             .unwrap_or_default();
+        let gait = Gait::build(&lib, &roles);
+        let travels = lib
+            .actions
+            .iter()
+            .map(|a| {
+                a.clips
+                    .first()
+                    .and_then(|c| lib.clips.get(c))
+                    .is_some_and(|c| gait::travel_m(c) >= gait::MIN_TRAVEL_M)
+            })
+            .collect();
+        if gait.is_empty() {
+            tracing::info!(
+                "the library has no locomotion clips: a dragged pelvis poses the character where it stands and does not walk"
+            );
+        }
         Self {
             lib,
             roles,
             posing,
             actions,
             recogniser,
+            gait,
+            travels,
         }
     }
 

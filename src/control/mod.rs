@@ -6,6 +6,8 @@
 //! - `tracking`: acceleration-based tracking (eq. 2-4).
 //! - [`controller`]: routes fingers to body parts or the camera and runs
 //!   posing, action and tracking control with the ragdoll's effects.
+//! - [`locomotion`]: walking along a finger's path with the library's
+//!   locomotion clips.
 //! - [`stage`]: the table: one character or several, the shared camera,
 //!   which finger belongs to whom, and bodies meeting.
 //! - [`marks`]: what is drawn over the picture for the fingers.
@@ -16,6 +18,7 @@ pub mod action;
 pub mod character;
 pub(crate) mod config;
 pub mod controller;
+pub mod locomotion;
 pub mod marks;
 pub mod posing;
 pub(crate) mod rig;

@@ -143,6 +143,46 @@ impl<'a> Author<'a> {
         }
     }
 
+    /// Drag the pelvis along a floor path (`path`: metres in the
+    /// character's frame as it stands now, x to its right, z ahead, from
+    /// its pelvis) at `speed` m/s, the finger kept over each point at the
+    /// pelvis's height as the camera shows it then; lift at the end and
+    /// wait for the walk to end.
+    fn walk_along(&mut self, path: &[(f64, f64)], speed: f64) {
+        let start = self.part(Role::Pelvis);
+        let c = &self.ctl.actors()[0].ctl;
+        let pelvis = c.world().positions[c.character().roles.get(Role::Pelvis)];
+        let turn = glam::DQuat::from_rotation_y(c.placement_now().yaw);
+        let points: Vec<glam::DVec3> = path
+            .iter()
+            .map(|(x, z)| pelvis + turn * glam::DVec3::new(-x, 0.0, *z))
+            .collect();
+        let total: f64 = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        self.down(0, start);
+        self.frame();
+        let mut s = 0.0;
+        while s < total {
+            s = (s + speed * DT).min(total);
+            let mut left = s;
+            let mut p = points[points.len() - 1];
+            for w in points.windows(2) {
+                let l = (w[1] - w[0]).length();
+                if l >= left && l > 0.0 {
+                    p = w[0] + (w[1] - w[0]) * (left / l);
+                    break;
+                }
+                left -= l;
+            }
+            self.sync();
+            let at = self.ctl.rig().camera().project(p).unwrap_or(start);
+            self.to(0, at);
+            self.frame();
+        }
+        self.synth.up(0);
+        self.frame();
+        self.settle();
+    }
+
     /// Drag an action's primary part along its trajectory as seen now, at
     /// the action's own speed, through its first 70 % and on to its
     /// farthest point from where it began if that comes later (a kick's
@@ -236,7 +276,12 @@ impl<'a> Author<'a> {
             self.synth.up(d.slot);
         }
         self.frame();
-        // Let them finish (at most 4 s), then a breath.
+        self.settle();
+    }
+
+    /// Let the characters finish what they do (at most 4 s), then a
+    /// breath.
+    fn settle(&mut self) {
         for _ in 0..40 {
             self.wait(0.1);
             self.sync();
@@ -253,8 +298,8 @@ impl<'a> Author<'a> {
     }
 }
 
-/// The demo recording: six actions started by drags (punch, kick, wave,
-/// bow, jump, walk), posing with one finger and with two, a part pinned by
+/// The demo recording: five actions started by drags (punch, kick, wave,
+/// bow, jump), a walk along a curve to where the finger lifts, posing with one finger and with two, a part pinned by
 /// one finger while another poses, camera turns and a pinch, and a rest
 /// while the camera eases home.
 #[must_use]
@@ -265,16 +310,20 @@ pub fn author_demo(
     picture: Picture,
 ) -> Synth {
     let mut a = Author::alone(ch, settings, input, picture);
-    for name in [
-        "punch_left",
-        "kick_right",
-        "wave_left",
-        "bow",
-        "jump",
-        "walk",
-    ] {
+    for name in ["punch_left", "kick_right", "wave_left", "bow", "jump"] {
         a.action(name);
     }
+    // A walk along a curve across the floor, to where the finger lifts.
+    a.walk_along(
+        &[
+            (0.0, 0.0),
+            (0.5, 0.15),
+            (0.95, 0.5),
+            (1.15, 1.0),
+            (1.0, 1.4),
+        ],
+        0.9,
+    );
     a.posing_tour(settings.home_after_s);
     a.synth
 }

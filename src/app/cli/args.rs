@@ -269,6 +269,27 @@ pub(super) enum EvalCommand {
         #[arg(long)]
         library: Option<PathBuf>,
     },
+    /// Walking where a finger leads: drag the pelvis along floor paths
+    /// through the controller (touch frames from the home view) and print
+    /// one JSON object (paths, followed, arrival_cm, deviation_cm, skate_mm,
+    /// skate_max_mm, pops, start_s, rows)
+    Walk {
+        /// Library folder (with library.toml) [default: the configuration's
+        /// character.library, else the shipped library]
+        #[arg(long)]
+        library: Option<PathBuf>,
+        /// JSON file of paths: {"paths": [{"points": [[x, z], ...],
+        /// "speed_mps": v}]}, metres in the character's frame (x to its
+        /// right, z ahead) from its pelvis [default: random curves]
+        #[arg(long)]
+        paths: Option<PathBuf>,
+        /// Seed of the random curves
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// How many random curves
+        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        count: u32,
+    },
     /// Action control: replay held-out clips' primary-part paths as drags
     /// through the controller (touch frames, as live input) and print one
     /// JSON object (trials, correct, wrong_action, missed,

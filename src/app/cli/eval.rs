@@ -225,3 +225,23 @@ pub(super) fn eval_character(mesh: &Path, library: &Path) -> Result<(), Failure>
     let json = serde_json::to_string_pretty(&out).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
+
+pub(super) fn eval_walk(
+    library: &Path,
+    paths: Option<&Path>,
+    seed: u64,
+    count: u32,
+) -> Result<(), Failure> {
+    use crate::tools::eval::walk;
+    let paths = match paths {
+        Some(file) => walk::read_paths(file).map_err(|e| Failure::new(exit::DATAERR, e))?,
+        None => walk::random_paths(seed, count as usize),
+    };
+    let ch = crate::app::character::load(library)?;
+    if ch.gait.is_empty() {
+        tracing::warn!(library = %library.display(), "the library has no locomotion clips: the character will not walk");
+    }
+    let out = walk::eval_walk(&ch, &paths);
+    let json = serde_json::to_string_pretty(&out).map_err(|e| Failure::new(exit::FAILURE, e))?;
+    writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}

@@ -209,6 +209,20 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             what: LibraryCommand::Check { dir, json },
         } => motion::library_check(&dir, json),
         Command::Eval {
+            what:
+                EvalCommand::Walk {
+                    library,
+                    paths,
+                    seed,
+                    count,
+                },
+        } => eval::eval_walk(
+            &chosen_library(config, library)?,
+            paths.as_deref(),
+            seed,
+            count,
+        ),
+        Command::Eval {
             what: EvalCommand::Character { mesh, library },
         } => eval::eval_character(&mesh, &chosen_library(config, library)?),
         Command::Eval {

@@ -93,11 +93,13 @@ pub struct Drag<'a> {
     pub slow: bool,
 }
 
-/// A small deterministic generator for the noise.
-struct Lcg(u64);
+/// A small deterministic generator (64-bit LCG, high bits): the noise
+/// here, the random paths of `eval walk`.
+pub(crate) struct Lcg(pub(crate) u64);
 
 impl Lcg {
-    fn unit(&mut self) -> f64 {
+    /// The next number in 0..1.
+    pub(crate) fn unit(&mut self) -> f64 {
         self.0 = self
             .0
             .wrapping_mul(6_364_136_223_846_793_005)

@@ -41,6 +41,15 @@ impl Controller {
                 (d.action, d.generalized)
             }
         };
+        let name = self.ch.actions[action].def.name.clone();
+        if self.ch.travels[action] && self.start_walk(camera, t, &name) {
+            // A walk's drag: walk along the finger's path instead.
+            tracing::debug!(
+                action = %self.ch.actions[action].def.name,
+                "a travelling action's drag walks along the finger's path"
+            );
+            return None;
+        }
         let at = self.placement_now();
         let player =
             ActionPlayer::start(&self.ch.actions, action, start_at, at, t, &mut self.events);
@@ -182,6 +191,15 @@ impl Controller {
                     usage: FingerUse::Camera,
                     tint: None,
                 },
+            });
+        }
+        if let Some(ahead) = self.walk_ahead() {
+            // The path the walk will take, on the floor.
+            let camera = self.rig.camera();
+            marks.trajectories.push(TrajectoryMark {
+                points: ahead.iter().filter_map(|p| camera.project(*p)).collect(),
+                executable: true,
+                tint: None,
             });
         }
         if trajectories && matches!(self.mode, Mode::Posing) {

@@ -16,6 +16,13 @@ use crate::control::posing::ik::plant_feet;
 /// the floor).
 pub(crate) const STEP_TRIGGER_M: f64 = 0.12;
 
+/// The most a planted foot is held turned against the body (radians).
+const MAX_TWIST: f64 = 1.2;
+
+/// How long a lifted foot takes to let go of its held turn (s): about a
+/// swing.
+const TWIST_RELEASE_S: f64 = 0.3;
+
 /// How high a step of at least [`STEP_TRIGGER_M`] lifts the foot (m).
 const STEP_HEIGHT_M: f64 = 0.06;
 
@@ -30,6 +37,15 @@ pub(super) struct FootHold {
     /// A step under way: where it left from, how far along it is (0..1)
     /// and how long it takes (s).
     step: Option<(DVec3, f64, f64)>,
+    /// While walking, the way the planted foot points (yaw, radians): it
+    /// stays so as the body turns over it.
+    held_yaw: Option<f64>,
+    /// The turn about the vertical added to the foot (radians): what
+    /// holds it to `held_yaw`...
+    twist: f64,
+    /// ...let go once the foot lifts: the turn it had then, and how far
+    /// the letting go is (0..1).
+    release: Option<(f64, f64)>,
 }
 
 /// How long a step of `dist` metres takes (s): a quick lift for a foot
@@ -50,6 +66,12 @@ impl Controller {
         let held = self.held();
         let settle = 1.0 - (-dt / 0.06).exp();
         let switched = std::mem::take(&mut self.switched);
+        // While walking, the clip's own foot contacts say which foot
+        // stands.
+        let contacts = match &self.mode {
+            super::Mode::Walk(w) => Some(w.contacts(&self.ch.gait)),
+            _ => None,
+        };
         let feet = [Role::LeftFoot, Role::RightFoot];
         let hips = [Role::LeftHip, Role::RightHip];
         let mut goals = [None; 2];
@@ -86,7 +108,7 @@ impl Controller {
                 // Landed: where the tracked posture has the foot.
                 foot.step = None;
             }
-            let on_floor = p.y <= self.ankle_rest + GROUND_CONTACT_M;
+            let on_floor = contacts.map_or(p.y <= self.ankle_rest + GROUND_CONTACT_M, |c| c[k]);
             match foot.anchor {
                 Some(a) => {
                     let away = (p - a).with_y(0.0).length();
@@ -95,7 +117,8 @@ impl Controller {
                     // A foot the posture lifts goes at once; one it moves
                     // along the floor waits for the other to stand.
                     let lifts = !on_floor;
-                    let strays = (away > STEP_TRIGGER_M || out_of_reach) && other_planted;
+                    let strays = (out_of_reach || (contacts.is_none() && away > STEP_TRIGGER_M))
+                        && other_planted;
                     if lifts || strays {
                         foot.anchor = None;
                         let dist = (tracked - a).with_y(0.0).length();
@@ -109,7 +132,7 @@ impl Controller {
                         goals[k] = Some(a);
                     }
                 }
-                None if on_floor && speed < LANDING_SPEED_M_S => {
+                None if on_floor && (contacts.is_some() || speed < LANDING_SPEED_M_S) => {
                     // Comes down where it is shown: no jump.
                     foot.anchor = Some(tracked);
                     goals[k] = Some(tracked);
@@ -120,7 +143,60 @@ impl Controller {
         if goals.iter().any(Option::is_some) {
             plant_feet(sk, roles, &mut self.output, goals);
         }
+        self.hold_turn(contacts.is_some(), dt);
         self.onto_floor(goals);
+    }
+
+    /// While walking, a planted foot keeps pointing where it stood when
+    /// the walk began or where it landed as the body turns over it (its
+    /// toes would sweep the floor); a lifted foot, or every foot once the
+    /// walk is over, takes the posture's turn again, smoothly.
+    fn hold_turn(&mut self, walking: bool, dt: f64) {
+        let sk = &self.ch.lib.skeleton;
+        let w = forward_kinematics(sk, &self.output);
+        for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+            let j = self.ch.roles.get(role);
+            let foot = &mut self.feet[k];
+            let yaw = foot_yaw(sk, &w, j);
+            if foot.anchor.is_none() || !walking {
+                foot.held_yaw = None;
+            } else if walking && foot.held_yaw.is_none() {
+                foot.held_yaw = Some(yaw);
+            }
+            foot.twist = match foot.held_yaw {
+                // Followed without wrapping round; at most MAX_TWIST held:
+                // beyond, the foot turns with the body.
+                Some(y) => {
+                    let wrap = crate::control::posing::sample::wrap;
+                    let t = foot.twist + wrap(wrap(y - yaw) - foot.twist);
+                    let held = t.clamp(-MAX_TWIST, MAX_TWIST);
+                    if held != t {
+                        foot.held_yaw = Some(yaw + held);
+                    }
+                    held
+                }
+                // Let go smoothly over TWIST_RELEASE_S, easing in and out.
+                None if foot.twist != 0.0 => {
+                    let (from, u) = foot.release.unwrap_or((foot.twist, 0.0));
+                    let u = (u + dt / TWIST_RELEASE_S).min(1.0);
+                    foot.release = (u < 1.0).then_some((from, u));
+                    from * (1.0 - u * u * (3.0 - 2.0 * u))
+                }
+                None => 0.0,
+            };
+            if foot.held_yaw.is_some() {
+                foot.release = None;
+            }
+            if foot.twist.abs() < 1e-4 {
+                foot.twist = 0.0;
+                continue;
+            }
+            let parent = sk.joints[j]
+                .parent
+                .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
+            let turned = DQuat::from_rotation_y(foot.twist) * w.rotations[j];
+            self.output.rotations[j] = (parent.inverse() * turned).normalize();
+        }
     }
 
     /// The floor: a sole below it (tracking straightens a leg before the
@@ -166,6 +242,21 @@ impl Controller {
     }
 }
 
+/// Which way foot `j` points over the floor (yaw, radians from +Z): its
+/// first child's (or End Site's) direction from the ankle.
+fn foot_yaw(sk: &Skeleton, w: &WorldPose, j: usize) -> f64 {
+    let toe = (0..sk.len())
+        .find(|&i| sk.joints[i].parent == Some(j))
+        .map_or_else(|| w.end_site(sk, j), |i| Some(w.positions[i]));
+    let d = toe.map_or(DVec3::Z, |p| p - w.positions[j]);
+    if d.x.hypot(d.z) < 1e-9 {
+        // Pointing straight down: the foot's own forward axis.
+        let f = w.rotations[j] * DVec3::Z;
+        return f.x.atan2(f.z);
+    }
+    d.x.atan2(d.z)
+}
+
 /// The turn at ankle `j` (world frame) that brings the foot's points in
 /// front of the ankle (toes, their End Sites) up onto the floor: about the
 /// foot's own across axis (level, square to where the toes point), by the
@@ -206,4 +297,20 @@ fn toes_onto_floor(sk: &Skeleton, w: &WorldPose, j: usize) -> DQuat {
         return DQuat::IDENTITY;
     }
     DQuat::from_axis_angle(ahead.cross(DVec3::Y).normalize(), turn.min(1.2))
+}
+
+/// Hip to ankle along the bones of the rest skeleton (m), the shorter leg.
+pub(super) fn leg_length(
+    sk: &crate::character::skeleton::Skeleton,
+    roles: &crate::character::roles::RoleMap,
+) -> f64 {
+    [
+        (Role::LeftKnee, Role::LeftFoot),
+        (Role::RightKnee, Role::RightFoot),
+    ]
+    .into_iter()
+    .map(|(knee, foot)| {
+        sk.joints[roles.get(knee)].offset.length() + sk.joints[roles.get(foot)].offset.length()
+    })
+    .fold(f64::INFINITY, f64::min)
 }

@@ -19,8 +19,10 @@ mod effects;
 mod feet;
 mod stance;
 mod surface;
+mod walk;
 
-use self::feet::FootHold;
+use self::feet::{FootHold, leg_length};
+pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
 use super::rig::Rig;
 use crate::character::roles::Role;
@@ -121,6 +123,8 @@ enum Grab {
 pub enum Mode {
     Posing,
     Action(Box<ActionPlayer>),
+    /// Walking where the pelvis finger leads.
+    Walk(Box<crate::control::locomotion::walker::Walker>),
 }
 
 /// The controller's state between frames.
@@ -166,26 +170,14 @@ pub struct Controller {
     /// How far another character's body pushed this one (m, on the
     /// floor): added to the pelvis, fading as the body recovers.
     shove: DVec3,
+    /// Where a finger on the pelvis leads, for walking, and what the walk
+    /// under way is told as.
+    lead: walk::Lead,
+    walking: String,
 }
 
 /// The longest drag kept for recognition (s): longer than any action.
 const MAX_TRAIL_S: f64 = 4.0;
-
-/// Hip to ankle along the bones of the rest skeleton (m), the shorter leg.
-fn leg_length(
-    sk: &crate::character::skeleton::Skeleton,
-    roles: &crate::character::roles::RoleMap,
-) -> f64 {
-    [
-        (Role::LeftKnee, Role::LeftFoot),
-        (Role::RightKnee, Role::RightFoot),
-    ]
-    .into_iter()
-    .map(|(knee, foot)| {
-        sk.joints[roles.get(knee)].offset.length() + sk.joints[roles.get(foot)].offset.length()
-    })
-    .fold(f64::INFINITY, f64::min)
-}
 
 /// A part this close to the floor touches it (m).
 const GROUND_CONTACT_M: f64 = 0.03;
@@ -224,6 +216,7 @@ impl Controller {
         };
         let pose = ch.rest_pose(&at);
         let world = forward_kinematics(&ch.lib.skeleton, &pose);
+        let pelvis_h = world.positions[ch.roles.get(Role::Pelvis)].y;
         let feet_now = [
             world.positions[ch.roles.get(Role::LeftFoot)],
             world.positions[ch.roles.get(Role::RightFoot)],
@@ -259,6 +252,11 @@ impl Controller {
             events: Vec::new(),
             matching: BTreeMap::new(),
             shove: DVec3::ZERO,
+            lead: walk::Lead {
+                height: pelvis_h,
+                beyond_since: None,
+            },
+            walking: String::new(),
             ch,
         }
     }
@@ -286,11 +284,13 @@ impl Controller {
         &self.mode
     }
 
-    /// The action playing, if any.
+    /// The action playing (or the walk under way, with how much of its
+    /// path is behind), if any.
     #[must_use]
     pub fn action(&self) -> Option<(&str, f64)> {
         match &self.mode {
             Mode::Action(p) => Some((self.ch.actions[p.action()].def.name.as_str(), p.time())),
+            Mode::Walk(w) => Some((self.walking.as_str(), w.progress())),
             Mode::Posing => None,
         }
     }
@@ -508,10 +508,13 @@ impl Controller {
             .values()
             .any(|g| matches!(g, Grab::Part { moved: true, .. }));
         match &mut self.mode {
+            Mode::Walk(_) => self.walk_step(&camera, t, dt),
             Mode::Posing => {
                 if let Some(player) = self.recognise(&camera, t) {
                     self.mode = Mode::Action(Box::new(player));
                     self.switched = true;
+                } else if matches!(self.mode, Mode::Walk(_)) || self.try_walk(&camera, t) {
+                    self.walk_step(&camera, t, dt);
                 } else if !constraints.is_empty() {
                     self.target = synthesize(
                         &self.ch.lib.skeleton,

@@ -281,6 +281,7 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
     let translates: Vec<bool> = (0..skel.len()).map(|i| i == j::HIPS).collect();
     let mut files = BTreeMap::new();
     let mut posing = Vec::new();
+    let mut locomotion = Vec::new();
     let mut actions: BTreeMap<
         String,
         (String, Vec<crate::character::library::Segment>, Vec<String>),
@@ -298,6 +299,7 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
             }
             match &score.kind {
                 Kind::Posing => posing.push(name),
+                Kind::Locomotion => locomotion.push(name),
                 Kind::Action {
                     name: action,
                     primary,
@@ -326,6 +328,13 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
         let _ = writeln!(toml, "  \"{p}\",");
     }
     toml.push_str("]\n");
+    if !locomotion.is_empty() {
+        toml.push_str("\n[locomotion]\nclips = [\n");
+        for p in &locomotion {
+            let _ = writeln!(toml, "  \"{p}\",");
+        }
+        toml.push_str("]\n");
+    }
     for (name, (primary, segments, clips)) in &actions {
         let _ = write!(
             toml,

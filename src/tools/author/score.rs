@@ -3,7 +3,7 @@
 //! A score is a TOML file of keyframes per body part with timing and easing:
 //!
 //! ```toml
-//! kind = "action"              # or "posing"
+//! kind = "action"              # or "posing", or "locomotion" (clips that travel)
 //! action = "punch_right"       # action model name (actions only)
 //! primary = "right_hand"       # the body part a finger drags to start it
 //! segments = [{ until = 0.3, still = true, release = "backward" }, { until = 1.0, still = false, release = "forward" }]
@@ -159,6 +159,8 @@ pub struct ChannelKey {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Kind {
     Posing,
+    /// Walking where a finger leads: `[locomotion]` in `library.toml`.
+    Locomotion,
     Action {
         name: String,
         primary: String,
@@ -192,6 +194,7 @@ impl Score {
             toml::from_str(&text).map_err(|e| invalid(e.to_string().trim_end().to_owned()))?;
         let kind = match file.kind.as_str() {
             "posing" => Kind::Posing,
+            "locomotion" => Kind::Locomotion,
             "action" => Kind::Action {
                 name: file
                     .action
@@ -204,7 +207,7 @@ impl Score {
             },
             other => {
                 return Err(invalid(format!(
-                    "kind must be \"posing\" or \"action\", found \"{other}\""
+                    "kind must be \"posing\", \"locomotion\" or \"action\", found \"{other}\""
                 )));
             }
         };

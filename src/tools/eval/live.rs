@@ -5,6 +5,7 @@
 //! Everything after the touch pipeline runs as in the kiosk: picking,
 //! posing, the trail since the finger last rested, recognition, playing.
 
+use crate::control::controller::WALKING;
 use std::sync::Arc;
 
 use crate::control::action::timeline::ActionEvent;
@@ -60,7 +61,8 @@ pub fn judge(ch: &Arc<Character>, settings: &Settings, drag: &Drag<'_>) -> Optio
     };
     let started = |ctl: &mut Controller| {
         ctl.take_events().into_iter().find_map(|e| match e {
-            ActionEvent::Started { action, .. } => Some(action),
+            // A walk started by the pelvis finger's reach is no action.
+            ActionEvent::Started { action, .. } if action != WALKING => Some(action),
             _ => None,
         })
     };

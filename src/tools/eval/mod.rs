@@ -5,9 +5,11 @@
 //! - [`live`]: the same drags through a whole controller.
 //! - [`separation`]: how far apart the actions are, next to the drags' spread.
 //! - [`character`]: a skinned figure playing a library's clips.
+//! - [`walk`]: the pelvis dragged along floor paths, walked.
 
 pub mod actions;
 pub mod character;
 pub mod live;
 pub mod posing;
 pub mod separation;
+pub mod walk;

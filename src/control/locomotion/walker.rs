@@ -1,0 +1,421 @@
+//! Walking along a finger's path: the character plays the library's
+//! locomotion frames, choosing every tenth of a second the frame whose
+//! next second best follows the path ahead (and whose feet continue the
+//! ones shown), crossfading to it; its root moves as the frames' roots
+//! do, turned towards a point a little ahead on the path. Near the path's
+//! end the frames chosen are those that slow down and stand: the walk
+//! ends there.
+
+use glam::{DQuat, DVec3};
+
+use super::gait::{FEATURES, FUTURE_S, Gait, cost};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
+use crate::control::posing::sample::{facing_yaw, wrap};
+
+/// How often a better frame is looked for (s).
+const SEARCH_S: f64 = 0.1;
+
+/// How long a crossfade to another frame takes (s).
+const BLEND_S: f64 = 0.25;
+
+/// A frame of the same clip this close to the one playing (s) is not a
+/// change.
+const SAME_S: f64 = 0.3;
+
+/// A better frame must be cheaper by this much to be switched to.
+const HYSTERESIS: f64 = 0.01;
+
+/// The fastest the walk turns towards the path (rad/s).
+const MAX_TURN: f64 = 2.0;
+
+/// The walk is over when the path's end is this close (m) and the feet
+/// have come to rest.
+pub(crate) const ARRIVE_M: f64 = 0.25;
+
+/// Feature weights: the root's future places, the feet, the feet's and
+/// the root's motion.
+const WEIGHTS: [f64; FEATURES] = [
+    1.0, 1.0, 1.0, 1.0, 1.0, 1.0, // future root
+    0.5, 0.5, 0.5, 0.5, 0.5, 0.5, // feet
+    1.0, 1.0, 1.0, 1.0, // feet's motion
+    0.5, 0.5, // root's motion
+];
+
+/// What is faded out of.
+#[derive(Clone, Debug)]
+enum Source {
+    /// A place among the gait frames (fractional frame index).
+    Frame(f64),
+    /// The posture the walk started from (facing removed).
+    Pose { rotations: Vec<DQuat>, root_y: f64 },
+}
+
+/// A walk under way.
+#[derive(Clone, Debug)]
+pub struct Walker {
+    /// The frame playing (fractional index into [`Gait::frames`]).
+    pos: f64,
+    /// The frame or posture faded out of, and how far the fade is (0..1).
+    from: Option<(Source, f64)>,
+    /// The root's floor point and facing.
+    root: DVec3,
+    yaw: f64,
+    /// The path: floor points, the first where the walk began.
+    path: Vec<DVec3>,
+    /// The path segment the character is nearest.
+    seg: usize,
+    /// Whether the finger still leads, and how fast it goes over the
+    /// floor (m/s, smoothed).
+    leading: bool,
+    finger_speed: f64,
+    last_finger: Option<(DVec3, f64)>,
+    /// Seconds the finger has been still.
+    still_s: f64,
+    /// The speed the walk aims at (m/s).
+    speed: f64,
+    search_in: f64,
+    walked_s: f64,
+    done: bool,
+}
+
+impl Walker {
+    /// Start walking from posture `pose` towards `goal` (a floor point),
+    /// the finger there at time `t`.
+    #[must_use]
+    pub fn start(
+        gait: &Gait,
+        sk: &Skeleton,
+        roles: &RoleMap,
+        pose: &Pose,
+        goal: DVec3,
+        t: f64,
+    ) -> Self {
+        let w = forward_kinematics(sk, pose);
+        let root = w.positions[0].with_y(0.0);
+        let yaw = facing_yaw(&w, roles);
+        let mut rotations = pose.rotations.clone();
+        rotations[0] = (DQuat::from_rotation_y(-yaw) * w.rotations[0]).normalize();
+        let unyaw = DQuat::from_rotation_y(-yaw);
+        // The starting posture's features: its feet, nothing moving.
+        let mut current = [0.0; FEATURES];
+        for (i, r) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+            let p = unyaw * (w.positions[roles.get(r)] - root);
+            current[6 + 3 * i..9 + 3 * i].copy_from_slice(&[p.x, p.y, p.z]);
+        }
+        let mut walker = Self {
+            pos: 0.0,
+            from: Some((
+                Source::Pose {
+                    rotations,
+                    root_y: w.positions[0].y,
+                },
+                0.0,
+            )),
+            root,
+            yaw,
+            path: vec![root, goal.with_y(0.0)],
+            seg: 0,
+            leading: true,
+            finger_speed: 0.0,
+            last_finger: Some((goal.with_y(0.0), t)),
+            still_s: 0.0,
+            speed: gait.low_speed().max(0.3),
+            search_in: 0.0,
+            walked_s: 0.0,
+            done: false,
+        };
+        let query = walker.query(&current);
+        walker.pos = gait.best(&query, &WEIGHTS).map_or(0.0, |(i, _)| i as f64);
+        walker
+    }
+
+    /// The finger is at floor point `p` at time `t`.
+    pub fn lead(&mut self, p: DVec3, t: f64) {
+        let p = p.with_y(0.0);
+        if let Some((q, tq)) = self.last_finger {
+            let dt = t - tq;
+            if dt > 1e-6 {
+                let v = (p - q).length() / dt;
+                let k = 1.0 - (-dt / 0.3).exp();
+                self.finger_speed += (v - self.finger_speed) * k;
+                if (p - q).length() < 0.005 {
+                    self.still_s += dt;
+                } else {
+                    self.still_s = 0.0;
+                }
+            }
+        }
+        self.last_finger = Some((p, t));
+        let last = *self.path.last().expect("a path has its start");
+        if (p - last).length() > 0.03 {
+            self.path.push(p);
+        } else if self.path.len() > 1 {
+            *self.path.last_mut().expect("checked") = p;
+        }
+    }
+
+    /// The finger lifted: walk on to the path's end and stop there.
+    pub fn release(&mut self) {
+        self.leading = false;
+    }
+
+    /// Whether the walk is over (the character stands near the path's
+    /// end).
+    #[must_use]
+    pub fn done(&self) -> bool {
+        self.done
+    }
+
+    /// Whether each foot (left, right) stands on the floor in the frames
+    /// playing: those of the frame that weighs most (both, in the
+    /// posture the walk started from).
+    #[must_use]
+    pub fn contacts(&self, gait: &Gait) -> [bool; 2] {
+        let of = |pos: f64| gait.frames[(pos.round() as usize).min(gait.frames.len() - 1)].contacts;
+        match &self.from {
+            Some((Source::Frame(p), w)) if *w < 0.5 => of(*p),
+            Some((Source::Pose { .. }, w)) if *w < 0.5 => [true, true],
+            _ => of(self.pos),
+        }
+    }
+
+    /// The path still ahead: from the character to its end.
+    #[must_use]
+    pub fn ahead(&self) -> Vec<DVec3> {
+        std::iter::once(self.root)
+            .chain(
+                self.path[(self.seg + 1).min(self.path.len() - 1)..]
+                    .iter()
+                    .copied(),
+            )
+            .collect()
+    }
+
+    /// The point `d` metres along the path from the character's nearest
+    /// point, and how much of the path is left from there.
+    fn along(&self, d: f64) -> (DVec3, f64) {
+        let (near, _) = self.nearest();
+        let mut here = near;
+        let mut left = d;
+        for q in &self.path[self.seg + 1..] {
+            let l = (*q - here).length();
+            if l >= left {
+                return (here + (*q - here) * (left / l.max(1e-9)), 0.0);
+            }
+            left -= l;
+            here = *q;
+        }
+        (here, left)
+    }
+
+    /// The nearest point of the current segment to the root.
+    fn nearest(&self) -> (DVec3, f64) {
+        let a = self.path[self.seg];
+        let b = self.path[(self.seg + 1).min(self.path.len() - 1)];
+        let ab = b - a;
+        let s = if ab.length_squared() > 1e-12 {
+            ((self.root - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let q = a + ab * s;
+        (q, (self.root - q).length())
+    }
+
+    /// How much of the path is behind the character (0..1).
+    #[must_use]
+    pub fn progress(&self) -> f64 {
+        let (near, _) = self.nearest();
+        let behind: f64 = self.path[..=self.seg]
+            .windows(2)
+            .map(|w| (w[1] - w[0]).length())
+            .sum::<f64>()
+            + (near - self.path[self.seg]).length();
+        let left = self.remaining();
+        if behind + left > 0.0 {
+            behind / (behind + left)
+        } else {
+            1.0
+        }
+    }
+
+    /// How far the path's end is along the path (m).
+    #[must_use]
+    pub fn remaining(&self) -> f64 {
+        let (near, _) = self.nearest();
+        let mut here = near;
+        let mut sum = 0.0;
+        for q in &self.path[self.seg + 1..] {
+            sum += (*q - here).length();
+            here = *q;
+        }
+        sum
+    }
+
+    /// The query: the path's next second in the character's frame, with
+    /// the feet and motion of `current`.
+    fn query(&self, current: &[f64; FEATURES]) -> [f64; FEATURES] {
+        let mut q = *current;
+        let unyaw = DQuat::from_rotation_y(-self.yaw);
+        for (i, s) in FUTURE_S.iter().enumerate() {
+            let (p, _) = self.along(self.speed * s);
+            let l = unyaw * (p - self.root);
+            q[2 * i] = l.x;
+            q[2 * i + 1] = l.z;
+        }
+        q
+    }
+
+    /// Move the character's nearest segment along as it walks.
+    fn follow(&mut self) {
+        while self.seg + 2 < self.path.len() {
+            let (_, now) = self.nearest();
+            self.seg += 1;
+            let (_, next) = self.nearest();
+            if next > now + 1e-9 {
+                self.seg -= 1;
+                break;
+            }
+        }
+    }
+
+    /// Advance `dt` seconds: the posture to show.
+    pub fn step(&mut self, gait: &Gait, sk: &Skeleton, dt: f64) -> Pose {
+        self.walked_s += dt;
+        self.follow();
+        if self.leading {
+            self.speed = self
+                .finger_speed
+                .clamp(gait.low_speed() * 0.8, gait.top_speed() * 1.1);
+        }
+        let frame = |pos: f64| &gait.frames[(pos.round() as usize).min(gait.frames.len() - 1)];
+        let clip = &gait.clips[frame(self.pos).clip];
+        let at_end = self.pos >= (clip.first + clip.len - 1) as f64 - 0.5;
+        self.search_in -= dt;
+        if (self.search_in <= 0.0 || at_end) && self.from.is_none() {
+            self.search_in = SEARCH_S;
+            let current = frame(self.pos).features;
+            let query = self.query(&current);
+            let now = cost(&current, &query, &WEIGHTS);
+            if let Some((best, c)) = gait.best(&query, &WEIGHTS) {
+                let same = gait.frames[best].clip == frame(self.pos).clip
+                    && (best as f64 - self.pos).abs() * clip.frame_time < SAME_S;
+                if at_end || (!same && c < now - HYSTERESIS) {
+                    self.from = Some((Source::Frame(self.pos), 0.0));
+                    self.pos = best as f64;
+                }
+            }
+        }
+        // Root motion, from the frames playing (blended).
+        let (step, turn) = self.motion(gait, dt);
+        let (steer_to, _) = self.along(self.speed.mul_add(0.5, 0.3));
+        let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
+        let remaining = self.remaining();
+        let steer = if remaining > ARRIVE_M && to.length() > 0.05 {
+            (3.0 * wrap(to.x.atan2(to.z))).clamp(-MAX_TURN, MAX_TURN) * dt
+        } else {
+            0.0
+        };
+        self.root += DQuat::from_rotation_y(self.yaw) * step;
+        self.yaw = wrap(self.yaw + turn + steer);
+        // Time moves on.
+        self.pos = advance(gait, self.pos, dt);
+        if let Some((src, s)) = self.from.take() {
+            let s = s + dt / BLEND_S;
+            if s < 1.0 {
+                let src = match src {
+                    Source::Frame(p) => Source::Frame(advance(gait, p, dt)),
+                    other => other,
+                };
+                self.from = Some((src, s));
+            }
+        }
+        let speed_now = step.length() / dt.max(1e-6);
+        let finger_done = !self.leading || self.still_s > 0.3;
+        if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
+            self.done = true;
+        }
+        // A walk that cannot reach the end stops in the end.
+        let path_len: f64 = self.path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        if !self.leading && self.walked_s > 4.0 + path_len / 0.3 {
+            tracing::debug!(
+                remaining_m = remaining,
+                "a walk that did not reach the path's end stops"
+            );
+            self.done = true;
+        }
+        self.pose(gait, sk)
+    }
+
+    /// The root's move over `dt` (in the character's frame) and its turn,
+    /// blended between the frames playing.
+    fn motion(&self, gait: &Gait, dt: f64) -> (DVec3, f64) {
+        let of = |pos: f64| {
+            let f = &gait.frames[(pos.floor() as usize).min(gait.frames.len() - 1)];
+            let r = dt / gait.clips[f.clip].frame_time;
+            (f.step * r, f.turn * r)
+        };
+        let (s, t) = of(self.pos);
+        match &self.from {
+            Some((Source::Frame(p), w)) => {
+                let (s0, t0) = of(*p);
+                let w = smooth(*w);
+                (s0.lerp(s, w), t0 + (t - t0) * w)
+            }
+            Some((Source::Pose { .. }, w)) => (s * smooth(*w), t * smooth(*w)),
+            None => (s, t),
+        }
+    }
+
+    /// The posture now: the frames playing blended, at the root's place.
+    fn pose(&self, gait: &Gait, sk: &Skeleton) -> Pose {
+        let (mut rotations, mut root_y) = sampled(gait, self.pos);
+        if let Some((src, w)) = &self.from {
+            let (r0, y0) = match src {
+                Source::Frame(p) => sampled(gait, *p),
+                Source::Pose { rotations, root_y } => (rotations.clone(), *root_y),
+            };
+            let w = smooth(*w);
+            for (a, b) in rotations.iter_mut().zip(&r0) {
+                *a = b.slerp(*a, w).normalize();
+            }
+            root_y = y0 + (root_y - y0) * w;
+        }
+        let mut pose = sk.rest_pose();
+        rotations[0] = (DQuat::from_rotation_y(self.yaw) * rotations[0]).normalize();
+        pose.rotations = rotations;
+        pose.translations[0] = self.root + DVec3::Y * root_y;
+        pose
+    }
+}
+
+/// Ease in and out over 0..1.
+fn smooth(s: f64) -> f64 {
+    let s = s.clamp(0.0, 1.0);
+    s * s * (3.0 - 2.0 * s)
+}
+
+/// A fractional frame's rotations and root height, between its two
+/// frames.
+fn sampled(gait: &Gait, pos: f64) -> (Vec<DQuat>, f64) {
+    let i = (pos.floor() as usize).min(gait.frames.len() - 1);
+    let clip = &gait.clips[gait.frames[i].clip];
+    let j = (i + 1).min(clip.first + clip.len - 1);
+    let u = (pos - i as f64).clamp(0.0, 1.0);
+    let (a, b) = (&gait.frames[i], &gait.frames[j]);
+    let rotations = a
+        .rotations
+        .iter()
+        .zip(&b.rotations)
+        .map(|(p, q)| p.slerp(*q, u).normalize())
+        .collect();
+    (rotations, a.root_y + (b.root_y - a.root_y) * u)
+}
+
+/// `pos` moved on by `dt` seconds in its clip, stopping at its last frame.
+fn advance(gait: &Gait, pos: f64, dt: f64) -> f64 {
+    let i = (pos.floor() as usize).min(gait.frames.len() - 1);
+    let clip = &gait.clips[gait.frames[i].clip];
+    (pos + dt / clip.frame_time).min((clip.first + clip.len - 1) as f64)
+}

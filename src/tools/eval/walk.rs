@@ -1,0 +1,389 @@
+//! Walking along a finger's path, measured (`marionette eval walk`): the
+//! pelvis is dragged along floor paths through a whole controller, as live
+//! touches are (the kiosk's home view; the finger put each frame over the
+//! path's point at the pelvis's standing height, as the picture shows it
+//! then), and the walk is judged: did it reach the path's end, how far
+//! from it did it settle, how far did it stray from the path, did planted
+//! feet slide, did joints pop, how soon did it step.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::character::roles::Role;
+use crate::control::action::trials::Lcg;
+use crate::control::character::Character;
+use crate::control::controller::{Controller, Mode, Settings};
+use crate::input::touch::{Phase, ScreenContact, ScreenFrame, Tool};
+use crate::tools::metrics::Meter;
+
+/// The frame rate the walk is stepped and measured at (as replays are).
+const HZ: f64 = 30.0;
+
+/// A path's end reached within this distance (m) counts as followed.
+pub const FOLLOWED_M: f64 = 0.3;
+
+/// The most paths a file may hold, and points a path.
+const MAX_PATHS: usize = 1000;
+const MAX_POINTS: usize = 10_000;
+
+/// A path to walk: floor points in metres in the character's frame (x to
+/// its right, z ahead), from its pelvis, and the finger's speed along it.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WalkPath {
+    pub points: Vec<[f64; 2]>,
+    pub speed_mps: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathsFile {
+    paths: Vec<WalkPath>,
+}
+
+/// One path's figures.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct WalkRow {
+    pub length_m: f64,
+    pub speed_mps: f64,
+    pub followed: bool,
+    pub arrival_cm: f64,
+    pub deviation_cm: f64,
+    pub skate_mm: f64,
+    pub skate_max_mm: f64,
+    pub pops: usize,
+    /// The first pops: time (s from the finger going down), joint, jump.
+    pub pop_list: Vec<String>,
+    /// The worst slide of a planted foot: which, and when.
+    pub worst_skate: String,
+    /// From the finger leaving posing's reach to the first step (s); -1
+    /// if the character never stepped.
+    pub start_s: f64,
+}
+
+/// What `eval walk` prints.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct WalkReport {
+    pub paths: usize,
+    pub followed: f64,
+    pub arrival_cm: f64,
+    pub deviation_cm: f64,
+    pub skate_mm: f64,
+    pub skate_max_mm: f64,
+    pub pops: usize,
+    pub start_s: f64,
+    pub rows: Vec<WalkRow>,
+}
+
+/// Read a paths file: `{"paths": [{"points": [[x, z], ...], "speed_mps": v}]}`.
+/// The error names the file and, for a bad number, the path and point.
+pub fn read_paths(file: &Path) -> Result<Vec<WalkPath>, String> {
+    let len = std::fs::metadata(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?
+        .len();
+    if len > 64 << 20 {
+        return Err(format!(
+            "{}: {len} bytes; a paths file holds at most 64 MB",
+            file.display()
+        ));
+    }
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let parsed: PathsFile = serde_json::from_str(&text).map_err(|e| {
+        format!(
+            "{}: not a paths file ({e}); expected {{\"paths\": [{{\"points\": [[x, z], ...], \"speed_mps\": v}}]}}",
+            file.display()
+        )
+    })?;
+    check_paths(&parsed.paths).map_err(|why| format!("{}: {why}", file.display()))?;
+    Ok(parsed.paths)
+}
+
+/// Every path usable: some paths, each of 2 or more finite points that go
+/// somewhere, at a speed a finger can drag.
+pub fn check_paths(paths: &[WalkPath]) -> Result<(), String> {
+    if paths.is_empty() {
+        return Err("no paths: give at least one".into());
+    }
+    if paths.len() > MAX_PATHS {
+        return Err(format!("{} paths; at most {MAX_PATHS}", paths.len()));
+    }
+    for (i, p) in paths.iter().enumerate() {
+        let n = i + 1;
+        if !(p.speed_mps.is_finite() && p.speed_mps > 0.05 && p.speed_mps <= 5.0) {
+            return Err(format!(
+                "path {n}: speed_mps = {} must be above 0.05 and at most 5",
+                p.speed_mps
+            ));
+        }
+        if p.points.len() < 2 || p.points.len() > MAX_POINTS {
+            return Err(format!(
+                "path {n}: {} points; a path has 2 to {MAX_POINTS}",
+                p.points.len()
+            ));
+        }
+        if let Some((k, q)) = p
+            .points
+            .iter()
+            .enumerate()
+            .find(|(_, q)| !q.iter().all(|v| v.is_finite() && v.abs() <= 100.0))
+        {
+            return Err(format!(
+                "path {n}, point {}: {q:?} is not a floor point in metres (finite, within 100 m)",
+                k + 1
+            ));
+        }
+        if length(&world_points(p)) < 0.05 {
+            return Err(format!("path {n}: its points do not go anywhere"));
+        }
+    }
+    Ok(())
+}
+
+/// Random smooth curves over the floor in view of the home camera, setting
+/// off across it, with finger speeds from a slow drag to a quick one; the
+/// same for a seed.
+#[must_use]
+pub fn random_paths(seed: u64, n: usize) -> Vec<WalkPath> {
+    let across = home_across();
+    let mut rng = Lcg(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d);
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        // Setting off across the view (to the screen's right or left,
+        // within 35 degrees): a drag up or down the screen from the home
+        // view moves the pelvis up or down rather than walking.
+        let side = if rng.unit() < 0.5 {
+            0.0
+        } else {
+            std::f64::consts::PI
+        };
+        let mut heading = across + side + range(&mut rng, -0.6, 0.6);
+        let total = range(&mut rng, 1.2, 3.0);
+        let bend = range(&mut rng, -0.5, 0.5);
+        let mut p = [0.0f64, 0.0];
+        let mut points = vec![p];
+        let mut s = 0.0;
+        while s < total {
+            heading += bend * 0.25 + range(&mut rng, -0.15, 0.15);
+            p = [p[0] + 0.25 * heading.sin(), p[1] + 0.25 * heading.cos()];
+            points.push(p);
+            s += 0.25;
+        }
+        // In view: across the floor, not behind the camera.
+        if points
+            .iter()
+            .all(|q| q[0].abs() <= 2.0 && (-2.5..=1.5).contains(&q[1]))
+        {
+            let speed_mps = range(&mut rng, 0.6, 1.4);
+            out.push(WalkPath { points, speed_mps });
+        }
+    }
+    out
+}
+
+/// Which way the home view's screen right goes over the floor, as a
+/// heading in the character's frame (radians from ahead, towards its
+/// right), the character standing at the origin facing +Z.
+fn home_across() -> f64 {
+    let cam = crate::control::rig::Rig::new(1280.0, 720.0).camera();
+    let ahead = (cam.target - cam.eye).with_y(0.0);
+    let right = ahead.cross(glam::DVec3::Y);
+    // World (dx, dz) is (-x, z) in the character's frame.
+    (-right.x).atan2(right.z)
+}
+
+/// The path's points on the floor, the character at the origin facing +Z
+/// (its right is -X).
+fn world_points(p: &WalkPath) -> Vec<DVec3> {
+    p.points
+        .iter()
+        .map(|q| DVec3::new(-(q[0] - p.points[0][0]), 0.0, q[1] - p.points[0][1]))
+        .collect()
+}
+
+fn length(pts: &[DVec3]) -> f64 {
+    pts.windows(2).map(|w| (w[1] - w[0]).length()).sum()
+}
+
+/// The point `s` metres along `pts`.
+fn at_length(pts: &[DVec3], s: f64) -> DVec3 {
+    let mut left = s;
+    for w in pts.windows(2) {
+        let l = (w[1] - w[0]).length();
+        if l >= left && l > 0.0 {
+            return w[0] + (w[1] - w[0]) * (left / l);
+        }
+        left -= l;
+    }
+    *pts.last().expect("a path has points")
+}
+
+/// Distance from `p` to the polyline `pts` (m).
+fn off_path(pts: &[DVec3], p: DVec3) -> f64 {
+    pts.windows(2)
+        .map(|w| {
+            let ab = w[1] - w[0];
+            let s = if ab.length_squared() > 0.0 {
+                ((p - w[0]).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (p - (w[0] + ab * s)).length()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Walk every path and measure.
+#[must_use]
+pub fn eval_walk(ch: &Arc<Character>, paths: &[WalkPath]) -> WalkReport {
+    let rows: Vec<WalkRow> = paths.iter().map(|p| walk_one(ch, p)).collect();
+    let n = rows.len().max(1) as f64;
+    let mean = |f: &dyn Fn(&WalkRow) -> f64| rows.iter().map(f).sum::<f64>() / n;
+    let starts: Vec<f64> = rows
+        .iter()
+        .map(|r| r.start_s)
+        .filter(|s| *s >= 0.0)
+        .collect();
+    let r3 = |v: f64| (v * 1000.0).round() / 1000.0;
+    WalkReport {
+        paths: rows.len(),
+        followed: r3(rows.iter().filter(|r| r.followed).count() as f64 / n),
+        arrival_cm: r3(mean(&|r| r.arrival_cm)),
+        deviation_cm: r3(mean(&|r| r.deviation_cm)),
+        skate_mm: r3(mean(&|r| r.skate_mm)),
+        skate_max_mm: r3(rows.iter().map(|r| r.skate_max_mm).fold(0.0, f64::max)),
+        pops: rows.iter().map(|r| r.pops).sum(),
+        start_s: r3(starts.iter().sum::<f64>() / starts.len().max(1) as f64),
+        rows,
+    }
+}
+
+fn contact(phase: Phase, at: crate::screen::ScreenPoint) -> ScreenContact {
+    ScreenContact {
+        id: 1,
+        phase,
+        tool: Tool::Finger,
+        raw: crate::input::calibration::RawPoint {
+            x: at.x as i32,
+            y: at.y as i32,
+        },
+        screen: at,
+    }
+}
+
+fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
+    let mut ctl = Controller::new(Arc::clone(ch), Settings::default(), 1280.0, 720.0, 0.0);
+    let dt = 1.0 / HZ;
+    let pelvis_j = ch.roles.get(Role::Pelvis);
+    let feet = [Role::LeftFoot, Role::RightFoot].map(|r| ch.roles.get(r));
+    let mut k = 0u32;
+    let step = |ctl: &mut Controller, frames: &[ScreenFrame], k: &mut u32| {
+        *k += 1;
+        ctl.step(frames, f64::from(*k) * dt);
+        f64::from(*k) * dt
+    };
+    for _ in 0..15 {
+        step(&mut ctl, &[], &mut k);
+    }
+    let pelvis = ctl.world().positions[pelvis_j];
+    let height = pelvis.y;
+    let pts: Vec<DVec3> = world_points(path)
+        .into_iter()
+        .map(|p| p + pelvis.with_y(0.0))
+        .collect();
+    let feet_rest = feet.map(|f| ctl.world().positions[f]);
+    let total = length(&pts);
+    let screen = |ctl: &Controller, p: DVec3| {
+        ctl.rig
+            .camera()
+            .project(p.with_y(height))
+            .unwrap_or_default()
+    };
+    let t0 = step(&mut ctl, &[], &mut k);
+    let down = ScreenFrame {
+        t: t0,
+        contacts: vec![contact(Phase::Down, screen(&ctl, pts[0]))],
+    };
+    step(&mut ctl, &[down], &mut k);
+    let mut meter = Meter::new(&ch.lib.skeleton, &ch.roles, dt);
+    let (mut dev_sum, mut dev_n) = (0.0, 0usize);
+    let mut left_reach: Option<f64> = None;
+    let mut first_step: Option<f64> = None;
+    let start = f64::from(k) * dt;
+    let mut lifted = false;
+    let mut after_lift = 0.0;
+    loop {
+        let t = f64::from(k + 1) * dt;
+        let s = (t - start) * path.speed_mps;
+        let mut frames = Vec::new();
+        if !lifted {
+            let p = at_length(&pts, s);
+            let phase = if s >= total { Phase::Up } else { Phase::Move };
+            frames.push(ScreenFrame {
+                t,
+                contacts: vec![contact(phase, screen(&ctl, p))],
+            });
+            if left_reach.is_none()
+                && (p - ctl.world().positions[pelvis_j].with_y(0.0)).length()
+                    > crate::control::controller::WALK_REACH_M
+            {
+                left_reach = Some(t);
+            }
+            lifted = s >= total;
+        }
+        step(&mut ctl, &frames, &mut k);
+        let held = if lifted { vec![] } else { vec![Role::Pelvis] };
+        meter.push(ctl.pose(), &held);
+        let w = ctl.world();
+        if first_step.is_none()
+            && feet.iter().zip(&feet_rest).any(|(f, r)| {
+                let p = w.positions[*f];
+                p.y > r.y + 0.02 || (p - *r).with_y(0.0).length() > 0.03
+            })
+        {
+            first_step = Some(t);
+        }
+        if matches!(ctl.mode(), Mode::Walk(_)) {
+            dev_sum += off_path(&pts, w.positions[pelvis_j].with_y(0.0));
+            dev_n += 1;
+        }
+        if lifted {
+            after_lift += dt;
+            let walking = matches!(ctl.mode(), Mode::Walk(_));
+            if (!walking && after_lift > 1.0) || after_lift > 15.0 {
+                break;
+            }
+        }
+    }
+    let end = *pts.last().expect("a path has points");
+    let arrival = (ctl.world().positions[pelvis_j].with_y(0.0) - end).length();
+    let m = meter.finish();
+    WalkRow {
+        length_m: (total * 1000.0).round() / 1000.0,
+        speed_mps: path.speed_mps,
+        followed: arrival <= FOLLOWED_M,
+        arrival_cm: arrival * 100.0,
+        deviation_cm: if dev_n > 0 {
+            dev_sum / dev_n as f64 * 100.0
+        } else {
+            0.0
+        },
+        skate_mm: m.foot_skate_mm_per_frame,
+        skate_max_mm: m.foot_skate_max_mm,
+        pops: m.pops,
+        pop_list: m.pop_list.into_iter().take(5).collect(),
+        worst_skate: m.worst_skate,
+        start_s: match (left_reach, first_step) {
+            (Some(a), Some(b)) => (b - a).max(0.0),
+            _ => -1.0,
+        },
+    }
+}
+
+/// A number in `a..b`.
+fn range(rng: &mut Lcg, a: f64, b: f64) -> f64 {
+    a + (b - a) * rng.unit()
+}

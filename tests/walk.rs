@@ -1,0 +1,135 @@
+//! Walking where the finger leads: the pelvis dragged along floor paths
+//! through the whole controller (`marionette eval walk`), the walk told as
+//! an event, bad paths files refused with what to fix.
+
+#![allow(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "measurements are printed for the reader of the run"
+)]
+
+mod common;
+
+use common::marionette;
+use marionette::control::controller::{Controller, Mode, Settings, WALKING};
+use marionette::tools::eval::walk::{WalkPath, eval_walk, random_paths};
+
+#[test]
+fn the_default_library_walks_along_random_paths() {
+    let ch = common::character();
+    assert_eq!(
+        ch.gait.clips.len(),
+        4,
+        "the default library's locomotion clips"
+    );
+    let r = eval_walk(&ch, &random_paths(1, 20));
+    eprintln!(
+        "followed {} arrival {} cm deviation {} cm skate {} mm (worst {}) pops {} start {} s",
+        r.followed, r.arrival_cm, r.deviation_cm, r.skate_mm, r.skate_max_mm, r.pops, r.start_s
+    );
+    // The README's figures (`marionette eval walk`, seed 1, 20 paths).
+    assert_eq!(r.paths, 20);
+    assert!(r.followed >= 0.95, "{r:?}");
+    // 1.0 followed, 8.64 cm from the end, 4.73 cm off the path, planted
+    // feet 3.04 mm per frame (worst step 52.4 mm), no pop, stepping 0.51 s
+    // after the finger left reach.
+    assert!(r.arrival_cm <= 9.5, "{r:?}");
+    assert!(r.deviation_cm <= 5.2, "{r:?}");
+    assert_eq!(r.pops, 0, "{r:?}");
+    assert!(r.skate_mm <= 3.3, "{r:?}");
+    assert!(r.skate_max_mm <= 57.0, "{r:?}");
+    assert!(r.start_s > 0.4 && r.start_s <= 0.56, "{r:?}");
+}
+
+#[test]
+fn a_walk_is_told_as_it_starts_and_ends_and_the_character_stands_where_the_finger_lifted() {
+    let ch = common::character();
+    // Two metres across the home view's floor, at a visitor's walk.
+    let path = WalkPath {
+        points: vec![[0.0, 0.0], [1.0, 0.3], [2.0, 0.2]],
+        speed_mps: 1.0,
+    };
+    let r = eval_walk(&ch, std::slice::from_ref(&path));
+    assert!(r.rows[0].followed, "{r:?}");
+    // The same drag, by hand, for the events.
+    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    for k in 1..=10 {
+        ctl.advance(f64::from(k) / 30.0);
+    }
+    let pelvis = ctl.world().positions[ch.roles.get(marionette::character::roles::Role::Pelvis)];
+    let cam = ctl.rig.camera();
+    let start = cam.project(pelvis).unwrap();
+    let end = cam
+        .project(pelvis + glam::DVec3::new(-1.5, 0.0, 0.2))
+        .unwrap();
+    let mut walked = false;
+    for k in 11..=200u32 {
+        let t = f64::from(k) / 30.0;
+        let u = (f64::from(k - 11) / 60.0).min(1.0);
+        let at = marionette::screen::ScreenPoint::new(
+            start.x + (end.x - start.x) * u,
+            start.y + (end.y - start.y) * u,
+        );
+        let phase = match k {
+            11 => marionette::input::touch::Phase::Down,
+            71 => marionette::input::touch::Phase::Up,
+            _ if k > 71 => {
+                ctl.advance(t);
+                walked |= matches!(ctl.mode(), Mode::Walk(_));
+                continue;
+            }
+            _ => marionette::input::touch::Phase::Move,
+        };
+        ctl.touch(&marionette::input::touch::ScreenFrame {
+            t,
+            contacts: vec![common::contact(1, phase, at)],
+        });
+        ctl.advance(t);
+        walked |= matches!(ctl.mode(), Mode::Walk(_));
+    }
+    assert!(walked, "the drag walked");
+    assert!(matches!(ctl.mode(), Mode::Posing), "posing again");
+    let events = ctl.take_events();
+    let told: Vec<String> = events.iter().map(|e| format!("{e:?}")).collect();
+    assert_eq!(events.len(), 2, "{told:?}");
+    assert!(
+        told[0].contains(WALKING) && told[0].contains("Started"),
+        "{told:?}"
+    );
+    assert!(
+        told[1].contains(WALKING) && told[1].contains("Finished"),
+        "{told:?}"
+    );
+}
+
+#[test]
+fn bad_paths_files_are_refused_naming_the_path_and_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("notjson.json", "walk here", "not a paths file"),
+        ("empty.json", r#"{"paths": []}"#, "no paths"),
+        (
+            "far.json",
+            r#"{"paths": [{"points": [[0, 0], [1e9, 0]], "speed_mps": 1}]}"#,
+            "path 1, point 2",
+        ),
+        (
+            "still.json",
+            r#"{"paths": [{"points": [[0, 0], [1, 0]], "speed_mps": 0}]}"#,
+            "path 1: speed_mps",
+        ),
+        (
+            "one.json",
+            r#"{"paths": [{"points": [[0, 0], [1, 0]], "speed_mps": 1}, {"points": [[0, 0]], "speed_mps": 1}]}"#,
+            "path 2: 1 points",
+        ),
+    ];
+    for (name, text, says) in cases {
+        let f = dir.path().join(name);
+        std::fs::write(&f, text).unwrap();
+        let o = marionette(&["eval", "walk", "--paths", f.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(65), "{name}: {err}");
+        assert!(err.contains(says) && err.contains(name), "{name}: {err}");
+    }
+}
