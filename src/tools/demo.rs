@@ -22,6 +22,8 @@ const DT_US: i64 = 16_667;
 const DT: f64 = DT_US as f64 / 1e6;
 /// Controller rate used while authoring (the demo's).
 pub const TICK_HZ: f64 = 30.0;
+/// The longest a travelling action's drag goes on (s).
+const TRAVEL_DRAG_S: f64 = 1.5;
 /// Axis maximum of the authored panel.
 const MAX: i32 = 4095;
 
@@ -237,6 +239,13 @@ impl<'a> Author<'a> {
                 })
                 .map_or(0.0, |p| p.t)
                 .max(0.7 * traj.last().map_or(0.0, |p| p.t));
+            // A walk's drag walks the character along it: a few steps,
+            // not the take's whole length, so it stays in view.
+            let end = if c.character().travels[index] && !c.character().gait.is_empty() {
+                end.min(TRAVEL_DRAG_S)
+            } else {
+                end
+            };
             self.down(slot, start);
             planned.push(Drag {
                 slot,

@@ -277,7 +277,7 @@ impl Backend for Replay<'_> {
                 }
             };
             match e {
-                ActionEvent::Started { action, time_s } => records.push(ActionRecord {
+                ActionEvent::Started { action, time_s, .. } => records.push(ActionRecord {
                     action,
                     started_s: time_s,
                     outcome: "playing".into(),

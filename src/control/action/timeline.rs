@@ -18,6 +18,11 @@ pub enum ActionEvent {
     Started {
         action: String,
         time_s: f64,
+        /// A walk the pelvis finger started by going out of posing's
+        /// reach (told as the travelling action its drag came nearest, or
+        /// `walking`): no action template started it.
+        #[serde(skip_serializing_if = "std::ops::Not::not")]
+        by_reach: bool,
     },
     /// Time stopped moving with a finger resting (where allowed).
     Stopped {
@@ -82,6 +87,7 @@ impl ActionTimeline {
         events.push(ActionEvent::Started {
             action: def.name.clone(),
             time_s,
+            by_reach: false,
         });
         Self {
             def,

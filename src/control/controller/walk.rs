@@ -74,6 +74,26 @@ impl Controller {
             .map(|(at, _)| floor_point(camera, at, self.lead.height))
     }
 
+    /// The travelling action (a walk, a run) whose templates the pelvis
+    /// finger's drag came nearest so far, if it came near one: the walk is
+    /// told as that action.
+    fn nearest_travelling(&self) -> Option<String> {
+        let id = self.grabs.iter().find_map(|(id, g)| {
+            matches!(
+                g,
+                Grab::Part {
+                    role: Role::Pelvis,
+                    ..
+                }
+            )
+            .then_some(*id)
+        })?;
+        let m = self.matching.get(&id)?;
+        // The action whose templates cost least now, at any coverage.
+        let action = m.drag.nearest_other(usize::MAX, 0)?;
+        self.ch.travels[action].then(|| self.ch.actions[action].def.name.clone())
+    }
+
     /// Where the finger holding the pelvis is on the screen, and where its
     /// drag began.
     fn pelvis_finger(&self) -> Option<(ScreenPoint, ScreenPoint)> {
@@ -119,7 +139,10 @@ impl Controller {
             return false;
         }
         tracing::debug!("the pelvis finger left posing's reach");
-        self.walk_to(goal, t, WALKING);
+        let label = self
+            .nearest_travelling()
+            .unwrap_or_else(|| WALKING.to_owned());
+        self.walk_to(goal, t, &label, true);
         true
     }
 
@@ -128,7 +151,7 @@ impl Controller {
     pub(super) fn start_walk(&mut self, camera: &Camera, t: f64, label: &str) -> bool {
         match self.pelvis_lead(camera) {
             Some(goal) if !self.ch.gait.is_empty() => {
-                self.walk_to(goal, t, label);
+                self.walk_to(goal, t, label, false);
                 true
             }
             _ => false,
@@ -137,7 +160,7 @@ impl Controller {
 
     /// Walk towards `goal`; the walk is told as the action `label`
     /// (started now, finished where it stops).
-    fn walk_to(&mut self, goal: DVec3, t: f64, label: &str) {
+    fn walk_to(&mut self, goal: DVec3, t: f64, label: &str, by_reach: bool) {
         let walker = Walker::start(
             &self.ch.gait,
             &self.ch.lib.skeleton,
@@ -150,6 +173,7 @@ impl Controller {
         self.events.push(ActionEvent::Started {
             action: label.to_owned(),
             time_s: t,
+            by_reach,
         });
         self.walking = label.to_owned();
         self.mode = Mode::Walk(Box::new(walker));

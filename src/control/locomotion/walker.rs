@@ -33,6 +33,10 @@ const MAX_TURN: f64 = 2.0;
 /// have come to rest.
 pub(crate) const ARRIVE_M: f64 = 0.25;
 
+/// A path's end closer than this (m, about a stride) but beside or
+/// behind the character ends the walk where it is.
+const STRIDE_M: f64 = 0.6;
+
 /// Feature weights: the root's future places, the feet, the feet's and
 /// the root's motion.
 const WEIGHTS: [f64; FEATURES] = [
@@ -311,7 +315,16 @@ impl Walker {
         let (step, turn) = self.motion(gait, dt);
         let (steer_to, _) = self.along(self.speed.mul_add(0.5, 0.3));
         let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
-        let remaining = self.remaining();
+        let mut remaining = self.remaining();
+        let finger_done = !self.leading || self.still_s > 0.3;
+        if finger_done && remaining < STRIDE_M && wrap(to.x.atan2(to.z)).abs() > 1.0 {
+            // The end is close beside or behind: turning round it would
+            // circle it. The walk ends here.
+            let end = self.root;
+            self.path.truncate(self.seg + 1);
+            self.path.push(end);
+            remaining = 0.0;
+        }
         let steer = if remaining > ARRIVE_M && to.length() > 0.05 {
             (3.0 * wrap(to.x.atan2(to.z))).clamp(-MAX_TURN, MAX_TURN) * dt
         } else {
@@ -332,7 +345,6 @@ impl Walker {
             }
         }
         let speed_now = step.length() / dt.max(1e-6);
-        let finger_done = !self.leading || self.still_s > 0.3;
         if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
             self.done = true;
         }

@@ -5,7 +5,6 @@
 //! Everything after the touch pipeline runs as in the kiosk: picking,
 //! posing, the trail since the finger last rested, recognition, playing.
 
-use crate::control::controller::WALKING;
 use std::sync::Arc;
 
 use crate::control::action::timeline::ActionEvent;
@@ -62,7 +61,9 @@ pub fn judge(ch: &Arc<Character>, settings: &Settings, drag: &Drag<'_>) -> Optio
     let started = |ctl: &mut Controller| {
         ctl.take_events().into_iter().find_map(|e| match e {
             // A walk started by the pelvis finger's reach is no action.
-            ActionEvent::Started { action, .. } if action != WALKING => Some(action),
+            ActionEvent::Started {
+                action, by_reach, ..
+            } if !by_reach => Some(action),
             _ => None,
         })
     };

@@ -18,6 +18,7 @@ use crate::character::library::{Release, Segment, hierarchy_difference};
 use crate::character::motion::{Clip, ImportSettings, KNOWN_UNITS};
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
+use crate::control::locomotion::gait::{MIN_TRAVEL_M, travel_m};
 use crate::control::posing::sample::facing_yaw;
 
 /// The parts an action can be led by, in the order ties are broken.
@@ -215,6 +216,9 @@ pub struct Plan {
     /// Takes named after an action that feed posing only, with the reason
     /// (one frame, or a body that hardly moves: no drag could start it).
     pub not_actions: Vec<(String, String)>,
+    /// Takes whose pelvis travels, with how far it comes from where it
+    /// starts (m): locomotion, for walking where a finger leads.
+    pub locomotion: Vec<(String, f64)>,
 }
 
 /// A take whose every part stays within this (m) shows no action.
@@ -389,8 +393,16 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
             a.primary.mirrored().name()
         ));
     }
+    let locomotion = takes
+        .iter()
+        .filter_map(|t| {
+            let m = travel_m(&t.clip);
+            (m >= MIN_TRAVEL_M).then(|| (t.file.clone(), m))
+        })
+        .collect();
     Ok(Plan {
         src: src.to_owned(),
+        locomotion,
         posing: takes.iter().map(|t| t.file.clone()).collect(),
         actions,
         roles,

@@ -3,6 +3,7 @@
 //! on one line each (control characters shown as `?`), and into strings
 //! escaped as TOML wants, so no name can break the file.
 
+use crate::control::locomotion::gait::MIN_TRAVEL_M;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -60,6 +61,16 @@ impl Plan {
             let _ = writeln!(t, "  {},", toml_string(c));
         }
         let _ = writeln!(t, "]");
+        if !self.locomotion.is_empty() {
+            let _ = writeln!(
+                t,
+                "\n[locomotion]\n# Takes whose pelvis travels (comes at least {MIN_TRAVEL_M} m from where it\n# starts): the character walks along a finger's path with them.\nclips = ["
+            );
+            for (c, m) in &self.locomotion {
+                let _ = writeln!(t, "  {},  # {m:.1} m", toml_string(c));
+            }
+            let _ = writeln!(t, "]");
+        }
         for a in &self.actions {
             let _ = writeln!(t, "\n[[action]]");
             for n in &a.notes {
@@ -105,6 +116,24 @@ impl Plan {
         }
         for (file, why) in &self.not_actions {
             lines.push(format!("not an action {file}: {why}"));
+        }
+        if self.locomotion.is_empty() {
+            lines.push(format!("no take travels (its pelvis {MIN_TRAVEL_M} m or more from where it starts): the character will not walk where a finger leads; record walks to give it locomotion"));
+        } else {
+            let mut named: Vec<String> = self
+                .locomotion
+                .iter()
+                .take(4)
+                .map(|(c, m)| format!("{c} ({m:.1} m)"))
+                .collect();
+            if self.locomotion.len() > named.len() {
+                named.push(format!("and {} more", self.locomotion.len() - named.len()));
+            }
+            lines.push(format!(
+                "locomotion (walking where a finger leads): {} takes that travel: {}",
+                self.locomotion.len(),
+                named.join(", ")
+            ));
         }
         for a in &self.actions {
             lines.push(format!("action {}: {} clips", a.name, a.clips.len()));
