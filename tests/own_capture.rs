@@ -103,7 +103,7 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
     }
     // 11 of 17 start (the README); of those that do not, `library check`
     // names the three it can see from the default camera.
-    assert!(started.len() >= 10, "{not:?}");
+    assert!(started.len() >= 11, "{not:?}");
     for named in [
         "`dash`: from the default camera",
         "`run` dragged from the default camera",
@@ -119,12 +119,13 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
         serde_json::from_slice(&std::fs::read(here.join("my-demo/metrics.json")).unwrap()).unwrap();
     eprintln!("metrics: {metrics}");
     assert_eq!(metrics["nan_frames"], 0, "{metrics}");
-    // The README's figures: 3.88 mm a frame on average (4.32 in a debug
-    // build, whose physics differ in the last bits and the run with them),
-    // nothing into the floor (the feet stand on it: before the library was
-    // moved onto its floor they floated 4 cm above it).
+    // The README's figures: 2.85 mm a frame on average (the target's 3
+    // mm), nothing into the floor (the feet stand on it: before the
+    // library was moved onto its floor they floated 4 cm above it), 33
+    // pops.
     let f = |k: &str| metrics[k].as_f64().unwrap();
-    assert!(f("foot_skate_mm_per_frame") <= 4.6, "{metrics}");
+    assert!(f("foot_skate_mm_per_frame") <= 3.0, "{metrics}");
+    assert!(f("pops") <= 36.0, "{metrics}");
     assert!(f("ground_penetration_mm") <= 1.0, "{metrics}");
     // Every action that started in the demo starts in the replay (a walk
     // may be told again, when a posing drag of the pelvis walks).

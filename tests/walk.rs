@@ -31,15 +31,15 @@ fn the_default_library_walks_along_random_paths() {
     // The README's figures (`marionette eval walk`, seed 1, 20 paths).
     assert_eq!(r.paths, 20);
     assert!(r.followed >= 0.95, "{r:?}");
-    // 1.0 followed, 8.64 cm from the end, 4.73 cm off the path, planted
-    // feet 3.04 mm per frame (worst step 52.4 mm), no pop, stepping 0.51 s
+    // 1.0 followed, 8.89 cm from the end, 4.82 cm off the path, planted
+    // feet 2.94 mm per frame (worst step 52.4 mm), no pop, stepping 0.50 s
     // after the finger left reach.
-    assert!(r.arrival_cm <= 9.5, "{r:?}");
-    assert!(r.deviation_cm <= 5.2, "{r:?}");
+    assert!(r.arrival_cm <= 9.8, "{r:?}");
+    assert!(r.deviation_cm <= 5.3, "{r:?}");
     assert_eq!(r.pops, 0, "{r:?}");
-    assert!(r.skate_mm <= 3.3, "{r:?}");
+    assert!(r.skate_mm <= 3.0, "{r:?}");
     assert!(r.skate_max_mm <= 57.0, "{r:?}");
-    assert!(r.start_s > 0.4 && r.start_s <= 0.56, "{r:?}");
+    assert!(r.start_s > 0.4 && r.start_s <= 0.55, "{r:?}");
 }
 
 #[test]

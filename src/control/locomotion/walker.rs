@@ -19,6 +19,10 @@ const SEARCH_S: f64 = 0.1;
 /// How long a crossfade to another frame takes (s).
 const BLEND_S: f64 = 0.25;
 
+/// ... and from the standing posture the walk starts from (s): the
+/// first step comes sooner.
+const BLEND_FROM_POSE_S: f64 = 0.15;
+
 /// A frame of the same clip this close to the one playing (s) is not a
 /// change.
 const SAME_S: f64 = 0.3;
@@ -131,6 +135,14 @@ impl Walker {
         };
         let query = walker.query(&current);
         walker.pos = gait.best(&query, &WEIGHTS).map_or(0.0, |(i, _)| i as f64);
+        if let Some(f) = gait.frames.get(walker.pos as usize) {
+            let c = &gait.clips[f.clip];
+            tracing::debug!(
+                clip = %c.name,
+                at_s = (walker.pos - c.first as f64) * c.frame_time,
+                "the walk starts from"
+            );
+        }
         walker
     }
 
@@ -335,7 +347,12 @@ impl Walker {
         // Time moves on.
         self.pos = advance(gait, self.pos, dt);
         if let Some((src, s)) = self.from.take() {
-            let s = s + dt / BLEND_S;
+            let blend = if matches!(src, Source::Pose { .. }) {
+                BLEND_FROM_POSE_S
+            } else {
+                BLEND_S
+            };
+            let s = s + dt / blend;
             if s < 1.0 {
                 let src = match src {
                     Source::Frame(p) => Source::Frame(advance(gait, p, dt)),
