@@ -2,7 +2,8 @@
 //! the ragdoll's physical effects → foot IK) for one character and for
 //! four, with two fingers posing; and tables of two and four characters
 //! standing within reach of each other, a finger posing each one's hand,
-//! collisions between their bodies included.
+//! collisions between their bodies included; and one character walking
+//! after a finger that leads its pelvis round a circle on the floor.
 //! `cargo bench --bench controller`.
 
 #![allow(clippy::print_stderr, reason = "the contacts seen are printed")]
@@ -13,7 +14,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::control::character::Character;
-use marionette::control::controller::{Controller, Settings};
+use marionette::control::controller::{Controller, Mode, Settings};
 use marionette::control::stage::{Actor, Stage};
 use marionette::input::calibration::RawPoint;
 use marionette::input::touch::{Phase, Tool};
@@ -161,6 +162,44 @@ fn table(c: &mut Criterion, ch: &Arc<Character>) {
             "{n} characters: {hits} hits over {k} steps, deepest overlap left {deepest:.3} m"
         );
     }
+    // Walking: the pelvis finger goes round a circle of 1.2 m about where
+    // the character stood, at 0.8 m/s, put each step over the circle's
+    // point at the pelvis's height as the camera shows it then.
+    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    ctl.advance(1.0 / 30.0);
+    let pelvis = ctl.world().positions[ch.roles.get(Role::Pelvis)];
+    let on_circle = |t: f64| {
+        let a = t * 0.8 / 1.2;
+        pelvis + glam::DVec3::new(1.2 * a.cos() - 1.2, 0.0, 1.2 * a.sin())
+    };
+    let down = ctl.rig.camera().project(pelvis).unwrap();
+    ctl.touch(&ScreenFrame {
+        t: 0.04,
+        contacts: vec![contact(1, Phase::Down, down)],
+    });
+    let mut k = 2u32;
+    let mut step = |ctl: &mut Controller| {
+        k += 1;
+        let t = f64::from(k) / 30.0;
+        let at = ctl.rig.camera().project(on_circle(t - 0.07)).unwrap();
+        ctl.touch(&ScreenFrame {
+            t,
+            contacts: vec![contact(1, Phase::Move, at)],
+        });
+        ctl.advance(t);
+        matches!(ctl.mode(), Mode::Walk(_))
+    };
+    for _ in 0..60 {
+        step(&mut ctl);
+    }
+    let (mut walking, mut steps) = (0usize, 0usize);
+    g.bench_function("1 character walking after the pelvis finger", |b| {
+        b.iter(|| {
+            walking += usize::from(step(&mut ctl));
+            steps += 1;
+        })
+    });
+    eprintln!("walking in {walking} of {steps} measured steps");
     g.finish();
 }
 
