@@ -10,6 +10,7 @@ use crate::character::roles::Role;
 use crate::control::action::trail::TrailPoint;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
+use crate::control::locomotion::walker::{path_length, point_along};
 use crate::control::stage::Stage;
 use crate::control::ticker::Ticker;
 use crate::input::config::InputConfig;
@@ -159,22 +160,13 @@ impl<'a> Author<'a> {
             .iter()
             .map(|(x, z)| pelvis + turn * glam::DVec3::new(-x, 0.0, *z))
             .collect();
-        let total: f64 = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        let total = path_length(&points);
         self.down(0, start);
         self.frame();
         let mut s = 0.0;
         while s < total {
             s = (s + speed * DT).min(total);
-            let mut left = s;
-            let mut p = points[points.len() - 1];
-            for w in points.windows(2) {
-                let l = (w[1] - w[0]).length();
-                if l >= left && l > 0.0 {
-                    p = w[0] + (w[1] - w[0]) * (left / l);
-                    break;
-                }
-                left -= l;
-            }
+            let p = point_along(&points, s);
             self.sync();
             let at = self.ctl.rig().camera().project(p).unwrap_or(start);
             self.to(0, at);

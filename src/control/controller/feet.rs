@@ -152,6 +152,15 @@ impl Controller {
     /// toes would sweep the floor); a lifted foot, or every foot once the
     /// walk is over, takes the posture's turn again, smoothly.
     fn hold_turn(&mut self, walking: bool, dt: f64) {
+        if !walking
+            && self
+                .feet
+                .iter()
+                .all(|f| f.twist == 0.0 && f.held_yaw.is_none())
+        {
+            // Posing with nothing held or let go: nothing to turn.
+            return;
+        }
         let sk = &self.ch.lib.skeleton;
         let w = forward_kinematics(sk, &self.output);
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {

@@ -514,6 +514,7 @@ impl Controller {
                     self.mode = Mode::Action(Box::new(player));
                     self.switched = true;
                 } else if matches!(self.mode, Mode::Walk(_)) || self.try_walk(&camera, t) {
+                    // A walk's drag started a walk, or the finger left reach.
                     self.walk_step(&camera, t, dt);
                 } else if !constraints.is_empty() {
                     self.target = synthesize(

@@ -13,6 +13,7 @@ use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::control::action::timeline::ActionEvent;
 use crate::control::locomotion::walker::Walker;
+use crate::input::touch::ContactId;
 use crate::screen::ScreenPoint;
 
 /// A pelvis finger's floor point farther than this from the pelvis (m)
@@ -47,6 +48,13 @@ pub(super) struct Lead {
     pub(super) beyond_since: Option<f64>,
 }
 
+/// The finger holding the pelvis (see [`Controller::pelvis_finger`]).
+struct PelvisFinger {
+    id: ContactId,
+    at: ScreenPoint,
+    from: ScreenPoint,
+}
+
 /// The floor point below where the ray through `at` meets the level
 /// plane at `height`.
 #[must_use]
@@ -71,39 +79,32 @@ impl Controller {
     /// The floor point the finger holding the pelvis leads to, if one does.
     fn pelvis_lead(&self, camera: &Camera) -> Option<DVec3> {
         self.pelvis_finger()
-            .map(|(at, _)| floor_point(camera, at, self.lead.height))
+            .map(|f| floor_point(camera, f.at, self.lead.height))
     }
 
     /// The travelling action (a walk, a run) whose templates the pelvis
-    /// finger's drag came nearest so far, if it came near one: the walk is
+    /// finger's drag costs least against now, at any coverage: the walk is
     /// told as that action.
     fn nearest_travelling(&self) -> Option<String> {
-        let id = self.grabs.iter().find_map(|(id, g)| {
-            matches!(
-                g,
-                Grab::Part {
-                    role: Role::Pelvis,
-                    ..
-                }
-            )
-            .then_some(*id)
-        })?;
-        let m = self.matching.get(&id)?;
-        // The action whose templates cost least now, at any coverage.
-        let action = m.drag.nearest_other(usize::MAX, 0)?;
+        let m = self.matching.get(&self.pelvis_finger()?.id)?;
+        let action = m.drag.cheapest(0, |_| true)?;
         self.ch.travels[action].then(|| self.ch.actions[action].def.name.clone())
     }
 
-    /// Where the finger holding the pelvis is on the screen, and where its
-    /// drag began.
-    fn pelvis_finger(&self) -> Option<(ScreenPoint, ScreenPoint)> {
-        self.grabs.values().find_map(|g| match g {
+    /// The finger holding the pelvis: its contact, where it is on the
+    /// screen and where its drag began.
+    fn pelvis_finger(&self) -> Option<PelvisFinger> {
+        self.grabs.iter().find_map(|(id, g)| match g {
             Grab::Part {
                 role: Role::Pelvis,
                 at,
                 trail,
                 ..
-            } => Some((*at, trail.first().map_or(*at, |p| p.at))),
+            } => Some(PelvisFinger {
+                id: *id,
+                at: *at,
+                from: trail.first().map_or(*at, |p| p.at),
+            }),
             _ => None,
         })
     }
@@ -123,13 +124,15 @@ impl Controller {
             self.lead.beyond_since = None;
             return false;
         }
-        let across = self.pelvis_finger().is_some_and(|(at, from)| {
-            (at.x - from.x).abs() >= (at.y - from.y).abs()
-                && (floor_point(camera, ScreenPoint::new(at.x, at.y + 1.0), self.lead.height)
-                    - goal)
-                    .length()
-                    <= MAX_M_PER_PX
-        });
+        let across = self
+            .pelvis_finger()
+            .is_some_and(|PelvisFinger { at, from, .. }| {
+                (at.x - from.x).abs() >= (at.y - from.y).abs()
+                    && (floor_point(camera, ScreenPoint::new(at.x, at.y + 1.0), self.lead.height)
+                        - goal)
+                        .length()
+                        <= MAX_M_PER_PX
+            });
         if !across {
             self.lead.beyond_since = None;
             return false;

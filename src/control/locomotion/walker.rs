@@ -209,20 +209,20 @@ impl Walker {
     }
 
     /// The point `d` metres along the path from the character's nearest
-    /// point, and how much of the path is left from there.
-    fn along(&self, d: f64) -> (DVec3, f64) {
+    /// point (the path's end past it).
+    fn along(&self, d: f64) -> DVec3 {
         let (near, _) = self.nearest();
         let mut here = near;
         let mut left = d;
         for q in &self.path[self.seg + 1..] {
             let l = (*q - here).length();
             if l >= left {
-                return (here + (*q - here) * (left / l.max(1e-9)), 0.0);
+                return here + (*q - here) * (left / l.max(1e-9));
             }
             left -= l;
             here = *q;
         }
-        (here, left)
+        here
     }
 
     /// The nearest point of the current segment to the root.
@@ -275,7 +275,7 @@ impl Walker {
         let mut q = *current;
         let unyaw = DQuat::from_rotation_y(-self.yaw);
         for (i, s) in FUTURE_S.iter().enumerate() {
-            let (p, _) = self.along(self.speed * s);
+            let p = self.along(self.speed * s);
             let l = unyaw * (p - self.root);
             q[2 * i] = l.x;
             q[2 * i + 1] = l.z;
@@ -325,7 +325,7 @@ impl Walker {
         }
         // Root motion, from the frames playing (blended).
         let (step, turn) = self.motion(gait, dt);
-        let (steer_to, _) = self.along(self.speed.mul_add(0.5, 0.3));
+        let steer_to = self.along(self.speed.mul_add(0.5, 0.3));
         let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
         let mut remaining = self.remaining();
         let finger_done = !self.leading || self.still_s > 0.3;
@@ -366,7 +366,7 @@ impl Walker {
             self.done = true;
         }
         // A walk that cannot reach the end stops in the end.
-        let path_len: f64 = self.path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        let path_len = path_length(&self.path);
         if !self.leading && self.walked_s > 4.0 + path_len / 0.3 {
             tracing::debug!(
                 remaining_m = remaining,
@@ -417,6 +417,27 @@ impl Walker {
         pose.translations[0] = self.root + DVec3::Y * root_y;
         pose
     }
+}
+
+/// The length of the polyline `pts` (m).
+#[must_use]
+pub fn path_length(pts: &[DVec3]) -> f64 {
+    pts.windows(2).map(|w| (w[1] - w[0]).length()).sum()
+}
+
+/// The point `s` metres along the polyline `pts` (its last point past
+/// its end).
+#[must_use]
+pub fn point_along(pts: &[DVec3], s: f64) -> DVec3 {
+    let mut left = s;
+    for w in pts.windows(2) {
+        let l = (w[1] - w[0]).length();
+        if l >= left && l > 0.0 {
+            return w[0] + (w[1] - w[0]) * (left / l);
+        }
+        left -= l;
+    }
+    pts.last().copied().unwrap_or_default()
 }
 
 /// Ease in and out over 0..1.

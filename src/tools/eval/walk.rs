@@ -16,6 +16,7 @@ use crate::character::roles::Role;
 use crate::control::action::trials::Lcg;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
+use crate::control::locomotion::walker::{path_length, point_along};
 use crate::input::touch::{Phase, ScreenContact, ScreenFrame, Tool};
 use crate::tools::metrics::Meter;
 
@@ -136,7 +137,7 @@ pub fn check_paths(paths: &[WalkPath]) -> Result<(), String> {
                 k + 1
             ));
         }
-        if length(&world_points(p)) < 0.05 {
+        if path_length(&world_points(p)) < 0.05 {
             return Err(format!("path {n}: its points do not go anywhere"));
         }
     }
@@ -202,23 +203,6 @@ fn world_points(p: &WalkPath) -> Vec<DVec3> {
         .iter()
         .map(|q| DVec3::new(-(q[0] - p.points[0][0]), 0.0, q[1] - p.points[0][1]))
         .collect()
-}
-
-fn length(pts: &[DVec3]) -> f64 {
-    pts.windows(2).map(|w| (w[1] - w[0]).length()).sum()
-}
-
-/// The point `s` metres along `pts`.
-fn at_length(pts: &[DVec3], s: f64) -> DVec3 {
-    let mut left = s;
-    for w in pts.windows(2) {
-        let l = (w[1] - w[0]).length();
-        if l >= left && l > 0.0 {
-            return w[0] + (w[1] - w[0]) * (left / l);
-        }
-        left -= l;
-    }
-    *pts.last().expect("a path has points")
 }
 
 /// Distance from `p` to the polyline `pts` (m).
@@ -295,7 +279,7 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
         .map(|p| p + pelvis.with_y(0.0))
         .collect();
     let feet_rest = feet.map(|f| ctl.world().positions[f]);
-    let total = length(&pts);
+    let total = path_length(&pts);
     let screen = |ctl: &Controller, p: DVec3| {
         ctl.rig
             .camera()
@@ -320,7 +304,7 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
         let s = (t - start) * path.speed_mps;
         let mut frames = Vec::new();
         if !lifted {
-            let p = at_length(&pts, s);
+            let p = point_along(&pts, s);
             let phase = if s >= total { Phase::Up } else { Phase::Move };
             frames.push(ScreenFrame {
                 t,

@@ -463,9 +463,16 @@ impl DragMatch {
     /// from by the margin.
     #[must_use]
     pub fn nearest_other(&self, action: usize, gate: usize) -> Option<usize> {
+        self.cheapest(gate, |a| a != action)
+    }
+
+    /// The action whose templates cost least now, at any coverage (for
+    /// the slowness cap of `gate`), among those `keep` keeps.
+    #[must_use]
+    pub fn cheapest(&self, gate: usize, keep: impl Fn(usize) -> bool) -> Option<usize> {
         self.costs
             .iter()
-            .filter(|c| c.action != action && c.any[gate % CAPS].is_finite())
+            .filter(|c| keep(c.action) && c.any[gate % CAPS].is_finite())
             .min_by(|a, b| a.any[gate % CAPS].total_cmp(&b.any[gate % CAPS]))
             .map(|c| c.action)
     }
