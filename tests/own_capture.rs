@@ -126,6 +126,8 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
     let f = |k: &str| metrics[k].as_f64().unwrap();
     assert!(f("foot_skate_mm_per_frame") <= 3.0, "{metrics}");
     assert!(f("pops") <= 36.0, "{metrics}");
+    // The worst single step, 277 mm (a foot of the quickest dashes).
+    assert!(f("foot_skate_max_mm") <= 290.0, "{metrics}");
     assert!(f("ground_penetration_mm") <= 1.0, "{metrics}");
     // Every action that started in the demo starts in the replay (a walk
     // may be told again, when a posing drag of the pelvis walks).
