@@ -3,14 +3,15 @@
 //! four, with two fingers posing; and tables of two and four characters
 //! standing within reach of each other, a finger posing each one's hand,
 //! collisions between their bodies included; and one character walking
-//! after a finger that leads its pelvis round a circle on the floor.
+//! after a finger that leads its pelvis round a circle on the floor, alone
+//! and with a wave laid over the walk by a second finger.
 //! `cargo bench --bench controller`.
 
 #![allow(clippy::print_stderr, reason = "the contacts seen are printed")]
 
 use std::sync::Arc;
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::control::character::Character;
@@ -20,6 +21,7 @@ use marionette::input::calibration::RawPoint;
 use marionette::input::touch::{Phase, Tool};
 use marionette::input::touch::{ScreenContact, ScreenFrame};
 use marionette::screen::ScreenPoint;
+use marionette::tools::eval::layer::SecondFinger;
 
 fn contact(id: u64, phase: Phase, at: ScreenPoint) -> ScreenContact {
     ScreenContact {
@@ -200,6 +202,47 @@ fn table(c: &mut Criterion, ch: &Arc<Character>) {
         })
     });
     eprintln!("walking in {walking} of {steps} measured steps");
+    // The same walk with a wave laid over it: a second finger drags the
+    // left hand's wave as it walks (as `eval walk --layer` does); each
+    // measured step starts from a copy of the controller with the wave at
+    // full weight.
+    let wave = ch
+        .actions
+        .iter()
+        .position(|a| a.def.name == "wave_left")
+        .unwrap();
+    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    ctl.advance(1.0 / 30.0);
+    ctl.touch(&ScreenFrame {
+        t: 0.04,
+        contacts: vec![contact(1, Phase::Down, down)],
+    });
+    let mut second = SecondFinger::new(wave);
+    let frame = |ctl: &Controller, second: &mut SecondFinger, k: u32| {
+        let t = f64::from(k) / 30.0;
+        let at = ctl.rig.camera().project(on_circle(t - 0.07)).unwrap();
+        let mut contacts = vec![contact(1, Phase::Move, at)];
+        if let Some((phase, p)) = second.contact(ch, ctl, t) {
+            contacts.push(contact(2, phase, p));
+        }
+        ScreenFrame { t, contacts }
+    };
+    let mut k = 2u32;
+    while ctl.layered().is_none_or(|l| l.weight < 1.0) {
+        k += 1;
+        assert!(k < 600, "the wave was not laid over the walk");
+        let f = frame(&ctl, &mut second, k);
+        ctl.step(std::slice::from_ref(&f), f.t);
+    }
+    assert!(matches!(ctl.mode(), Mode::Walk(_)), "walking");
+    let next = frame(&ctl, &mut second, k + 1);
+    g.bench_function("1 character walking with a wave laid over it", |b| {
+        b.iter_batched_ref(
+            || ctl.clone(),
+            |c| c.step(std::slice::from_ref(&next), next.t),
+            BatchSize::SmallInput,
+        );
+    });
     g.finish();
 }
 

@@ -1,10 +1,12 @@
 //! What the character is made of: the library, its posing model and its
 //! action models, built once and shared by every controller.
 
-use crate::character::library::Library;
+use crate::character::library::{ActionDef, Library};
+use crate::character::roles::Role;
 use crate::character::roles::RoleMap;
 use crate::character::skeleton::Pose;
 use crate::control::action::calibrate::calibrate;
+use crate::control::action::layer::{Mask, Regions};
 use crate::control::action::model::ActionModel;
 use crate::control::action::recogniser::{Recogniser, TemplateRule};
 use crate::control::locomotion::gait::{self, Gait};
@@ -28,6 +30,13 @@ pub struct Character {
     /// Which actions travel (a walk, a run): with locomotion clips, their
     /// drag walks along the finger's path instead.
     pub travels: Vec<bool>,
+    /// The body's regions, for an action laid over a walk (`None` where
+    /// the skeleton's chest does not hang below its pelvis).
+    pub regions: Option<Regions>,
+    /// For each action, the regions it takes when laid over a walk or an
+    /// action led by the legs: `None` for an action that cannot be (led
+    /// by the legs or the pelvis, or travelling).
+    pub layers: Vec<Option<Mask>>,
 }
 
 impl Character {
@@ -80,6 +89,16 @@ impl Character {
                     .is_some_and(|c| gait::travel_m(c) >= gait::MIN_TRAVEL_M)
             })
             .collect();
+        let regions = Regions::new(&lib.skeleton, &roles);
+        let layers = lib
+            .actions
+            .iter()
+            .zip(&travels)
+            .map(|(def, travels): (&ActionDef, &bool)| {
+                let r = regions.as_ref()?;
+                (upper(def.primary) && !travels).then(|| r.mask(&lib, &roles, def))
+            })
+            .collect();
         if gait.is_empty() {
             tracing::info!(
                 "the library has no locomotion clips: a dragged pelvis poses the character where it stands and does not walk"
@@ -93,6 +112,8 @@ impl Character {
             recogniser,
             gait,
             travels,
+            regions,
+            layers,
         }
     }
 
@@ -139,4 +160,20 @@ impl Character {
             None => self.lib.skeleton.rest_pose(),
         }
     }
+}
+
+/// Whether `role` belongs to the upper body (arms, head, chest): an action
+/// it leads can be laid over a walk.
+#[must_use]
+pub fn upper(role: Role) -> bool {
+    !matches!(
+        role,
+        Role::Pelvis
+            | Role::LeftHip
+            | Role::LeftKnee
+            | Role::LeftFoot
+            | Role::RightHip
+            | Role::RightKnee
+            | Role::RightFoot
+    )
 }

@@ -272,7 +272,7 @@ pub(super) enum EvalCommand {
     /// Walking where a finger leads: drag the pelvis along floor paths
     /// through the controller (touch frames from the home view) and print
     /// one JSON object (paths, followed, arrival_cm, deviation_cm, skate_mm,
-    /// skate_max_mm, pops, start_s, rows)
+    /// skate_max_mm, pops, start_s, rows; with --layer, layered)
     Walk {
         /// Library folder (with library.toml) [default: the configuration's
         /// character.library, else the shipped library]
@@ -289,6 +289,11 @@ pub(super) enum EvalCommand {
         /// How many random curves
         #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=1000))]
         count: u32,
+        /// An action of the arms or head that a second finger drags over
+        /// each walk (layered on the upper body); its figures are printed
+        /// as `layered` (started, part_cm, part_max_cm, shown_cm)
+        #[arg(long, value_name = "ACTION")]
+        layer: Option<String>,
     },
     /// Action control: replay held-out clips' primary-part paths as drags
     /// through the controller (touch frames, as live input) and print one

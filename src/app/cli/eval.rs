@@ -231,6 +231,7 @@ pub(super) fn eval_walk(
     paths: Option<&Path>,
     seed: u64,
     count: u32,
+    layer: Option<&str>,
 ) -> Result<(), Failure> {
     use crate::tools::eval::walk;
     let paths = match paths {
@@ -241,7 +242,42 @@ pub(super) fn eval_walk(
     if ch.gait.is_empty() {
         tracing::warn!(library = %library.display(), "the library has no locomotion clips: the character will not walk");
     }
-    let out = walk::eval_walk(&ch, &paths);
+    let layer = match layer {
+        None => None,
+        Some(name) => Some(layer_action(&ch, name)?),
+    };
+    let out = walk::eval_walk(&ch, &paths, layer);
     let json = serde_json::to_string_pretty(&out).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+/// The action `name` of `ch`, one that can be laid over a walk.
+fn layer_action(ch: &crate::control::character::Character, name: &str) -> Result<usize, Failure> {
+    let layerable: Vec<&str> = ch
+        .actions
+        .iter()
+        .zip(&ch.layers)
+        .filter(|(_, l)| l.is_some())
+        .map(|(a, _)| a.def.name.as_str())
+        .collect();
+    let found = ch.actions.iter().position(|a| a.def.name == name);
+    match found {
+        Some(i) if ch.layers[i].is_some() => Ok(i),
+        _ => Err(Failure::new(
+            exit::USAGE,
+            format!(
+                "--layer {name}: {}; actions that can be laid over a walk (led by the arms or head): {}",
+                if found.is_some() {
+                    "led by the legs or pelvis, or travelling, it cannot be laid over a walk"
+                } else {
+                    "the library has no such action"
+                },
+                if layerable.is_empty() {
+                    "none".to_owned()
+                } else {
+                    layerable.join(", ")
+                }
+            ),
+        )),
+    }
 }

@@ -215,12 +215,14 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     paths,
                     seed,
                     count,
+                    layer,
                 },
         } => eval::eval_walk(
             &chosen_library(config, library)?,
             paths.as_deref(),
             seed,
             count,
+            layer.as_deref(),
         ),
         Command::Eval {
             what: EvalCommand::Character { mesh, library },

@@ -7,6 +7,8 @@
 //! - [`model`]: action models (learned model, average trajectory,
 //!   direction, duration) and recognition among them.
 //! - [`player`]: playing an action under the fingers.
+//! - [`layer`]: an arm or head action laid over the upper body of a walk
+//!   (or of an action led by the legs), region by region.
 //! - [`trail`]: matching a finger's trail against an action's projected
 //!   trajectory by dynamic programming (eq. 1), and the paper's start
 //!   conditions.
@@ -19,6 +21,7 @@
 //!   the library's own clips left out in turn).
 
 pub mod calibrate;
+pub mod layer;
 pub mod model;
 pub mod player;
 pub mod recogniser;

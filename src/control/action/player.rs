@@ -49,29 +49,24 @@ impl ActionPlayer {
         // clips so that their posture at `t0` stands where the character
         // stands, not where the clips' start would put it.
         let mut at = at;
-        let mut off = glam::DVec3::ZERO;
-        let mut count = 0.0;
-        for clip in 0..a.def.clips.len() {
-            let nearest = a
-                .model
-                .samples
-                .iter()
-                .filter(|s| s.clip == clip)
-                .min_by(|x, y| (x.time - t0).abs().total_cmp(&(y.time - t0).abs()));
-            if let Some(s) = nearest {
-                off += glam::DVec3::new(s.root_offset.x, 0.0, s.root_offset.z);
-                count += 1.0;
-            }
-        }
-        if count > 0.0 {
-            at.position -= glam::DQuat::from_rotation_y(at.yaw) * (off / count);
-        }
+        at.position -= glam::DQuat::from_rotation_y(at.yaw) * root_offset(a, t0);
         Self {
             action,
             timeline: ActionTimeline::start(a.def.clone(), a.duration, t0, time_s, events),
             clip_weights: vec![1.0 / n as f64; n],
             at,
         }
+    }
+
+    /// Keep the clips placed under a body that moves on its own (a walk
+    /// that an action is layered on): their posture now stands where `at`
+    /// (the body's placement now) stands.
+    pub fn follow(&mut self, actions: &[ActionModel], at: Placement) {
+        let off = root_offset(&actions[self.action], self.timeline.time());
+        self.at = Placement {
+            position: at.position - glam::DQuat::from_rotation_y(at.yaw) * off,
+            ..at
+        };
     }
 
     /// Which action (index into the action models).
@@ -171,6 +166,26 @@ impl ActionPlayer {
         weights.sort_by(|x, y| y.1.total_cmp(&x.1));
         blend(&lib.skeleton, &model, &weights, &self.at)
     }
+}
+
+/// The clips' root offset from their start at generalized time `t` (the
+/// mean over the clips of their nearest samples), on the floor.
+fn root_offset(a: &ActionModel, t: f64) -> glam::DVec3 {
+    let mut off = glam::DVec3::ZERO;
+    let mut count = 0.0;
+    for clip in 0..a.def.clips.len() {
+        let nearest = a
+            .model
+            .samples
+            .iter()
+            .filter(|s| s.clip == clip)
+            .min_by(|x, y| (x.time - t).abs().total_cmp(&(y.time - t).abs()));
+        if let Some(s) = nearest {
+            off += glam::DVec3::new(s.root_offset.x, 0.0, s.root_offset.z);
+            count += 1.0;
+        }
+    }
+    if count > 0.0 { off / count } else { off }
 }
 
 /// Sample weights gathered per clip and normalised.

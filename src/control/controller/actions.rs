@@ -2,11 +2,13 @@
 //! and the marks drawn for the fingers and the trajectories.
 
 use super::{Controller, Grab, Matching, Mode, RecogniserKind};
+use crate::character::roles::Role;
 use crate::control::action::model::recognize;
 use crate::control::action::player::ActionPlayer;
 use crate::control::action::recogniser::{Decision, DragMatch};
 use crate::control::action::trail::{TrailPoint, view_angle_deg};
 use crate::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
+use crate::screen::ScreenPoint;
 
 impl Controller {
     pub(super) fn reset_trails(&mut self, t: f64) {
@@ -37,7 +39,7 @@ impl Controller {
                 (found.action, found.matched.coverage)
             }
             RecogniserKind::Templates => {
-                let d = self.recognise_templates(camera)?;
+                let d = self.recognise_templates(camera, |_| true)?;
                 (d.action, d.generalized)
             }
         };
@@ -91,14 +93,18 @@ impl Controller {
     }
 
     /// The template recogniser: each held part's trail is fed to its
-    /// match as it grows (a new match where the trail began anew).
-    fn recognise_templates(
+    /// match as it grows (a new match where the trail began anew), relative
+    /// to the body (what the pelvis moved on the screen while walking taken
+    /// out); a decision is taken for the parts `only` allows.
+    pub(super) fn recognise_templates(
         &mut self,
         camera: &crate::character::camera::Camera,
+        only: fn(Role) -> bool,
     ) -> Option<Decision> {
         let at = self.placement_now();
         let (grabs, actions) = (&self.grabs, &self.ch.actions);
         let thresholds = self.ch.recogniser.thresholds;
+        let drift = self.drift.px;
         self.matching.retain(|id, m| {
             let held = grabs.contains_key(id);
             if let (false, Some(c)) = (held, m.drag.closest()) {
@@ -129,6 +135,11 @@ impl Controller {
             else {
                 continue;
             };
+            if !only(*role) {
+                // Not a part that may start anything now (the pelvis
+                // finger that walks the character): not matched.
+                continue;
+            }
             let fresh = || Matching {
                 start: *trail_start,
                 fed: 0,
@@ -148,7 +159,10 @@ impl Controller {
                 *m = fresh();
             }
             for p in &trail[m.fed..] {
-                m.drag.push(*p);
+                m.drag.push(TrailPoint {
+                    at: ScreenPoint::new(p.at.x - drift.x, p.at.y - drift.y),
+                    t: p.t,
+                });
             }
             m.fed = trail.len();
             if !*moved || trail.len() < 2 || found.is_some() {

@@ -18,11 +18,13 @@ mod contact;
 mod effects;
 mod feet;
 mod fingers;
+mod layer;
 mod stance;
 mod surface;
 mod walk;
 
 use self::feet::{FootHold, leg_length};
+pub use self::layer::Layered;
 pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
 use super::rig::Rig;
@@ -32,7 +34,8 @@ use crate::control::action::player::ActionPlayer;
 use crate::control::action::recogniser::DragMatch;
 use crate::control::action::timeline::{ActionEvent, Status};
 use crate::control::action::trail::{StartRule, TrailPoint};
-use crate::control::posing::constraint::SynthOptions;
+use crate::control::character::upper;
+use crate::control::posing::constraint::{Constraint, SynthOptions};
 use crate::control::posing::sample::{Anchor, Placement};
 use crate::control::posing::synth::synthesize;
 use crate::control::tracking::accel::{AccelTracker, Gains};
@@ -175,6 +178,10 @@ pub struct Controller {
     /// under way is told as.
     lead: walk::Lead,
     walking: String,
+    /// An arm or head action laid over the walk (or an action led by the
+    /// legs), and where the pelvis went on the screen while walking.
+    layer: Option<Box<layer::Layer>>,
+    drift: layer::Drift,
 }
 
 /// The longest drag kept for recognition (s): longer than any action.
@@ -258,6 +265,8 @@ impl Controller {
                 beyond_since: None,
             },
             walking: String::new(),
+            layer: None,
+            drift: layer::Drift::default(),
             ch,
         }
     }
@@ -272,6 +281,13 @@ impl Controller {
     #[must_use]
     pub fn pose(&self) -> &Pose {
         &self.output
+    }
+
+    /// The posture asked for now (before tracking and the physical
+    /// effects).
+    #[must_use]
+    pub fn target(&self) -> &Pose {
+        &self.target
     }
 
     /// World transforms of the posture shown now.
@@ -371,6 +387,12 @@ impl Controller {
         self.time = t;
         let camera = self.rig.camera();
         let constraints = self.constraints(&camera);
+        // Under a layered action the arms and head are its own.
+        let base: Vec<Constraint> = constraints
+            .iter()
+            .copied()
+            .filter(|c| self.layer.is_none() || !upper(c.role))
+            .collect();
         let moved = self
             .grabs
             .values()
@@ -378,18 +400,20 @@ impl Controller {
         match &mut self.mode {
             Mode::Walk(_) => self.walk_step(&camera, t, dt),
             Mode::Posing => {
-                if let Some(player) = self.recognise(&camera, t) {
+                // An action laid over a walk that ended plays out first.
+                let found = self.layer.is_none().then(|| self.recognise(&camera, t));
+                if let Some(player) = found.flatten() {
                     self.mode = Mode::Action(Box::new(player));
                     self.switched = true;
                 } else if matches!(self.mode, Mode::Walk(_)) || self.try_walk(&camera, t) {
                     // A walk's drag started a walk, or the finger left reach.
                     self.walk_step(&camera, t, dt);
-                } else if !constraints.is_empty() {
+                } else if !base.is_empty() {
                     self.target = synthesize(
                         &self.ch.lib.skeleton,
                         &self.ch.roles,
                         &self.ch.posing,
-                        &constraints,
+                        &base,
                         &self.at,
                         self.planted,
                         &SynthOptions::default(),
@@ -403,7 +427,7 @@ impl Controller {
                 self.target = player.step(
                     &self.ch.lib,
                     &self.ch.actions,
-                    &constraints,
+                    &base,
                     !moved,
                     dt,
                     &mut self.events,
@@ -420,6 +444,7 @@ impl Controller {
                 }
             }
         }
+        self.layer_step(&camera, &constraints, t, dt);
         for g in self.grabs.values_mut() {
             if let Grab::Part { moved, .. } = g {
                 *moved = false;
@@ -451,6 +476,7 @@ impl Controller {
         let idle = self.idle_s() > self.settings.home_after_s;
         let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
         self.rig.settle(floor, idle, dt);
+        self.follow_drift(&self.rig.camera());
     }
 
     /// Touches up to `t`, then advance to `t`.

@@ -6,9 +6,11 @@
 //! - [`separation`]: how far apart the actions are, next to the drags' spread.
 //! - [`character`]: a skinned figure playing a library's clips.
 //! - [`walk`]: the pelvis dragged along floor paths, walked.
+//! - [`layer`]: a second finger's action laid over those walks.
 
 pub mod actions;
 pub mod character;
+pub mod layer;
 pub mod live;
 pub mod posing;
 pub mod separation;

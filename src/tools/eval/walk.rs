@@ -18,6 +18,7 @@ use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
 use crate::control::locomotion::walker::{path_length, point_along};
 use crate::input::touch::{Phase, ScreenContact, ScreenFrame, Tool};
+use crate::tools::eval::layer::{LayerReport, LayerRow, SecondFinger, summarise};
 use crate::tools::metrics::Meter;
 
 /// The frame rate the walk is stepped and measured at (as replays are).
@@ -63,6 +64,9 @@ pub struct WalkRow {
     /// From the finger leaving posing's reach to the first step (s); -1
     /// if the character never stepped.
     pub start_s: f64,
+    /// The action a second finger laid over the walk, if one was asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layered: Option<LayerRow>,
 }
 
 /// What `eval walk` prints.
@@ -76,6 +80,8 @@ pub struct WalkReport {
     pub skate_max_mm: f64,
     pub pops: usize,
     pub start_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layered: Option<LayerReport>,
     pub rows: Vec<WalkRow>,
 }
 
@@ -220,10 +226,11 @@ fn off_path(pts: &[DVec3], p: DVec3) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Walk every path and measure.
+/// Walk every path and measure; with `layer` (an action's index), a
+/// second finger drags that action over each walk.
 #[must_use]
-pub fn eval_walk(ch: &Arc<Character>, paths: &[WalkPath]) -> WalkReport {
-    let rows: Vec<WalkRow> = paths.iter().map(|p| walk_one(ch, p)).collect();
+pub fn eval_walk(ch: &Arc<Character>, paths: &[WalkPath], layer: Option<usize>) -> WalkReport {
+    let rows: Vec<WalkRow> = paths.iter().map(|p| walk_one(ch, p, layer)).collect();
     let n = rows.len().max(1) as f64;
     let mean = |f: &dyn Fn(&WalkRow) -> f64| rows.iter().map(f).sum::<f64>() / n;
     let starts: Vec<f64> = rows
@@ -241,13 +248,17 @@ pub fn eval_walk(ch: &Arc<Character>, paths: &[WalkPath]) -> WalkReport {
         skate_max_mm: r3(rows.iter().map(|r| r.skate_max_mm).fold(0.0, f64::max)),
         pops: rows.iter().map(|r| r.pops).sum(),
         start_s: r3(starts.iter().sum::<f64>() / starts.len().max(1) as f64),
+        layered: layer.map(|a| {
+            let played: Vec<&LayerRow> = rows.iter().filter_map(|r| r.layered.as_ref()).collect();
+            summarise(&ch.actions[a].def.name, &played)
+        }),
         rows,
     }
 }
 
-fn contact(phase: Phase, at: crate::screen::ScreenPoint) -> ScreenContact {
+fn contact(id: u64, phase: Phase, at: crate::screen::ScreenPoint) -> ScreenContact {
     ScreenContact {
-        id: 1,
+        id,
         phase,
         tool: Tool::Finger,
         raw: crate::input::calibration::RawPoint {
@@ -258,7 +269,8 @@ fn contact(phase: Phase, at: crate::screen::ScreenPoint) -> ScreenContact {
     }
 }
 
-fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
+fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkRow {
+    let mut second = layer.map(SecondFinger::new);
     let mut ctl = Controller::new(Arc::clone(ch), Settings::default(), 1280.0, 720.0, 0.0);
     let dt = 1.0 / HZ;
     let pelvis_j = ch.roles.get(Role::Pelvis);
@@ -289,7 +301,7 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
     let t0 = step(&mut ctl, &[], &mut k);
     let down = ScreenFrame {
         t: t0,
-        contacts: vec![contact(Phase::Down, screen(&ctl, pts[0]))],
+        contacts: vec![contact(1, Phase::Down, screen(&ctl, pts[0]))],
     };
     step(&mut ctl, &[down], &mut k);
     let mut meter = Meter::new(&ch.lib.skeleton, &ch.roles, dt);
@@ -302,14 +314,14 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
     loop {
         let t = f64::from(k + 1) * dt;
         let s = (t - start) * path.speed_mps;
-        let mut frames = Vec::new();
+        let mut contacts = Vec::new();
+        if let Some((phase, at)) = second.as_mut().and_then(|f| f.contact(ch, &ctl, t)) {
+            contacts.push(contact(2, phase, at));
+        }
         if !lifted {
             let p = point_along(&pts, s);
             let phase = if s >= total { Phase::Up } else { Phase::Move };
-            frames.push(ScreenFrame {
-                t,
-                contacts: vec![contact(phase, screen(&ctl, p))],
-            });
+            contacts.push(contact(1, phase, screen(&ctl, p)));
             if left_reach.is_none()
                 && (p - ctl.world().positions[pelvis_j].with_y(0.0)).length()
                     > crate::control::controller::WALK_REACH_M
@@ -318,7 +330,15 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
             }
             lifted = s >= total;
         }
+        let frames: Vec<ScreenFrame> = if contacts.is_empty() {
+            Vec::new()
+        } else {
+            vec![ScreenFrame { t, contacts }]
+        };
         step(&mut ctl, &frames, &mut k);
+        if let Some(f) = second.as_mut() {
+            f.measure(ch, &ctl);
+        }
         let held = if lifted { vec![] } else { vec![Role::Pelvis] };
         meter.push(ctl.pose(), &held);
         let w = ctl.world();
@@ -336,8 +356,8 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
         }
         if lifted {
             after_lift += dt;
-            let walking = matches!(ctl.mode(), Mode::Walk(_));
-            if (!walking && after_lift > 1.0) || after_lift > 15.0 {
+            let busy = matches!(ctl.mode(), Mode::Walk(_)) || ctl.layered().is_some();
+            if (!busy && after_lift > 1.0) || after_lift > 15.0 {
                 break;
             }
         }
@@ -364,6 +384,7 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath) -> WalkRow {
             (Some(a), Some(b)) => (b - a).max(0.0),
             _ => -1.0,
         },
+        layered: second.map(SecondFinger::finish),
     }
 }
 
