@@ -202,14 +202,29 @@ fn replay_metrics_meet_the_motion_targets_and_show_what_tracking_buys() {
     assert_eq!(f(&on, "pops"), 0.0, "{}", on["pop_list"]);
     assert!(f(&on, "max_joint_speed_jump_rad_s") <= 10.0);
     assert!(f(&on, "foot_skate_mm_per_frame") <= 5.0, "{on}");
-    // The README's figures: 0.35 mm per frame on average, the worst step
-    // 14.0 mm (a foot as the walk along the curve starts).
-    assert!(f(&on, "foot_skate_mm_per_frame") <= 0.38, "{on}");
+    // The README's figures: 0.42 mm per frame on average, the worst step
+    // 14.4 mm (a foot as the walk back, waving, stops).
+    assert!(f(&on, "foot_skate_mm_per_frame") <= 0.46, "{on}");
     assert!(f(&on, "foot_skate_max_mm") <= 15.0, "{on}");
     assert!(f(&on, "ground_penetration_mm") <= 5.0, "{on}");
     let actions = on["actions"].as_array().unwrap();
-    assert!(actions.len() >= 6);
+    assert!(actions.len() >= 8);
     assert!(actions.iter().all(|a| a["outcome"] == "finished"), "{on}");
+    // The wave laid over the walk back: started while that walk plays.
+    let at = |name: &str| {
+        actions
+            .iter()
+            .filter(|a| a["name"] == name)
+            .map(|a| (f(a, "start_s"), f(a, "end_s")))
+            .collect::<Vec<_>>()
+    };
+    let (walks, waves) = (at("walk"), at("wave_right"));
+    assert!(
+        waves
+            .iter()
+            .any(|w| walks.iter().any(|k| k.0 < w.0 && w.0 < k.1)),
+        "{on}"
+    );
     // Without tracking the switches between controllers pop.
     assert!(f(&off, "pops") > 20.0, "{off}");
     assert!(f(&off, "max_joint_speed_jump_rad_s") > 3.0 * f(&on, "max_joint_speed_jump_rad_s"));

@@ -569,7 +569,7 @@ fn the_demo_runs_through_with_a_configured_mesh_and_refuses_a_broken_one() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    assert!(stdout.contains("actions started by drags: 6"), "{stdout}");
+    assert!(stdout.contains("actions started by drags: 8"), "{stdout}");
     assert!(out.join("contact-sheet.png").is_file());
     // A broken mesh stops the start, saying what and where.
     std::fs::write(dir.path().join("mascot.glb"), b"glTF\x02\0\0\0").unwrap();

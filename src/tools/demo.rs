@@ -15,7 +15,9 @@ use crate::control::stage::Stage;
 use crate::control::ticker::Ticker;
 use crate::input::config::InputConfig;
 use crate::input::pipeline;
+use crate::input::touch::Phase;
 use crate::screen::{Picture, ScreenPoint};
+use crate::tools::eval::layer::SecondFinger;
 use crate::tools::synth::{Synth, panel};
 
 /// Frame interval of the authored panel (60 Hz).
@@ -151,7 +153,18 @@ impl<'a> Author<'a> {
     /// its pelvis) at `speed` m/s, the finger kept over each point at the
     /// pelvis's height as the camera shows it then; lift at the end and
     /// wait for the walk to end.
-    fn walk_along(&mut self, path: &[(f64, f64)], speed: f64) {
+    /// With `layer`, a second finger drags that action on the upper body
+    /// as the character walks (see [`SecondFinger`]).
+    fn walk_along(&mut self, path: &[(f64, f64)], speed: f64, layer: Option<&str>) {
+        let mut second = layer
+            .and_then(|name| {
+                let c = &self.ctl.actors()[0].ctl;
+                c.character()
+                    .actions
+                    .iter()
+                    .position(|a| a.def.name == name)
+            })
+            .map(SecondFinger::new);
         let start = self.part(Role::Pelvis);
         let c = &self.ctl.actors()[0].ctl;
         let pelvis = c.world().positions[c.character().roles.get(Role::Pelvis)];
@@ -170,11 +183,38 @@ impl<'a> Author<'a> {
             self.sync();
             let at = self.ctl.rig().camera().project(p).unwrap_or(start);
             self.to(0, at);
+            if let Some(f) = second.as_mut() {
+                self.second_finger(f);
+            }
             self.frame();
         }
         self.synth.up(0);
         self.frame();
+        // The layered action's finger goes its way to the end.
+        if let Some(f) = second.as_mut() {
+            for _ in 0..300 {
+                if f.lifted() {
+                    break;
+                }
+                self.second_finger(f);
+                self.frame();
+            }
+        }
         self.settle();
+    }
+
+    /// The second finger's touch in this frame (slot 1).
+    fn second_finger(&mut self, f: &mut SecondFinger) {
+        self.sync();
+        let c = &self.ctl.actors()[0].ctl;
+        match f.contact(c.character(), c, self.time) {
+            Some((Phase::Down, p)) => self.down(1, p),
+            Some((Phase::Up, _)) => {
+                self.synth.up(1);
+            }
+            Some((_, p)) => self.to(1, p),
+            None => {}
+        }
     }
 
     /// Drag an action's primary part along its trajectory as seen now, at
@@ -290,7 +330,7 @@ impl<'a> Author<'a> {
                 .ctl
                 .actors()
                 .iter()
-                .all(|a| matches!(a.ctl.mode(), Mode::Posing))
+                .all(|a| matches!(a.ctl.mode(), Mode::Posing) && a.ctl.layered().is_none())
             {
                 break;
             }
@@ -324,6 +364,14 @@ pub fn author_demo(
             (1.0, 1.4),
         ],
         0.9,
+        None,
+    );
+    // Back across the floor, waving the right hand as it walks: a second
+    // finger drags the wave while the first leads the pelvis.
+    a.walk_along(
+        &[(0.0, 0.0), (0.2, 0.7), (0.35, 1.4), (0.4, 2.1)],
+        0.7,
+        Some("wave_right"),
     );
     a.posing_tour(settings.home_after_s);
     a.synth

@@ -142,7 +142,8 @@ enum Shows {
 /// Steps worth a thumbnail: a dry run of the same controller finds the
 /// stretches where something happens (an action, a pose held, the camera
 /// moving) and takes one step from each (60% into it), plus the first and
-/// last steps; evenly thinned to `max`.
+/// last steps; at most `max`, every action's stretch first, the others
+/// evenly thinned.
 fn key_steps(ctl: &Stage, ticker: &Ticker, end: f64, max: usize) -> Vec<usize> {
     let (mut ctl, mut ticker) = (ctl.clone(), ticker.clone());
     let mut runs: Vec<(Shows, usize, usize)> = Vec::new();
@@ -152,7 +153,7 @@ fn key_steps(ctl: &Stage, ticker: &Ticker, end: f64, max: usize) -> Vec<usize> {
         let t = ticker.step(&mut ctl);
         step += 1;
         let shows = match ctl.action() {
-            Some((name, _)) => Shows::Action(name.to_owned()),
+            Some((name, _)) => Shows::Action(name),
             None if !ctl.held().is_empty() => Shows::Posing(ctl.held().len()),
             None if ctl.rig().orbit != orbit => Shows::Camera,
             None => Shows::Rest,
@@ -166,18 +167,34 @@ fn key_steps(ctl: &Stage, ticker: &Ticker, end: f64, max: usize) -> Vec<usize> {
             break;
         }
     }
-    let mut keys: Vec<usize> = runs
+    let shown: Vec<(bool, usize)> = runs
         .iter()
         .filter(|(s, a, b)| *s != Shows::Rest && b - a >= 3)
-        .map(|(_, a, b)| a + (b - a) * 6 / 10)
+        .map(|(s, a, b)| (matches!(s, Shows::Action(_)), a + (b - a) * 6 / 10))
         .collect();
-    keys.insert(0, 1);
-    keys.push(step);
-    if keys.len() > max.max(2) {
-        let n = keys.len();
-        let m = max.max(2);
-        keys = (0..m).map(|i| keys[i * (n - 1) / (m - 1)]).collect();
-    }
+    let m = max.max(2);
+    let mut keys = vec![1, step];
+    // Every action first (the sheet is there to show them), then the
+    // other stretches evenly thinned to fill the sheet.
+    let actions: Vec<usize> = shown.iter().filter(|s| s.0).map(|s| s.1).collect();
+    let others: Vec<usize> = shown.iter().filter(|s| !s.0).map(|s| s.1).collect();
+    let take = |from: &[usize], n: usize| -> Vec<usize> {
+        if from.len() <= n {
+            from.to_vec()
+        } else if n == 0 {
+            Vec::new()
+        } else if n == 1 {
+            vec![from[from.len() / 2]]
+        } else {
+            (0..n)
+                .map(|i| from[i * (from.len() - 1) / (n - 1)])
+                .collect()
+        }
+    };
+    keys.extend(take(&actions, m - 2));
+    let room = m.saturating_sub(keys.len());
+    keys.extend(take(&others, room));
+    keys.sort_unstable();
     keys.dedup();
     keys
 }
@@ -283,8 +300,19 @@ impl Backend for Replay<'_> {
                     outcome: "playing".into(),
                     ended_s: None,
                 }),
-                ActionEvent::Finished { time_s, .. } | ActionEvent::Cancelled { time_s, .. } => {
-                    if let Some(r) = records.last_mut() {
+                ActionEvent::Finished {
+                    ref action, time_s, ..
+                }
+                | ActionEvent::Cancelled {
+                    ref action, time_s, ..
+                } => {
+                    // The action of that name still playing (a walk and an
+                    // action laid over it end apart).
+                    let open = records
+                        .iter_mut()
+                        .rev()
+                        .find(|r| r.ended_s.is_none() && r.action == *action);
+                    if let Some(r) = open {
                         r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
                             "finished".into()
                         } else {

@@ -54,6 +54,8 @@ pub struct Layered<'a> {
     pub action: &'a str,
     /// How much of the upper body is the action's now (0 to 1).
     pub weight: f64,
+    /// The action's generalized time (0 to 1).
+    pub time: f64,
     /// The action's own posture, as it alone would put the body.
     pub alone: &'a Pose,
 }
@@ -66,6 +68,7 @@ impl Controller {
         self.layer.as_ref().map(|l| Layered {
             action: self.ch.actions[l.player.action()].def.name.as_str(),
             weight: l.weight,
+            time: l.player.time(),
             alone: &l.alone,
         })
     }

@@ -239,8 +239,16 @@ impl Stage {
 
     /// The first action playing (by character order), if any.
     #[must_use]
-    pub fn action(&self) -> Option<(&str, f64)> {
-        self.actors.iter().find_map(|a| a.ctl.action())
+    pub fn action(&self) -> Option<(String, f64)> {
+        self.actors
+            .iter()
+            .find_map(|a| match (a.ctl.action(), a.ctl.layered()) {
+                // A wave laid over a walk: "walk + wave_right".
+                (Some((name, time)), Some(l)) => Some((format!("{name} + {}", l.action), time)),
+                (Some((name, time)), None) => Some((name.to_owned(), time)),
+                (None, Some(l)) => Some((l.action.to_owned(), l.time)),
+                (None, None) => None,
+            })
     }
 
     /// Whether any character plays an action.

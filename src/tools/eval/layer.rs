@@ -82,6 +82,12 @@ impl SecondFinger {
         }
     }
 
+    /// Whether the finger has lifted (or never will go down).
+    #[must_use]
+    pub fn lifted(&self) -> bool {
+        self.lifted
+    }
+
     /// Where the finger is in the frame at time `t`, and how: `None`
     /// before it goes down and after it lifted.
     pub fn contact(
