@@ -188,3 +188,63 @@ fn an_action_of_the_legs_cannot_be_laid_over_a_walk_and_the_error_says_which_can
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("no such action"), "{err}");
 }
+
+#[test]
+fn a_new_finger_on_the_pelvis_leads_the_walk_from_where_the_character_is() {
+    use marionette::character::roles::Role;
+    use marionette::input::touch::{Phase, ScreenFrame};
+    use marionette::screen::ScreenPoint;
+    let ch = common::character();
+    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    let mut k = 0u32;
+    let mut step = |ctl: &mut Controller, contacts| {
+        k += 1;
+        let t = f64::from(k) / 30.0;
+        ctl.step(&[ScreenFrame { t, contacts }], t);
+    };
+    for _ in 0..10 {
+        step(&mut ctl, vec![]);
+    }
+    let pelvis = |ctl: &Controller| ctl.world().positions[ch.roles.get(Role::Pelvis)];
+    let start = pelvis(&ctl);
+    let on_screen = |ctl: &Controller, p: glam::DVec3| ctl.rig.camera().project(p).unwrap();
+    // One finger leads 1.2 m to the character's left (across the view)...
+    let first = start + glam::DVec3::new(1.2, 0.0, 0.0);
+    let drag = |ctl: &mut Controller,
+                id: u64,
+                to: glam::DVec3,
+                step: &mut dyn FnMut(&mut Controller, Vec<_>)| {
+        let from = pelvis(ctl);
+        step(
+            ctl,
+            vec![common::contact(id, Phase::Down, on_screen(ctl, from))],
+        );
+        for i in 1..=45 {
+            let u = f64::from(i) / 45.0;
+            let p = from + (to.with_y(from.y) - from) * u;
+            let at: ScreenPoint = on_screen(ctl, p);
+            step(ctl, vec![common::contact(id, Phase::Move, at)]);
+        }
+        let at = on_screen(ctl, to.with_y(from.y));
+        step(ctl, vec![common::contact(id, Phase::Up, at)]);
+    };
+    drag(&mut ctl, 1, first, &mut step);
+    assert!(
+        matches!(ctl.mode(), Mode::Walk(_)),
+        "the first finger walks it"
+    );
+    // ...and, while it walks, another takes the pelvis and leads it back
+    // past where it began.
+    let second = start - glam::DVec3::new(0.8, 0.0, 0.0);
+    drag(&mut ctl, 2, second, &mut step);
+    for _ in 0..240 {
+        step(&mut ctl, vec![]);
+        if matches!(ctl.mode(), Mode::Posing) {
+            break;
+        }
+    }
+    assert!(matches!(ctl.mode(), Mode::Posing), "the walk ends");
+    let end = pelvis(&ctl).with_y(0.0);
+    let d = (end - second.with_y(0.0)).length();
+    assert!(d < 0.45, "stands {d} m from where the second finger lifted");
+}

@@ -8,7 +8,8 @@
 //!   [`init`]: a library planned from a folder of an exhibit's takes;
 //!   [`libcheck`]: what a drag can start in a library, told to its builder.
 //! - [`synth`]: recordings authored from gestures; [`demo`]: the demo
-//!   recording, authored against the character.
+//!   recording, authored against the character; [`abuse`]: random
+//!   multi-finger abuse of the table.
 //! - `sheet`, [`checks`], `metrics`: stick-figure sheets, foot sliding
 //!   and joint limits of clips, and motion quality of a replay.
 
@@ -17,6 +18,7 @@
     reason = "the application, the device edges and the tools measure and wait in real time"
 )]
 
+pub mod abuse;
 pub mod author;
 pub mod checks;
 pub mod demo;

@@ -157,6 +157,24 @@ pub(super) enum Command {
         #[arg(long, default_value = "assets/library")]
         out: PathBuf,
     },
+    /// Write a recording of random multi-finger abuse of the table (fast
+    /// flicks of grabbed parts, drags, holds, up to five fingers, lost
+    /// events), the same for a seed; replay it with `replay --metrics`
+    AuthorAbuse {
+        /// The recording to write (evemu)
+        #[arg(long)]
+        out: PathBuf,
+        /// How long (s)
+        #[arg(long, default_value_t = 600.0)]
+        seconds: f64,
+        /// Seed of the fingers' moves
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Library folder whose character the fingers aim at [default: the
+        /// configuration's character.library, else the shipped library]
+        #[arg(long)]
+        library: Option<PathBuf>,
+    },
     /// Draw each clip of a library as a contact sheet (stick figures, front
     /// and side views) and report foot sliding, floor contact and joint limits
     ContactSheet {

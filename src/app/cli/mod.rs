@@ -291,6 +291,18 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             writeln!(std::io::stdout(), "wrote {n} files to {}", out.display())
                 .map_err(stdout_error)
         }
+        Command::AuthorAbuse {
+            out,
+            seconds,
+            seed,
+            library,
+        } => replay::author_abuse(
+            config,
+            &chosen_library(config, library)?,
+            &out,
+            seconds,
+            seed,
+        ),
         Command::ContactSheet {
             library,
             out,

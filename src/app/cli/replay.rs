@@ -373,3 +373,48 @@ fn where_(place: &str, sep: &str) -> String {
         format!("{place}{sep}")
     }
 }
+
+/// `author-abuse`: a recording of `seconds` of random multi-finger abuse,
+/// the fingers aimed at where the library's character stands in the home
+/// view, written whole to `out`.
+pub(super) fn author_abuse(
+    config: &Config,
+    library: &Path,
+    out: &Path,
+    seconds: f64,
+    seed: u64,
+) -> Result<(), Failure> {
+    if !(seconds.is_finite() && (1.0..=86_400.0).contains(&seconds)) {
+        return Err(Failure::new(
+            exit::USAGE,
+            format!("--seconds {seconds}: give 1 to 86400"),
+        ));
+    }
+    let ch = crate::app::character::load(library)?;
+    let synth = crate::tools::abuse::author_abuse(
+        &ch,
+        config.control_settings(),
+        config.display.picture(),
+        seconds,
+        seed,
+    );
+    let mut text = Vec::new();
+    synth
+        .finish()
+        .write(&mut text)
+        .map_err(|e| Failure::new(exit::FAILURE, e))?;
+    crate::output::replace_file(out, &text).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", out.display()),
+        )
+    })?;
+    writeln!(
+        std::io::stdout(),
+        "{:.0} s of abuse (seed {seed}) written to {}; measure it with `marionette replay {} --metrics OUT.json`",
+        seconds,
+        out.display(),
+        out.display()
+    )
+    .map_err(stdout_error)
+}

@@ -263,6 +263,7 @@ impl Controller {
             lead: walk::Lead {
                 height: pelvis_h,
                 beyond_since: None,
+                finger: None,
             },
             walking: String::new(),
             layer: None,

@@ -46,6 +46,8 @@ pub(super) struct Lead {
     /// the level plane at this height.
     pub(super) height: f64,
     pub(super) beyond_since: Option<f64>,
+    /// The finger the walk under way follows.
+    pub(super) finger: Option<ContactId>,
 }
 
 /// The finger holding the pelvis (see [`Controller::pelvis_finger`]).
@@ -181,16 +183,25 @@ impl Controller {
         self.walking = label.to_owned();
         self.mode = Mode::Walk(Box::new(walker));
         self.lead.beyond_since = None;
+        self.lead.finger = self.pelvis_finger().map(|f| f.id);
         self.matching.clear();
     }
 
     /// One step of the walk; posing again once it is over.
     pub(super) fn walk_step(&mut self, camera: &Camera, t: f64, dt: f64) {
         let lead = self.pelvis_lead(camera);
+        let finger = self.pelvis_finger().map(|f| f.id);
         let Mode::Walk(walker) = &mut self.mode else {
             return;
         };
         match lead {
+            // Another finger holds the pelvis now: the walk follows it
+            // from where the character is, not along the first one's path.
+            Some(p) if finger != self.lead.finger => {
+                tracing::debug!("another finger leads the walk");
+                walker.lead_anew(p, t);
+                self.lead.finger = finger;
+            }
             Some(p) => walker.lead(p, t),
             None => walker.release(),
         }

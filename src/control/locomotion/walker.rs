@@ -37,6 +37,12 @@ const MAX_TURN: f64 = 2.0;
 /// have come to rest.
 pub(crate) const ARRIVE_M: f64 = 0.25;
 
+/// Path segments kept behind the character before they are dropped.
+const KEPT_BEHIND: usize = 32;
+
+/// The most points a path keeps (ahead of the character and behind).
+const MAX_PATH_POINTS: usize = 1024;
+
 /// A path's end closer than this (m, about a stride) but beside or
 /// behind the character ends the walk where it is.
 const STRIDE_M: f64 = 0.6;
@@ -69,10 +75,14 @@ pub struct Walker {
     /// The root's floor point and facing.
     root: DVec3,
     yaw: f64,
-    /// The path: floor points, the first where the walk began.
+    /// The path: floor points, from where the walk began (or where the
+    /// finger leading it took over), the oldest ones behind dropped.
     path: Vec<DVec3>,
     /// The path segment the character is nearest.
     seg: usize,
+    /// How long the path dropped from behind the character is (m): the
+    /// path kept is bounded, however long the walk.
+    dropped_m: f64,
     /// Whether the finger still leads, and how fast it goes over the
     /// floor (m/s, smoothed).
     leading: bool,
@@ -130,6 +140,7 @@ impl Walker {
             still_s: 0.0,
             speed: gait.low_speed().max(0.3),
             search_in: 0.0,
+            dropped_m: 0.0,
             walked_s: 0.0,
             done: false,
         };
@@ -169,6 +180,28 @@ impl Walker {
         } else if self.path.len() > 1 {
             *self.path.last_mut().expect("checked") = p;
         }
+        if self.path.len() > MAX_PATH_POINTS {
+            // A finger that keeps going far ahead of the walk: every other
+            // point ahead is let go (the path's shape, coarser).
+            let keep = self.seg + 2;
+            let mut k = 0;
+            self.path.retain(|_| {
+                k += 1;
+                k <= keep || k % 2 == 0 || k == MAX_PATH_POINTS + 1
+            });
+        }
+    }
+
+    /// Another finger took the lead (the first lifted, a new one holds
+    /// the pelvis): the path starts again from where the character is,
+    /// towards `p`.
+    pub fn lead_anew(&mut self, p: DVec3, t: f64) {
+        self.path = vec![self.root, p.with_y(0.0)];
+        self.seg = 0;
+        self.dropped_m = 0.0;
+        self.leading = true;
+        self.last_finger = Some((p.with_y(0.0), t));
+        self.still_s = 0.0;
     }
 
     /// The finger lifted: walk on to the path's end and stop there.
@@ -243,10 +276,8 @@ impl Walker {
     #[must_use]
     pub fn progress(&self) -> f64 {
         let (near, _) = self.nearest();
-        let behind: f64 = self.path[..=self.seg]
-            .windows(2)
-            .map(|w| (w[1] - w[0]).length())
-            .sum::<f64>()
+        let behind: f64 = self.dropped_m
+            + path_length(&self.path[..=self.seg])
             + (near - self.path[self.seg]).length();
         let left = self.remaining();
         if behind + left > 0.0 {
@@ -283,7 +314,8 @@ impl Walker {
         q
     }
 
-    /// Move the character's nearest segment along as it walks.
+    /// Move the character's nearest segment along as it walks; the path
+    /// well behind is dropped.
     fn follow(&mut self) {
         while self.seg + 2 < self.path.len() {
             let (_, now) = self.nearest();
@@ -293,6 +325,11 @@ impl Walker {
                 self.seg -= 1;
                 break;
             }
+        }
+        if self.seg >= KEPT_BEHIND {
+            self.dropped_m += path_length(&self.path[..=self.seg]);
+            self.path.drain(..self.seg);
+            self.seg = 0;
         }
     }
 
@@ -366,7 +403,7 @@ impl Walker {
             self.done = true;
         }
         // A walk that cannot reach the end stops in the end.
-        let path_len = path_length(&self.path);
+        let path_len = self.dropped_m + path_length(&self.path);
         if !self.leading && self.walked_s > 4.0 + path_len / 0.3 {
             tracing::debug!(
                 remaining_m = remaining,
@@ -468,4 +505,39 @@ fn advance(gait: &Gait, pos: f64, dt: f64) -> f64 {
     let i = (pos.floor() as usize).min(gait.frames.len() - 1);
     let clip = &gait.clips[gait.frames[i].clip];
     (pos + dt / clip.frame_time).min((clip.first + clip.len - 1) as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::character::library::Library;
+
+    #[test]
+    fn a_long_walk_keeps_a_bounded_path_and_a_new_finger_starts_it_again() {
+        let lib = Library::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/library"
+        )))
+        .unwrap();
+        let roles = lib.clips["walk_path.bvh"].roles.clone();
+        let gait = Gait::build(&lib, &roles);
+        let pose = lib.clips["walk_path.bvh"].frames[0].clone();
+        let mut w = Walker::start(&gait, &lib.skeleton, &roles, &pose, DVec3::X, 0.0);
+        // A finger that goes round and round for ten minutes, far faster
+        // than the walk.
+        let dt = 1.0 / 30.0;
+        for k in 0..18_000 {
+            let t = f64::from(k) * dt;
+            let p = DVec3::new(3.0 * (t * 2.0).cos(), 0.0, 3.0 * (t * 2.0).sin());
+            w.lead(p, t);
+            let _ = w.step(&gait, &lib.skeleton, dt);
+            assert!(w.path.len() <= MAX_PATH_POINTS, "{} points", w.path.len());
+        }
+        assert!(w.progress().is_finite());
+        // Another finger: the path goes from where the character is.
+        w.lead_anew(DVec3::new(0.0, 0.0, -2.0), 600.0);
+        assert_eq!(w.path.len(), 2);
+        assert_eq!(w.path[0], w.root);
+        assert!(w.remaining() > 0.0);
+    }
 }

@@ -1,0 +1,187 @@
+//! A visitor who yanks the character, as a recording (`marionette
+//! author-abuse`): random multi-finger abuse of the table for as long as
+//! asked, the same for a seed. Fingers go down on or near a body part
+//! (where a controller fed the same touches shows it then: the character
+//! walks, the camera turns) and flick it fast, drag it, hold it, up to
+//! five at once; now and then the kernel's buffer overflows
+//! (`SYN_DROPPED`) and the moves in it are lost, or a lift is. Replayed
+//! with `replay --metrics`, it says whether the body pops, slides or sinks
+//! under such treatment.
+
+use std::sync::Arc;
+
+use crate::character::roles::Role;
+use crate::control::action::trials::Lcg;
+use crate::control::character::Character;
+use crate::control::controller::{Controller, Settings};
+use crate::input::calibration::RawPoint;
+use crate::input::touch::{Phase, ScreenContact, ScreenFrame, Tool};
+use crate::screen::{Picture, ScreenPoint};
+use crate::tools::synth::{Synth, panel};
+
+/// Frame interval of the panel (60 Hz).
+const DT_US: i64 = 16_667;
+const DT: f64 = DT_US as f64 / 1e6;
+
+/// Axis maximum of the panel.
+const MAX: i32 = 4095;
+
+/// Fingers the panel tracks (a visitor and a friend).
+const SLOTS: i32 = 5;
+
+/// New fingers go down at this mean rate (per second) while a slot is
+/// free.
+const DOWN_PER_S: f64 = 2.5;
+
+/// The kernel's buffer overflows this often on average (per second).
+const DROPPED_PER_S: f64 = 0.05;
+
+/// What a finger does.
+#[derive(Clone, Copy, Debug)]
+struct Finger {
+    /// The contact the following controller knows it by.
+    id: u64,
+    at: (f64, f64),
+    /// Velocity (px/s) and its turn (rad/s), for curving drags.
+    v: (f64, f64),
+    turn: f64,
+    /// Seconds left before it lifts.
+    left: f64,
+}
+
+/// A recording of `seconds` of abuse of `ch` over a picture `picture`.
+#[must_use]
+pub fn author_abuse(
+    ch: &Arc<Character>,
+    settings: Settings,
+    picture: Picture,
+    seconds: f64,
+    seed: u64,
+) -> Synth {
+    let (w, h) = picture.size();
+    let (w, h) = (f64::from(w), f64::from(h));
+    let mut rng = Lcg(seed.wrapping_mul(0x2545_f491_4f6c_dd1d) ^ 0x6a09_e667_f3bc_c909);
+    let mut synth = Synth::new(panel("marionette abuse panel", SLOTS, MAX));
+    let raw = |p: (f64, f64)| {
+        let f = |v: f64, size: f64| ((v / size).clamp(0.0, 1.0) * f64::from(MAX)).round() as i32;
+        (f(p.0, w), f(p.1, h))
+    };
+    // Where the parts are: a controller fed the same touches.
+    let mut ctl = Controller::new(Arc::clone(ch), settings, w, h, 0.0);
+    let contact = |id: u64, phase: Phase, p: (f64, f64)| {
+        let (x, y) = raw(p);
+        ScreenContact {
+            id,
+            phase,
+            tool: Tool::Finger,
+            raw: RawPoint { x, y },
+            screen: ScreenPoint::new(p.0, p.1),
+        }
+    };
+    let mut fingers: Vec<Option<Finger>> = vec![None; SLOTS as usize];
+    let mut next_id = 1u64;
+    synth.frame(DT_US);
+    let mut t = 0.0;
+    while t < seconds {
+        t += DT;
+        let dropping = rng.unit() < DROPPED_PER_S * DT;
+        let mut touches = Vec::new();
+        for (slot, f) in fingers.iter_mut().enumerate() {
+            let slot = slot as i32;
+            match f {
+                Some(g) => {
+                    g.left -= DT;
+                    if g.left <= 0.0 {
+                        if dropping && rng.unit() < 0.5 {
+                            // The lift is lost in the overflow.
+                            synth.forget(slot);
+                        } else {
+                            synth.up(slot);
+                        }
+                        touches.push(contact(g.id, Phase::Up, g.at));
+                        *f = None;
+                        continue;
+                    }
+                    let (c, s) = (g.turn * DT).sin_cos();
+                    g.v = (g.v.0 * s - g.v.1 * c, g.v.0 * c + g.v.1 * s);
+                    g.at = (
+                        (g.at.0 + g.v.0 * DT).clamp(0.0, w),
+                        (g.at.1 + g.v.1 * DT).clamp(0.0, h),
+                    );
+                    if !dropping {
+                        let (x, y) = raw(g.at);
+                        synth.to(slot, x, y);
+                    }
+                    touches.push(contact(g.id, Phase::Move, g.at));
+                }
+                None if !dropping && rng.unit() < DOWN_PER_S * DT => {
+                    let role = Role::ALL[(rng.unit() * 16.0) as usize % 16];
+                    let aim = ctl
+                        .rig
+                        .camera()
+                        .project(ctl.world().positions[ch.roles.get(role)])
+                        .unwrap_or(ScreenPoint::new(w / 2.0, h / 2.0));
+                    let at = (
+                        (aim.x + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, w),
+                        (aim.y + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, h),
+                    );
+                    let dir = rng.unit() * std::f64::consts::TAU;
+                    let kind = rng.unit();
+                    let (speed, left, turn) = if kind < 0.6 {
+                        // A flick: fast and short.
+                        (
+                            range(&mut rng, 800.0, 4000.0),
+                            range(&mut rng, 0.05, 0.35),
+                            0.0,
+                        )
+                    } else if kind < 0.9 {
+                        // A drag, curving.
+                        (
+                            range(&mut rng, 100.0, 700.0),
+                            range(&mut rng, 0.4, 3.0),
+                            range(&mut rng, -3.0, 3.0),
+                        )
+                    } else {
+                        // A hold.
+                        (0.0, range(&mut rng, 0.3, 4.0), 0.0)
+                    };
+                    *f = Some(Finger {
+                        id: next_id,
+                        at,
+                        v: (speed * dir.cos(), speed * dir.sin()),
+                        turn,
+                        left,
+                    });
+                    touches.push(contact(next_id, Phase::Down, at));
+                    next_id += 1;
+                    let (x, y) = raw(at);
+                    synth.down(slot, x, y);
+                }
+                None => {}
+            }
+        }
+        if dropping {
+            synth.dropped();
+        }
+        synth.frame(DT_US);
+        ctl.step(
+            &[ScreenFrame {
+                t,
+                contacts: touches,
+            }],
+            t,
+        );
+    }
+    for (slot, f) in fingers.iter().enumerate() {
+        if f.is_some() {
+            synth.up(slot as i32);
+        }
+    }
+    synth.frame(DT_US);
+    synth
+}
+
+/// A number in `a..b`.
+fn range(rng: &mut Lcg, a: f64, b: f64) -> f64 {
+    a + (b - a) * rng.unit()
+}

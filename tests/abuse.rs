@@ -1,0 +1,56 @@
+//! A visitor who yanks the character: random multi-finger abuse authored
+//! as a recording (`marionette author-abuse`), the same for a seed, and
+//! replayed through the whole pipeline with `replay --metrics`.
+
+mod common;
+
+use common::marionette;
+
+#[test]
+fn abuse_is_the_same_for_a_seed_and_replays_without_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = |name: &str| dir.path().join(name);
+    let author = |seed: &str, out: &str| {
+        let o = marionette(&[
+            "author-abuse",
+            "--seconds",
+            "60",
+            "--seed",
+            seed,
+            "--out",
+            file(out).to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(file(out)).unwrap()
+    };
+    let (a, b, c) = (
+        author("1", "a.evemu"),
+        author("1", "b.evemu"),
+        author("2", "c.evemu"),
+    );
+    assert_eq!(a, b, "the same seed, the same recording");
+    assert_ne!(a, c, "another seed, another recording");
+    let o = marionette(&[
+        "replay",
+        file("a.evemu").to_str().unwrap(),
+        "--metrics",
+        file("a.json").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(file("a.json")).unwrap()).unwrap();
+    assert!(m["frames"].as_f64().unwrap() > 1700.0, "{m}");
+    assert_eq!(m["nan_frames"], 0, "{m}");
+    // Fingers aimed at the body hold parts and start actions.
+    assert!(!m["actions"].as_array().unwrap().is_empty(), "{m}");
+    // Bad lengths are refused.
+    let o = marionette(&[
+        "author-abuse",
+        "--seconds",
+        "0",
+        "--out",
+        file("d.evemu").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!file("d.evemu").exists());
+}
