@@ -2,6 +2,11 @@
 //! as a recording (`marionette author-abuse`), the same for a seed, and
 //! replayed through the whole pipeline with `replay --metrics`.
 
+#![allow(
+    clippy::print_stderr,
+    reason = "the measurements are printed for the reader of the run"
+)]
+
 mod common;
 
 use common::marionette;
@@ -41,6 +46,11 @@ fn abuse_is_the_same_for_a_seed_and_replays_without_nan() {
         serde_json::from_slice(&std::fs::read(file("a.json")).unwrap()).unwrap();
     assert!(m["frames"].as_f64().unwrap() > 1700.0, "{m}");
     assert_eq!(m["nan_frames"], 0, "{m}");
+    eprintln!("{m}");
+    // A minute of it (seed 1): one frame over the pop line (17 without the
+    // bound on joint accelerations), nothing into the floor.
+    assert!(m["pops"].as_f64().unwrap() <= 3.0, "{m}");
+    assert!(m["ground_penetration_mm"].as_f64().unwrap() <= 5.0, "{m}");
     // Fingers aimed at the body hold parts and start actions.
     assert!(!m["actions"].as_array().unwrap().is_empty(), "{m}");
     // Bad lengths are refused.

@@ -214,7 +214,7 @@ impl Controller {
     /// keeps its turn: turning it instead snaps the ankle round each time a
     /// fast foot meets the floor), then any toes still under turn up at
     /// the ankle, as toes flatten on the ground.
-    fn onto_floor(&mut self, mut goals: [Option<DVec3>; 2]) {
+    pub(super) fn onto_floor(&mut self, mut goals: [Option<DVec3>; 2]) {
         let sk = &self.ch.lib.skeleton;
         let roles = &self.ch.roles;
         let feet = [Role::LeftFoot, Role::RightFoot];

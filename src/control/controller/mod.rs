@@ -18,6 +18,7 @@ mod contact;
 mod effects;
 mod feet;
 mod fingers;
+mod jerk;
 mod layer;
 mod stance;
 mod surface;
@@ -182,6 +183,8 @@ pub struct Controller {
     /// legs), and where the pelvis went on the screen while walking.
     layer: Option<Box<layer::Layer>>,
     drift: layer::Drift,
+    /// The shown posture's last joint velocities, bounding their change.
+    jerk: jerk::Jerk,
 }
 
 /// The longest drag kept for recognition (s): longer than any action.
@@ -268,6 +271,7 @@ impl Controller {
             walking: String::new(),
             layer: None,
             drift: layer::Drift::default(),
+            jerk: jerk::Jerk::default(),
             ch,
         }
     }
@@ -473,6 +477,10 @@ impl Controller {
             }
         }
         self.fix_feet(dt);
+        if self.settings.settle_s > 0.0 {
+            // Part of tracking: off, the synthesised postures are shown.
+            self.bound_jerks(dt);
+        }
         self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
         let idle = self.idle_s() > self.settings.home_after_s;
         let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
