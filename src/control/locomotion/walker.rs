@@ -40,6 +40,10 @@ pub(crate) const ARRIVE_M: f64 = 0.25;
 /// Path segments kept behind the character before they are dropped.
 const KEPT_BEHIND: usize = 32;
 
+/// A walk whose finger has lifted and that has come no closer to the
+/// path's end for this long stops where it is (s).
+const STALLED_S: f64 = 2.0;
+
 /// The most points a path keeps (ahead of the character and behind).
 const MAX_PATH_POINTS: usize = 1024;
 
@@ -83,6 +87,10 @@ pub struct Walker {
     /// How long the path dropped from behind the character is (m): the
     /// path kept is bounded, however long the walk.
     dropped_m: f64,
+    /// The least distance left to the path's end since the finger lifted
+    /// (m), and how long since the walk last came 5 cm closer (s).
+    closest_m: f64,
+    stalled_s: f64,
     /// Whether the finger still leads, and how fast it goes over the
     /// floor (m/s, smoothed).
     leading: bool,
@@ -140,6 +148,8 @@ impl Walker {
             still_s: 0.0,
             speed: gait.low_speed().max(0.3),
             search_in: 0.0,
+            closest_m: f64::INFINITY,
+            stalled_s: 0.0,
             dropped_m: 0.0,
             walked_s: 0.0,
             done: false,
@@ -403,8 +413,21 @@ impl Walker {
             self.done = true;
         }
         // A walk that cannot reach the end stops in the end.
+        // A walk that cannot reach the end stops in the end: once it has
+        // come no closer for a while after the finger lifted (frames that
+        // cannot carry the body there: a sideways walk asked to go ahead),
+        // or taken far longer than the path needs.
+        if self.leading {
+            self.closest_m = f64::INFINITY;
+            self.stalled_s = 0.0;
+        } else if remaining < self.closest_m - 0.05 {
+            self.closest_m = remaining;
+            self.stalled_s = 0.0;
+        } else {
+            self.stalled_s += dt;
+        }
         let path_len = self.dropped_m + path_length(&self.path);
-        if !self.leading && self.walked_s > 4.0 + path_len / 0.3 {
+        if !self.leading && (self.stalled_s > STALLED_S || self.walked_s > 4.0 + path_len / 0.3) {
             tracing::debug!(
                 remaining_m = remaining,
                 "a walk that did not reach the path's end stops"
