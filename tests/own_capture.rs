@@ -121,7 +121,7 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
     eprintln!("metrics: {metrics}");
     assert_eq!(metrics["nan_frames"], 0, "{metrics}");
     // The README's figures: 2 pops (joints' accelerations bounded: 33
-    // without), 3.21 mm a frame on average (the target's 3 mm, not met),
+    // without), 3.20 mm a frame on average (the target's 3 mm, not met),
     // nothing into the floor (the feet stand on it: before the library
     // was moved onto its floor they floated 4 cm above it).
     let f = |k: &str| metrics[k].as_f64().unwrap();

@@ -19,6 +19,10 @@ pub(crate) const STEP_TRIGGER_M: f64 = 0.12;
 /// The most a planted foot is held turned against the body (radians).
 const MAX_TWIST: f64 = 1.2;
 
+/// A planted foot turned farther than this against the body (radians)
+/// when a walk ends steps into line.
+const SETTLE_TWIST: f64 = 0.15;
+
 /// How long a lifted foot takes to let go of its held turn (s): about a
 /// swing.
 const TWIST_RELEASE_S: f64 = 0.3;
@@ -34,9 +38,10 @@ const LANDING_SPEED_M_S: f64 = 0.3;
 pub(super) struct FootHold {
     /// Where the foot stands while it carries the body.
     pub(super) anchor: Option<DVec3>,
-    /// A step under way: where it left from, how far along it is (0..1)
-    /// and how long it takes (s).
-    step: Option<(DVec3, f64, f64)>,
+    /// A step under way: where it left from, how far along it is (0..1),
+    /// how long it takes (s) and the least it lifts the foot (a share of
+    /// a full step's height).
+    step: Option<(DVec3, f64, f64, f64)>,
     /// While walking, the way the planted foot points (yaw, radians): it
     /// stays so as the body turns over it.
     held_yaw: Option<f64>,
@@ -93,15 +98,15 @@ impl Controller {
                 *foot = FootHold::default();
                 continue;
             }
-            if let Some((from, s, dur)) = foot.step {
+            if let Some((from, s, dur, lift)) = foot.step {
                 let s = s + dt / dur;
                 if s < 1.0 {
-                    foot.step = Some((from, s, dur));
+                    foot.step = Some((from, s, dur, lift));
                     let e = s * s * (3.0 - 2.0 * s);
                     let dist = (tracked - from).with_y(0.0).length();
                     let arc = STEP_HEIGHT_M
                         * (std::f64::consts::PI * s).sin()
-                        * (dist / STEP_TRIGGER_M).min(1.0);
+                        * (dist / STEP_TRIGGER_M).clamp(lift, 1.0);
                     goals[k] = Some(from + (tracked - from) * e + DVec3::Y * arc);
                     continue;
                 }
@@ -122,7 +127,7 @@ impl Controller {
                     if lifts || strays {
                         foot.anchor = None;
                         let dist = (tracked - a).with_y(0.0).length();
-                        foot.step = Some((a, 0.0, step_duration(dist)));
+                        foot.step = Some((a, 0.0, step_duration(dist), 0.0));
                         goals[k] = Some(a);
                     } else {
                         // Height from the target (a heel may rise over
@@ -165,9 +170,24 @@ impl Controller {
         let w = forward_kinematics(sk, &self.output);
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let j = self.ch.roles.get(role);
+            let other = self.feet[1 - k];
             let foot = &mut self.feet[k];
             let yaw = foot_yaw(sk, &w, j);
-            if foot.anchor.is_none() || !walking {
+            let turned = !walking
+                && foot.anchor.is_some()
+                && foot.held_yaw.is_some()
+                && foot.twist.abs() > SETTLE_TWIST;
+            if turned && other.anchor.is_some() && other.step.is_none() {
+                // The walk is over with this foot turned against the body:
+                // it steps into line, lifted (its turn let go in the air),
+                // rather than turning on the floor.
+                if let Some(a) = foot.anchor.take() {
+                    foot.step = Some((a, 0.0, TWIST_RELEASE_S, 1.0));
+                }
+                foot.held_yaw = None;
+            } else if turned && other.step.is_some() {
+                // ...once the other foot, stepping, stands again.
+            } else if foot.anchor.is_none() || !walking {
                 foot.held_yaw = None;
             } else if walking && foot.held_yaw.is_none() {
                 foot.held_yaw = Some(yaw);
