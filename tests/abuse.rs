@@ -53,14 +53,16 @@ fn abuse_is_the_same_for_a_seed_and_replays_without_nan() {
     assert!(m["ground_penetration_mm"].as_f64().unwrap() <= 5.0, "{m}");
     // Fingers aimed at the body hold parts and start actions.
     assert!(!m["actions"].as_array().unwrap().is_empty(), "{m}");
-    // Bad lengths are refused.
-    let o = marionette(&[
-        "author-abuse",
-        "--seconds",
-        "0",
-        "--out",
-        file("d.evemu").to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(!file("d.evemu").exists());
+    // Bad lengths are refused, nothing written.
+    for bad in ["0", "7200", "nan"] {
+        let o = marionette(&[
+            "author-abuse",
+            "--seconds",
+            bad,
+            "--out",
+            file("d.evemu").to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        assert!(!file("d.evemu").exists());
+    }
 }

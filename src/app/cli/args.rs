@@ -164,7 +164,7 @@ pub(super) enum Command {
         /// The recording to write (evemu)
         #[arg(long)]
         out: PathBuf,
-        /// How long (s)
+        /// How long (s, at most 3600)
         #[arg(long, default_value_t = 600.0)]
         seconds: f64,
         /// Seed of the fingers' moves

@@ -384,10 +384,13 @@ pub(super) fn author_abuse(
     seconds: f64,
     seed: u64,
 ) -> Result<(), Failure> {
-    if !(seconds.is_finite() && (1.0..=86_400.0).contains(&seconds)) {
+    // An hour is about 160 MB of evemu text, built in memory.
+    if !(seconds.is_finite() && (1.0..=3600.0).contains(&seconds)) {
         return Err(Failure::new(
             exit::USAGE,
-            format!("--seconds {seconds}: give 1 to 86400"),
+            format!(
+                "--seconds {seconds}: give 1 to 3600 (an hour is about 160 MB of recording); for longer, write several seeds"
+            ),
         ));
     }
     let ch = crate::app::character::load(library)?;
