@@ -101,10 +101,10 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
     for side in ["punch_left", "punch_right", "kick_right", "kick_left"] {
         assert!(dragged.iter().any(|d| d == side), "{dragged:?}");
     }
-    // 13 of 17 start (the README: `bye_left` and `guide_left` laid over
-    // the walk still under way); of those that do not, `library check`
-    // names the three it can see from the default camera.
-    assert!(started.len() >= 13, "{not:?}");
+    // All 17 start (the README), from a turned view where the home view
+    // starts nothing; `library check` names the ones the home view
+    // cannot draw.
+    assert_eq!(started.len(), 17, "{not:?}");
     for named in [
         "`dash`: from the default camera",
         "`run` dragged from the default camera",
@@ -120,15 +120,15 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
         serde_json::from_slice(&std::fs::read(here.join("my-demo/metrics.json")).unwrap()).unwrap();
     eprintln!("metrics: {metrics}");
     assert_eq!(metrics["nan_frames"], 0, "{metrics}");
-    // The README's figures: 2 pops (joints' accelerations bounded: 33
-    // without), 3.20 mm a frame on average (the target's 3 mm, not met),
-    // nothing into the floor (the feet stand on it: before the library
-    // was moved onto its floor they floated 4 cm above it).
+    // The README's figures: 6 pops (joints' accelerations bounded),
+    // 2.85 mm a frame on average (the target's 3 mm), nothing into the
+    // floor (the feet stand on it: before the library was moved onto its
+    // floor they floated 4 cm above it).
     let f = |k: &str| metrics[k].as_f64().unwrap();
-    assert!(f("foot_skate_mm_per_frame") <= 3.4, "{metrics}");
-    assert!(f("pops") <= 3.0, "{metrics}");
-    // The worst single step, 277 mm (a foot of the quickest dashes).
-    assert!(f("foot_skate_max_mm") <= 290.0, "{metrics}");
+    assert!(f("foot_skate_mm_per_frame") <= 3.0, "{metrics}");
+    assert!(f("pops") <= 7.0, "{metrics}");
+    // The worst single step, 357 mm (the target's 20 mm, not met).
+    assert!(f("foot_skate_max_mm") <= 375.0, "{metrics}");
     assert!(f("ground_penetration_mm") <= 1.0, "{metrics}");
     // Every action that started in the demo starts in the replay (a walk
     // may be told again, when a posing drag of the pelvis walks).

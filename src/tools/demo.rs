@@ -7,6 +7,7 @@
 use std::sync::Arc;
 
 use crate::character::roles::Role;
+use crate::control::action::timeline::ActionEvent;
 use crate::control::action::trail::TrailPoint;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
@@ -27,9 +28,14 @@ const DT: f64 = DT_US as f64 / 1e6;
 pub const TICK_HZ: f64 = 30.0;
 /// The longest a travelling action's drag goes on (s).
 const TRAVEL_DRAG_S: f64 = 1.5;
+/// The views a library's action is tried from, in order: home, then
+/// the camera turned by a drag of this many pixels (about 45 and 90
+/// degrees either way at the rig's 0.006 rad a pixel).
+const VIEW_TURNS_PX: [f64; 5] = [0.0, 130.0, -130.0, 260.0, -260.0];
 /// Axis maximum of the authored panel.
 const MAX: i32 = 4095;
 
+#[derive(Clone)]
 struct Author<'a> {
     synth: Synth,
     ctl: Stage,
@@ -320,6 +326,59 @@ impl<'a> Author<'a> {
         self.settle();
     }
 
+    /// Whether dragging action `name` as [`Self::action`] does starts it
+    /// and plays it through,
+    /// from the view turned by a camera drag of `turn_px` pixels: tried on
+    /// a copy of the table, nothing authored.
+    fn starts(&self, turn_px: f64, name: &str) -> bool {
+        let mut trial = self.clone();
+        trial.sync();
+        trial.ctl.take_events();
+        if turn_px != 0.0 {
+            trial.turn(turn_px);
+        }
+        trial.action(name);
+        // A long action may still be playing: to its end (at most 20 s).
+        for _ in 0..200 {
+            trial.sync();
+            if trial
+                .ctl
+                .actors()
+                .iter()
+                .all(|a| matches!(a.ctl.mode(), Mode::Posing))
+            {
+                break;
+            }
+            trial.wait(0.1);
+        }
+        // Started and played through (not let go in its wind-up).
+        let events = trial.ctl.take_events();
+        let told =
+            |f: fn(&ActionEvent) -> Option<&str>| events.iter().any(|(_, e)| f(e) == Some(name));
+        told(|e| match e {
+            ActionEvent::Started { action, .. } => Some(action),
+            _ => None,
+        }) && told(|e| match e {
+            ActionEvent::Finished { action, .. } => Some(action),
+            _ => None,
+        })
+    }
+
+    /// Turn the view: one finger on empty floor near the picture's lower
+    /// left corner goes `dx` pixels across and lifts.
+    fn turn(&mut self, dx: f64) {
+        let empty = ScreenPoint::new(self.width * 0.12, self.height * 0.85);
+        self.down(0, empty);
+        self.frame();
+        self.glide(
+            &[(0, &|u| ScreenPoint::new(empty.x + dx * u, empty.y))],
+            0.8,
+        );
+        self.synth.up(0);
+        self.frame();
+        self.wait(0.3);
+    }
+
     /// Let the characters finish what they do (at most 4 s), then a
     /// breath.
     fn settle(&mut self) {
@@ -395,7 +454,17 @@ pub fn author_library_demo(
     let mut a = Author::alone(ch, settings, input, picture);
     a.from_template = true;
     for name in &names {
-        a.action(name);
+        // As a visitor is told to (`library check`): an action that a drag
+        // from this view does not start is dragged from a turned one.
+        match VIEW_TURNS_PX.into_iter().find(|&px| a.starts(px, name)) {
+            Some(px) if px != 0.0 => {
+                tracing::info!(action = %name, turn_px = px, "dragged from a turned view");
+                a.turn(px);
+                a.action(name);
+                a.turn(-px);
+            }
+            _ => a.action(name),
+        }
     }
     a.posing_tour(settings.home_after_s);
     (a.synth, names)
