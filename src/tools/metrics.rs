@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, foot_points, forward_kinematics};
 
 /// A jump in a joint's angular speed larger than this between two frames
 /// (rad/s) counts as a pop: 10 rad/s in one 1/30 s frame is 300 rad/s²,
@@ -46,15 +46,6 @@ fn finite(p: &Pose) -> bool {
         .iter()
         .all(|q| q.to_array().iter().all(|v| v.is_finite()))
         && p.translations.iter().all(|t| t.is_finite())
-}
-
-/// The points of a foot that can touch the floor: the ankle, the joints
-/// below it and their End Sites, in a fixed order.
-fn foot_points(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> Vec<glam::DVec3> {
-    (0..skeleton.len())
-        .filter(|&i| i == ankle || skeleton.is_ancestor(ankle, i))
-        .flat_map(|i| std::iter::once(w.positions[i]).chain(w.end_site(skeleton, i)))
-        .collect()
 }
 
 /// Motion quality of postures stepped every `dt` seconds, one posture at a

@@ -10,7 +10,7 @@ use glam::{DQuat, DVec3};
 use super::{Controller, GROUND_CONTACT_M};
 use crate::character::roles::Role;
 use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics, sole};
-use crate::control::posing::ik::plant_feet;
+use crate::control::posing::ik::{ccd, chain, plant_feet};
 
 /// A planted foot steps when the posture wants it this far away (m, on
 /// the floor).
@@ -51,7 +51,15 @@ pub(super) struct FootHold {
     /// ...let go once the foot lifts: the turn it had then, and how far
     /// the letting go is (0..1).
     release: Option<(f64, f64)>,
+    /// Where a foot not carrying the body is shown and how fast it moves:
+    /// it follows the target posture's foot over the floor as the pelvis
+    /// follows the target's (turning the tracked leg's joints alone swung
+    /// a raised foot 0.3 m to and fro while the target's stood still).
+    track: Option<(DVec3, DVec3)>,
 }
+
+/// The most a free foot's shown position accelerates (m/s²).
+const MAX_FOOT_ACCEL: f64 = 60.0;
 
 /// How long a step of `dist` metres takes (s): a quick lift for a foot
 /// the posture raises where it stands, about a walking step's time for a
@@ -71,6 +79,7 @@ impl Controller {
         let held = self.held();
         let settle = 1.0 - (-dt / 0.06).exp();
         let switched = std::mem::take(&mut self.switched);
+        let gains = crate::control::tracking::accel::Gains::critical(self.settings.settle_s);
         // While walking, the clip's own foot contacts say which foot
         // stands.
         let contacts = match &self.mode {
@@ -91,13 +100,24 @@ impl Controller {
                 0.0
             };
             self.last_feet[k] = p;
-            let tracked = shown.positions[foot_j];
             let other_planted = self.feet[1 - k].anchor.is_some();
             let foot = &mut self.feet[k];
             if held.contains(&role) {
                 *foot = FootHold::default();
                 continue;
             }
+            let tracked = match foot.track {
+                // Tracking off: the target's foot.
+                _ if self.settings.settle_s <= 0.0 => (p, DVec3::ZERO),
+                Some((at, v)) => {
+                    let acc = ((p - at) * gains.k - v * gains.d).clamp_length_max(MAX_FOOT_ACCEL);
+                    let v = v + acc * dt;
+                    (at + v * dt, v)
+                }
+                None => (shown.positions[foot_j], DVec3::ZERO),
+            };
+            foot.track = Some(tracked);
+            let tracked = tracked.0;
             if let Some((from, s, dur, lift)) = foot.step {
                 let s = s + dt / dur;
                 if s < 1.0 {
@@ -142,7 +162,11 @@ impl Controller {
                     foot.anchor = Some(tracked);
                     goals[k] = Some(tracked);
                 }
-                None => {}
+                None => goals[k] = Some(tracked),
+            }
+            if let (Some(a), Some(_)) = (foot.anchor, goals[k]) {
+                // Carrying the body: shown where it stands.
+                foot.track = Some((a, DVec3::ZERO));
             }
         }
         if goals.iter().any(Option::is_some) {
@@ -256,6 +280,16 @@ impl Controller {
         }
         if lifted {
             plant_feet(sk, roles, &mut self.output, goals);
+            // A leg that cannot bend the foot up far enough (pulled
+            // straight, or its knee the bound holds back): the body rises.
+            let w = forward_kinematics(sk, &self.output);
+            let under = feet
+                .iter()
+                .map(|r| -sole(sk, &w, roles.get(*r)).y)
+                .fold(0.0, f64::max);
+            if under > 0.0 {
+                self.output.translations[0].y += under;
+            }
         }
         let w = forward_kinematics(sk, &self.output);
         for role in feet {
@@ -267,6 +301,22 @@ impl Controller {
                     .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
                 self.output.rotations[j] = (parent.inverse() * turn * w.rotations[j]).normalize();
             }
+        }
+        // A hand no finger holds goes no deeper than the floor: the arm
+        // lifts it by as much as its lowest point went under.
+        let held = self.held();
+        let w = forward_kinematics(sk, &self.output);
+        let hands: Vec<(usize, Vec<usize>, DVec3)> = [Role::LeftHand, Role::RightHand]
+            .into_iter()
+            .filter(|r| !held.contains(r))
+            .filter_map(|r| {
+                let j = roles.get(r);
+                let under = -sole(sk, &w, j).y;
+                (under > 0.0).then(|| (j, chain(sk, roles, r), w.positions[j] + DVec3::Y * under))
+            })
+            .collect();
+        if !hands.is_empty() {
+            ccd(sk, &mut self.output, &hands, 12);
         }
     }
 }

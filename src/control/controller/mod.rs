@@ -22,6 +22,7 @@ mod jerk;
 mod layer;
 mod stance;
 mod surface;
+mod sweep;
 mod walk;
 
 use self::feet::{FootHold, leg_length};
@@ -153,6 +154,8 @@ pub struct Controller {
     feet: [FootHold; 2],
     /// The target's foot positions last step, for their speed.
     last_feet: [DVec3; 2],
+    /// How far each foot is lifted for sweeping the floor (0..1).
+    swept: [f64; 2],
     /// Ankle height standing at rest (m): a foot lower than this plus a
     /// little is on the floor.
     ankle_rest: f64,
@@ -245,6 +248,7 @@ impl Controller {
             output: pose.clone(),
             feet: [FootHold::default(); 2],
             last_feet: feet_now,
+            swept: [0.0; 2],
             ankle_rest: feet_now[0].y.min(feet_now[1].y),
             leg_length: leg_length(&ch.lib.skeleton, &ch.roles),
             settings,
@@ -477,6 +481,7 @@ impl Controller {
             }
         }
         self.fix_feet(dt);
+        self.clear_swept_feet(dt);
         if self.settings.settle_s > 0.0 {
             // Part of tracking: off, the synthesised postures are shown.
             self.bound_jerks(dt);

@@ -1,0 +1,94 @@
+//! A foot that moves fast over the floor is swinging: it is lifted clear
+//! of the floor (as a walker's swinging toes clear it) rather than swept
+//! along it. Whatever moved it (a step landing, the body lunging under a
+//! free foot, tracking catching up), a foot low and fast is lifted by as
+//! much as its lowest point lacks of [`CLEARANCE_M`], in proportion to
+//! its speed between [`SLOW_M_S`] and [`SWING_M_S`], and set down again
+//! over [`SET_DOWN_S`] once it slows. Feet held by a finger are the
+//! finger's.
+
+use glam::DVec3;
+
+use super::Controller;
+use crate::character::roles::Role;
+use crate::character::skeleton::{foot_points, forward_kinematics, sole};
+use crate::control::posing::ik::plant_feet;
+
+/// Up to this speed over the floor (m/s) a foot stays on it (a planted
+/// foot of the library's walks slides at about a third of it)...
+const SLOW_M_S: f64 = 0.2;
+/// ...from this speed on it is clear of it.
+const SWING_M_S: f64 = 0.35;
+/// How far above the floor a swinging foot's lowest point goes (m).
+const CLEARANCE_M: f64 = 0.022;
+/// Only points this near the floor count for the speed (m).
+const NEAR_M: f64 = 0.06;
+/// How long a foot that slowed takes to come down (s).
+const SET_DOWN_S: f64 = 0.1;
+
+impl Controller {
+    /// Lift the feet that sweep the floor (see the module), against the
+    /// posture shown last frame.
+    pub(super) fn clear_swept_feet(&mut self, dt: f64) {
+        if dt <= 0.0 {
+            return;
+        }
+        let sk = &self.ch.lib.skeleton;
+        let roles = &self.ch.roles;
+        let now = forward_kinematics(sk, &self.output);
+        let held = self.held();
+        let mut lifts = [0.0; 2];
+        for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+            if held.contains(&role) {
+                self.swept[k] = 0.0;
+                continue;
+            }
+            let j = roles.get(role);
+            let (before, after) = (foot_points(sk, &self.world, j), foot_points(sk, &now, j));
+            let speed = before
+                .iter()
+                .zip(&after)
+                .filter(|(a, b)| a.y.min(b.y) < NEAR_M)
+                .map(|(a, b)| (*b - *a).with_y(0.0).length() / dt)
+                .fold(0.0, f64::max);
+            let want = ((speed - SLOW_M_S) / (SWING_M_S - SLOW_M_S)).clamp(0.0, 1.0);
+            self.swept[k] = want.max(self.swept[k] - dt / SET_DOWN_S);
+            lifts[k] = CLEARANCE_M * self.swept[k];
+        }
+        self.lift_feet(lifts);
+    }
+
+    /// Lift each foot until its lowest point is `lifts[k]` above the
+    /// floor (no lower than it is), keeping its turn.
+    fn lift_feet(&mut self, lifts: [f64; 2]) {
+        let sk = &self.ch.lib.skeleton;
+        let roles = &self.ch.roles;
+        // The leg's IK turns the foot with the leg: a few passes lift its
+        // lowest point as far as asked.
+        let mut w = forward_kinematics(sk, &self.output);
+        for _ in 0..3 {
+            let mut goals = [None; 2];
+            for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+                let j = roles.get(role);
+                let lowest = sole(sk, &w, j).y;
+                if lifts[k] - lowest > 1e-4 {
+                    goals[k] = Some(w.positions[j] + DVec3::Y * (lifts[k] - lowest));
+                }
+            }
+            if goals.iter().all(Option::is_none) {
+                break;
+            }
+            plant_feet(sk, roles, &mut self.output, goals);
+            // The foot keeps its turn: lifted, not tipped by the leg.
+            let lifted = forward_kinematics(sk, &self.output);
+            for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+                let j = roles.get(role);
+                if let (Some(_), Some(p)) = (goals[k], sk.joints[j].parent) {
+                    self.output.rotations[j] =
+                        (lifted.rotations[p].inverse() * w.rotations[j]).normalize();
+                }
+            }
+            w = forward_kinematics(sk, &self.output);
+        }
+    }
+}
