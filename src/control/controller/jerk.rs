@@ -8,7 +8,8 @@
 use glam::{DQuat, DVec3};
 
 use super::Controller;
-use crate::character::skeleton::{Pose, rotation_difference};
+use crate::character::roles::Role;
+use crate::character::skeleton::{Pose, forward_kinematics, rotation_difference, sole};
 
 /// The most a joint's angular velocity changes in a second (rad/s²).
 const MAX_ACCEL: f64 = 240.0;
@@ -53,8 +54,23 @@ impl Controller {
                 *v = w;
             }
         }
-        // The floor still holds: a foot the bound left under it is lifted.
-        self.onto_floor([None, None]);
+        // The floor still holds: a foot or a hand the bound (or a finger)
+        // left under it lifts the body, its joints untouched (bending the leg
+        // to lift the foot undid the bound: a knee popped as a kick began).
+        let sk = &self.ch.lib.skeleton;
+        let w = forward_kinematics(sk, &self.output);
+        let under = [
+            Role::LeftFoot,
+            Role::RightFoot,
+            Role::LeftHand,
+            Role::RightHand,
+        ]
+        .into_iter()
+        .map(|r| -sole(sk, &w, self.ch.roles.get(r)).y)
+        .fold(0.0, f64::max);
+        if under > 0.0 {
+            self.output.translations[0].y += under;
+        }
         if let Some((last, _)) = &mut self.jerk.last {
             last.clone_from(&self.output);
         }

@@ -199,10 +199,37 @@ impl Gait {
     /// over.
     #[must_use]
     pub fn best(&self, query: &[f64; FEATURES], weights: &[f64; FEATURES]) -> Option<(usize, f64)> {
+        self.best_with_room(query, weights, 0.0)
+    }
+
+    /// [`Self::best`] among the frames with at least `room_s` seconds of
+    /// their clip after them (a walk that starts does not start in a
+    /// clip's stop); with none such, among them all.
+    #[must_use]
+    pub fn best_with_room(
+        &self,
+        query: &[f64; FEATURES],
+        weights: &[f64; FEATURES],
+        room_s: f64,
+    ) -> Option<(usize, f64)> {
+        let found = self.best_left(query, weights, room_s);
+        if found.is_none() && room_s > 0.0 {
+            return self.best_left(query, weights, 0.0);
+        }
+        found
+    }
+
+    fn best_left(
+        &self,
+        query: &[f64; FEATURES],
+        weights: &[f64; FEATURES],
+        room_s: f64,
+    ) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         for (i, f) in self.frames.iter().enumerate() {
             let c = &self.clips[f.clip];
-            if i + 1 >= c.first + c.len {
+            let left = (c.first + c.len).saturating_sub(i + 1);
+            if left == 0 || (left as f64) * c.frame_time < room_s {
                 continue;
             }
             let cost = cost(&f.features, query, weights);

@@ -43,6 +43,11 @@ const KEPT_BEHIND: usize = 32;
 /// A walk whose finger has lifted and that has come no closer to the
 /// path's end for this long stops where it is (s).
 const STALLED_S: f64 = 2.0;
+/// A walk starts from a frame with at least this much of its clip after
+/// it (s): the frames of a clip's stop stand as still as the character,
+/// and a walk started there stood a while longer (0.47 s to the first
+/// step, the target's 0.3).
+const START_ROOM_S: f64 = 1.5;
 
 /// The most points a path keeps (ahead of the character and behind).
 const MAX_PATH_POINTS: usize = 1024;
@@ -155,7 +160,9 @@ impl Walker {
             done: false,
         };
         let query = walker.query(&current);
-        walker.pos = gait.best(&query, &WEIGHTS).map_or(0.0, |(i, _)| i as f64);
+        walker.pos = gait
+            .best_with_room(&query, &WEIGHTS, START_ROOM_S)
+            .map_or(0.0, |(i, _)| i as f64);
         if let Some(f) = gait.frames.get(walker.pos as usize) {
             let c = &gait.clips[f.clip];
             tracing::debug!(
@@ -412,7 +419,6 @@ impl Walker {
         if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
             self.done = true;
         }
-        // A walk that cannot reach the end stops in the end.
         // A walk that cannot reach the end stops in the end: once it has
         // come no closer for a while after the finger lifted (frames that
         // cannot carry the body there: a sideways walk asked to go ahead),
