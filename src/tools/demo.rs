@@ -327,9 +327,8 @@ impl<'a> Author<'a> {
     }
 
     /// Whether dragging action `name` as [`Self::action`] does starts it
-    /// and plays it through,
-    /// from the view turned by a camera drag of `turn_px` pixels: tried on
-    /// a copy of the table, nothing authored.
+    /// and plays it through, from the view turned by a camera drag of
+    /// `turn_px` pixels: tried on a copy of the table, nothing authored.
     fn starts(&self, turn_px: f64, name: &str) -> bool {
         let mut trial = self.clone();
         trial.sync();
@@ -351,17 +350,13 @@ impl<'a> Author<'a> {
             }
             trial.wait(0.1);
         }
-        // Started and played through (not let go in its wind-up).
-        let events = trial.ctl.take_events();
-        let told =
-            |f: fn(&ActionEvent) -> Option<&str>| events.iter().any(|(_, e)| f(e) == Some(name));
-        told(|e| match e {
-            ActionEvent::Started { action, .. } => Some(action),
-            _ => None,
-        }) && told(|e| match e {
-            ActionEvent::Finished { action, .. } => Some(action),
-            _ => None,
-        })
+        // Started and played through (not let go in its wind-up): a start
+        // comes before its end, so its finish tells both.
+        trial
+            .ctl
+            .take_events()
+            .iter()
+            .any(|(_, e)| matches!(e, ActionEvent::Finished { action, .. } if action == name))
     }
 
     /// Turn the view: one finger on empty floor near the picture's lower
