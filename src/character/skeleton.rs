@@ -182,23 +182,23 @@ pub fn rotation_difference(from: DQuat, to: DQuat) -> DVec3 {
 
 /// The points of a foot: the ankle, the joints below it and their End
 /// Sites, always in the same order.
-#[must_use]
-pub fn foot_points(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> Vec<DVec3> {
+pub fn foot_points<'a>(
+    skeleton: &'a Skeleton,
+    w: &'a WorldPose,
+    ankle: usize,
+) -> impl Iterator<Item = DVec3> + 'a {
     (0..skeleton.len())
-        .filter(|&i| i == ankle || skeleton.is_ancestor(ankle, i))
-        .flat_map(|i| std::iter::once(w.positions[i]).chain(w.end_site(skeleton, i)))
-        .collect()
+        .filter(move |&i| i == ankle || skeleton.is_ancestor(ankle, i))
+        .flat_map(move |i| std::iter::once(w.positions[i]).chain(w.end_site(skeleton, i)))
 }
 
 /// The sole of a foot: its lowest point (ankle, toes, End Sites).
 #[must_use]
 pub fn sole(skeleton: &Skeleton, w: &WorldPose, ankle: usize) -> DVec3 {
-    foot_points(skeleton, w, ankle)
-        .into_iter()
-        .fold(
-            w.positions[ankle],
-            |best, p| if p.y < best.y { p } else { best },
-        )
+    foot_points(skeleton, w, ankle).fold(
+        w.positions[ankle],
+        |best, p| if p.y < best.y { p } else { best },
+    )
 }
 
 /// Two-bone IK on world positions, the turns only: for the limb `a`-`b`-`c`

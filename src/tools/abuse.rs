@@ -129,21 +129,17 @@ pub fn author_abuse(
                     let kind = rng.unit();
                     let (speed, left, turn) = if kind < 0.6 {
                         // A flick: fast and short.
-                        (
-                            range(&mut rng, 800.0, 4000.0),
-                            range(&mut rng, 0.05, 0.35),
-                            0.0,
-                        )
+                        (rng.range(800.0, 4000.0), rng.range(0.05, 0.35), 0.0)
                     } else if kind < 0.9 {
                         // A drag, curving.
                         (
-                            range(&mut rng, 100.0, 700.0),
-                            range(&mut rng, 0.4, 3.0),
-                            range(&mut rng, -3.0, 3.0),
+                            rng.range(100.0, 700.0),
+                            rng.range(0.4, 3.0),
+                            rng.range(-3.0, 3.0),
                         )
                     } else {
                         // A hold.
-                        (0.0, range(&mut rng, 0.3, 4.0), 0.0)
+                        (0.0, rng.range(0.3, 4.0), 0.0)
                     };
                     *f = Some(Finger {
                         id: next_id,
@@ -179,9 +175,4 @@ pub fn author_abuse(
     }
     synth.frame(DT_US);
     synth
-}
-
-/// A number in `a..b`.
-fn range(rng: &mut Lcg, a: f64, b: f64) -> f64 {
-    a + (b - a) * rng.unit()
 }

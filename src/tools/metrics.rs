@@ -143,7 +143,6 @@ impl<'a> Meter<'a> {
                     continue;
                 }
                 let planted: Vec<f64> = foot_points(skeleton, prev_world, f)
-                    .into_iter()
                     .zip(foot_points(skeleton, &world, f))
                     .filter(|(a, b)| a.y < 0.02 && b.y < 0.02)
                     .map(|(a, b)| (b - a).with_y(0.0).length() * 1e3)

@@ -106,6 +106,10 @@ impl Lcg {
             .wrapping_add(1_442_695_040_888_963_407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// The next number in `a..b`.
+    pub(crate) fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.unit()
+    }
     fn noise(&mut self, px: f64) -> f64 {
         (self.unit() * 2.0 - 1.0) * px
     }

@@ -8,9 +8,10 @@
 use glam::{DQuat, DVec3};
 
 use super::{Controller, GROUND_CONTACT_M};
-use crate::character::roles::Role;
-use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics, sole};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics, sole};
 use crate::control::posing::ik::{ccd, chain, plant_feet};
+use crate::control::tracking::accel::Gains;
 
 /// A planted foot steps when the posture wants it this far away (m, on
 /// the floor).
@@ -79,7 +80,7 @@ impl Controller {
         let held = self.held();
         let settle = 1.0 - (-dt / 0.06).exp();
         let switched = std::mem::take(&mut self.switched);
-        let gains = crate::control::tracking::accel::Gains::critical(self.settings.settle_s);
+        let gains = Gains::critical(self.settings.settle_s);
         // While walking, the clip's own foot contacts say which foot
         // stands.
         let contacts = match &self.mode {
@@ -282,14 +283,7 @@ impl Controller {
             plant_feet(sk, roles, &mut self.output, goals);
             // A leg that cannot bend the foot up far enough (pulled
             // straight, or its knee the bound holds back): the body rises.
-            let w = forward_kinematics(sk, &self.output);
-            let under = feet
-                .iter()
-                .map(|r| -sole(sk, &w, roles.get(*r)).y)
-                .fold(0.0, f64::max);
-            if under > 0.0 {
-                self.output.translations[0].y += under;
-            }
+            rise_over_floor(sk, roles, &mut self.output, &feet);
         }
         let w = forward_kinematics(sk, &self.output);
         for role in feet {
@@ -318,6 +312,20 @@ impl Controller {
         if !hands.is_empty() {
             ccd(sk, &mut self.output, &hands, 12);
         }
+    }
+}
+
+/// Raise the whole body of `pose` by as much as the lowest point of any
+/// of `parts` (and what hangs from it) is under the floor, its joints
+/// untouched.
+pub(super) fn rise_over_floor(sk: &Skeleton, roles: &RoleMap, pose: &mut Pose, parts: &[Role]) {
+    let w = forward_kinematics(sk, pose);
+    let under = parts
+        .iter()
+        .map(|r| -sole(sk, &w, roles.get(*r)).y)
+        .fold(0.0, f64::max);
+    if under > 0.0 {
+        pose.translations[0].y += under;
     }
 }
 
@@ -379,10 +387,7 @@ fn toes_onto_floor(sk: &Skeleton, w: &WorldPose, j: usize) -> DQuat {
 }
 
 /// Hip to ankle along the bones of the rest skeleton (m), the shorter leg.
-pub(super) fn leg_length(
-    sk: &crate::character::skeleton::Skeleton,
-    roles: &crate::character::roles::RoleMap,
-) -> f64 {
+pub(super) fn leg_length(sk: &crate::character::skeleton::Skeleton, roles: &RoleMap) -> f64 {
     [
         (Role::LeftKnee, Role::LeftFoot),
         (Role::RightKnee, Role::RightFoot),

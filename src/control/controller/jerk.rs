@@ -8,8 +8,9 @@
 use glam::{DQuat, DVec3};
 
 use super::Controller;
+use super::feet::rise_over_floor;
 use crate::character::roles::Role;
-use crate::character::skeleton::{Pose, forward_kinematics, rotation_difference, sole};
+use crate::character::skeleton::{Pose, rotation_difference};
 
 /// The most a joint's angular velocity changes in a second (rad/s²).
 const MAX_ACCEL: f64 = 240.0;
@@ -43,34 +44,29 @@ impl Controller {
             .enumerate()
         {
             let from = last.rotations[j];
-            let w = rotation_difference(from, *q) / dt;
+            let mut w = rotation_difference(from, *q) / dt;
             let change = w - *v;
             let len = change.length();
             if len > most {
-                let w = *v + change * (most / len);
+                w = *v + change * (most / len);
                 *q = (DQuat::from_scaled_axis(w * dt) * from).normalize();
-                *v = w;
-            } else {
-                *v = w;
             }
+            *v = w;
         }
         // The floor still holds: a foot or a hand the bound (or a finger)
         // left under it lifts the body, its joints untouched (bending the leg
         // to lift the foot undid the bound: a knee popped as a kick began).
-        let sk = &self.ch.lib.skeleton;
-        let w = forward_kinematics(sk, &self.output);
-        let under = [
-            Role::LeftFoot,
-            Role::RightFoot,
-            Role::LeftHand,
-            Role::RightHand,
-        ]
-        .into_iter()
-        .map(|r| -sole(sk, &w, self.ch.roles.get(r)).y)
-        .fold(0.0, f64::max);
-        if under > 0.0 {
-            self.output.translations[0].y += under;
-        }
+        rise_over_floor(
+            &self.ch.lib.skeleton,
+            &self.ch.roles,
+            &mut self.output,
+            &[
+                Role::LeftFoot,
+                Role::RightFoot,
+                Role::LeftHand,
+                Role::RightHand,
+            ],
+        );
         if let Some((last, _)) = &mut self.jerk.last {
             last.clone_from(&self.output);
         }

@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use super::Controller;
 use crate::character::roles::Role;
-use crate::character::skeleton::{foot_points, forward_kinematics, sole};
+use crate::character::skeleton::{WorldPose, foot_points, forward_kinematics, sole};
 use crate::control::posing::ik::plant_feet;
 
 /// Up to this speed over the floor (m/s) a foot stays on it (a planted
@@ -44,28 +44,26 @@ impl Controller {
                 continue;
             }
             let j = roles.get(role);
-            let (before, after) = (foot_points(sk, &self.world, j), foot_points(sk, &now, j));
-            let speed = before
-                .iter()
-                .zip(&after)
+            let speed = foot_points(sk, &self.world, j)
+                .zip(foot_points(sk, &now, j))
                 .filter(|(a, b)| a.y.min(b.y) < NEAR_M)
-                .map(|(a, b)| (*b - *a).with_y(0.0).length() / dt)
+                .map(|(a, b)| (b - a).with_y(0.0).length() / dt)
                 .fold(0.0, f64::max);
             let want = ((speed - SLOW_M_S) / (SWING_M_S - SLOW_M_S)).clamp(0.0, 1.0);
             self.swept[k] = want.max(self.swept[k] - dt / SET_DOWN_S);
             lifts[k] = CLEARANCE_M * self.swept[k];
         }
-        self.lift_feet(lifts);
+        self.lift_feet(lifts, now);
     }
 
     /// Lift each foot until its lowest point is `lifts[k]` above the
-    /// floor (no lower than it is), keeping its turn.
-    fn lift_feet(&mut self, lifts: [f64; 2]) {
+    /// floor (no lower than it is), keeping its turn; `w` is the shown
+    /// posture's world pose.
+    fn lift_feet(&mut self, lifts: [f64; 2], mut w: WorldPose) {
         let sk = &self.ch.lib.skeleton;
         let roles = &self.ch.roles;
         // The leg's IK turns the foot with the leg: a few passes lift its
         // lowest point as far as asked.
-        let mut w = forward_kinematics(sk, &self.output);
         for _ in 0..3 {
             let mut goals = [None; 2];
             for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {

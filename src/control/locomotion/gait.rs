@@ -199,7 +199,7 @@ impl Gait {
     /// over.
     #[must_use]
     pub fn best(&self, query: &[f64; FEATURES], weights: &[f64; FEATURES]) -> Option<(usize, f64)> {
-        self.best_with_room(query, weights, 0.0)
+        self.best_left(query, weights, 0.0)
     }
 
     /// [`Self::best`] among the frames with at least `room_s` seconds of
@@ -212,11 +212,8 @@ impl Gait {
         weights: &[f64; FEATURES],
         room_s: f64,
     ) -> Option<(usize, f64)> {
-        let found = self.best_left(query, weights, room_s);
-        if found.is_none() && room_s > 0.0 {
-            return self.best_left(query, weights, 0.0);
-        }
-        found
+        self.best_left(query, weights, room_s)
+            .or_else(|| self.best(query, weights))
     }
 
     fn best_left(

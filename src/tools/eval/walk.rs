@@ -167,14 +167,14 @@ pub fn random_paths(seed: u64, n: usize) -> Vec<WalkPath> {
         } else {
             std::f64::consts::PI
         };
-        let mut heading = across + side + range(&mut rng, -0.6, 0.6);
-        let total = range(&mut rng, 1.2, 3.0);
-        let bend = range(&mut rng, -0.5, 0.5);
+        let mut heading = across + side + rng.range(-0.6, 0.6);
+        let total = rng.range(1.2, 3.0);
+        let bend = rng.range(-0.5, 0.5);
         let mut p = [0.0f64, 0.0];
         let mut points = vec![p];
         let mut s = 0.0;
         while s < total {
-            heading += bend * 0.25 + range(&mut rng, -0.15, 0.15);
+            heading += bend * 0.25 + rng.range(-0.15, 0.15);
             p = [p[0] + 0.25 * heading.sin(), p[1] + 0.25 * heading.cos()];
             points.push(p);
             s += 0.25;
@@ -184,7 +184,7 @@ pub fn random_paths(seed: u64, n: usize) -> Vec<WalkPath> {
             .iter()
             .all(|q| q[0].abs() <= 2.0 && (-2.5..=1.5).contains(&q[1]))
         {
-            let speed_mps = range(&mut rng, 0.6, 1.4);
+            let speed_mps = rng.range(0.6, 1.4);
             out.push(WalkPath { points, speed_mps });
         }
     }
@@ -386,9 +386,4 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         },
         layered: second.map(SecondFinger::finish),
     }
-}
-
-/// A number in `a..b`.
-fn range(rng: &mut Lcg, a: f64, b: f64) -> f64 {
-    a + (b - a) * rng.unit()
 }
