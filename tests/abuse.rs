@@ -55,7 +55,7 @@ fn abuse_is_the_same_for_a_seed_and_replays_without_nan() {
         m["max_joint_speed_jump_rad_s"].as_f64().unwrap() <= 8.01,
         "{m}"
     );
-    assert!(m["ground_penetration_mm"].as_f64().unwrap() <= 5.0, "{m}");
+    assert!(m["ground_penetration_mm"].as_f64().unwrap() <= 0.1, "{m}");
     // Fingers aimed at the body hold parts and start actions.
     assert!(!m["actions"].as_array().unwrap().is_empty(), "{m}");
     // Bad lengths are refused, nothing written.
