@@ -4,8 +4,9 @@
 //! free foot, tracking catching up), a foot low and fast is lifted by as
 //! much as its lowest point lacks of [`CLEARANCE_M`], in proportion to
 //! its speed between [`SLOW_M_S`] and [`SWING_M_S`], and set down again
-//! over [`SET_DOWN_S`] once it slows. Feet held by a finger are the
-//! finger's.
+//! over [`SET_DOWN_S`] once it slows; where a straight leg cannot lift a
+//! swinging foot that far, the body rises by what it lacks. Feet held by
+//! a finger are the finger's.
 
 use glam::DVec3;
 
@@ -87,6 +88,21 @@ impl Controller {
                 }
             }
             w = forward_kinematics(sk, &self.output);
+        }
+        // A straight leg cannot lift its swinging foot clear: the body rises
+        // by what it lacks (as a runner's does), the feet that stand
+        // planted again.
+        let short = (0..2)
+            .filter(|&k| lifts[k] > 0.0 && self.feet[k].anchor.is_none())
+            .map(|k| lifts[k] - sole(sk, &w, roles.get([Role::LeftFoot, Role::RightFoot][k])).y)
+            .fold(0.0, f64::max);
+        if short > 1e-3 {
+            let stand: [Option<DVec3>; 2] =
+                std::array::from_fn(|k| self.feet[k].anchor.filter(|_| lifts[k] == 0.0));
+            self.output.translations[0].y += short;
+            if stand.iter().any(Option::is_some) {
+                plant_feet(sk, roles, &mut self.output, stand);
+            }
         }
     }
 }

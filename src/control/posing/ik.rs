@@ -67,6 +67,18 @@ pub fn ccd(
     goals: &[(usize, Vec<usize>, DVec3)],
     sweeps: usize,
 ) {
+    ccd_within(skeleton, pose, goals, sweeps, |_, q| q);
+}
+
+/// [`ccd`] with each joint's turn kept within what `limit` allows: it
+/// maps joint `j`'s new local rotation to the nearest it may take.
+pub fn ccd_within(
+    skeleton: &Skeleton,
+    pose: &mut Pose,
+    goals: &[(usize, Vec<usize>, DVec3)],
+    sweeps: usize,
+    limit: impl Fn(usize, DQuat) -> DQuat,
+) {
     // Per goal: the path from the root down to the effector, and where each
     // chain joint lies on it (a chain joint off the path cannot move it).
     let paths: Vec<(Vec<usize>, Vec<usize>)> = goals
@@ -124,7 +136,10 @@ pub fn ccd(
                 // This joint's world rotation now, after the turns of the
                 // joints below it (which do not change it).
                 let current = parent_rot * pose.rotations[j];
-                pose.rotations[j] = (parent_rot.inverse() * (turn * current)).normalize();
+                let local = limit(j, (parent_rot.inverse() * (turn * current)).normalize());
+                pose.rotations[j] = local;
+                // Where the effector went with the turn the limit allowed.
+                let turn = parent_rot * local * current.inverse();
                 end = pivot + turn * a;
             }
         }
