@@ -264,3 +264,70 @@ pub fn apply_ik(
         pose.rotations[j] = (parent.inverse() * w.rotations[j]).normalize();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::character::skeleton::Joint;
+
+    /// A leg hanging from a root: hip, knee, ankle.
+    fn leg() -> Skeleton {
+        let joint = |name: &str, parent, y| Joint {
+            name: name.to_owned(),
+            parent,
+            offset: DVec3::new(0.0, y, 0.0),
+            end_site: None,
+        };
+        Skeleton {
+            joints: vec![
+                joint("Root", None, 1.0),
+                joint("Hip", Some(0), 0.0),
+                joint("Knee", Some(1), -0.45),
+                joint("Ankle", Some(2), -0.45),
+            ],
+        }
+    }
+
+    #[test]
+    fn ccd_within_limits_turns_no_joint_past_its_limit_and_gets_as_near_as_that_allows() {
+        let sk = leg();
+        let rest = sk.rest_pose();
+        let goal = DVec3::new(0.0, 0.5, 0.4);
+        let goals = [(3, vec![2, 1], goal)];
+        let dist = |p: &Pose| (forward_kinematics(&sk, p).positions[3] - goal).length();
+        // Unlimited, the ankle reaches the goal.
+        let mut free = rest.clone();
+        ccd(&sk, &mut free, &goals, 12);
+        assert!(dist(&free) < 1e-3, "{}", dist(&free));
+        // Each joint turned at most 0.2 rad from rest: none turns further,
+        // and the ankle comes nearer than it was.
+        let most = 0.2;
+        let limit = |j: usize, q: DQuat| {
+            let from = rest.rotations[j];
+            let d = q * from.inverse();
+            let angle = d.to_scaled_axis().length();
+            if angle > most {
+                (DQuat::from_scaled_axis(d.to_scaled_axis() * (most / angle)) * from).normalize()
+            } else {
+                q
+            }
+        };
+        let mut held = rest.clone();
+        ccd_within(&sk, &mut held, &goals, 12, limit);
+        for j in [1, 2] {
+            let turned = (held.rotations[j] * rest.rotations[j].inverse()).to_scaled_axis();
+            assert!(
+                turned.length() <= most + 1e-9,
+                "joint {j} turned {}",
+                turned.length()
+            );
+        }
+        assert!(
+            dist(&held) < dist(&rest) - 0.1,
+            "{} vs {}",
+            dist(&held),
+            dist(&rest)
+        );
+        assert!(dist(&held) > 0.05, "the limits keep it from the goal");
+    }
+}
