@@ -85,3 +85,31 @@ fn a_skeleton_without_sides_has_no_mirror_image() {
     }
     assert_eq!(clip.mirrored().unwrap_err(), MirrorError::NoPairs);
 }
+
+#[test]
+fn a_mirrored_foot_stands_on_its_sole_not_its_instep() {
+    // The Bandai bones lie along their x axis: the offsets alone leave the
+    // roll about a bone open, and a half turn about it put the mirrored
+    // feet on their insteps (a skinned figure's feet then went 9 cm into
+    // the floor and were lifted out, bending its knees). The motion tells
+    // the rolls apart: a walk's mirrored left foot turns as its own left
+    // foot does, give or take the walk's own asymmetry.
+    let clip = import(&common::shared_dir().join("mocap/bandai/d1_walk_normal_001.bvh"));
+    let m = clip.mirrored().unwrap();
+    let sk = &clip.skeleton;
+    for name in ["Foot_L", "Toes_L", "Foot_R", "Hand_L", "LowerLeg_R"] {
+        let j = sk.joints.iter().position(|x| x.name == name).unwrap();
+        let mean = clip
+            .frames
+            .iter()
+            .zip(&m.frames)
+            .map(|(a, b)| {
+                let (wa, wb) = (forward_kinematics(sk, a), forward_kinematics(sk, b));
+                wa.rotations[j].angle_between(wb.rotations[j])
+            })
+            .sum::<f64>()
+            / clip.frames.len() as f64;
+        eprintln!("{name}: {mean:.2} rad on average from its own turn");
+        assert!(mean < 1.1, "{name}: {mean:.2} rad");
+    }
+}

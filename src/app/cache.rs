@@ -16,8 +16,9 @@ use crate::control::posing::sample::distance;
 const MAGIC: &[u8; 8] = b"MRNTPOSE";
 /// Bumped whenever samples, the distance or the embedding change (2: the
 /// import reads Character Creator position channels as displacements and
-/// retargets other performers onto the library's skeleton).
-const FORMAT: u32 = 2;
+/// retargets other performers onto the library's skeleton; 3: mirrored
+/// clips take the roll about a bone that the motion shows).
+const FORMAT: u32 = 3;
 
 /// The content key of a library: the cache format and the library's own
 /// content key (computed as its files were read: nothing is read again).

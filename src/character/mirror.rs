@@ -14,7 +14,7 @@
 use glam::{DMat3, DQuat, DVec3};
 
 use super::motion::Clip;
-use super::skeleton::Skeleton;
+use super::skeleton::{Pose, Skeleton};
 
 /// Why a clip has no mirror image.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -78,13 +78,20 @@ const REFLECTIONS: [DVec3; 4] = [
     DVec3::new(-1.0, -1.0, -1.0),
 ];
 
+/// At most this many frames tell apart reflections the offsets cannot.
+const MOTION_SAMPLES: usize = 200;
+
 /// For every joint, the reflection that takes its partner's local frame to
 /// its own (`A_j` with `off_c = A_j off_{m(c)}` for its children `c`, or
 /// its End Site), and the share of offset length left unmatched over the
 /// whole skeleton. Rigs mirror their right side differently (across local
 /// x, or with the bones pointing the other way along x): each joint's is
-/// measured.
-fn frame_mirrors(skeleton: &Skeleton, partner: &[usize]) -> (Vec<DVec3>, f64) {
+/// measured. Offsets along one axis (a bone along its x) or none (a hand's
+/// End Site at the joint) leave the roll about the bone open: reflections
+/// that differ by half a turn about it match alike, though a foot so
+/// mirrored stands on its instep. Among those, the one under which the
+/// partner's turns in `frames` look most like the joint's own is taken.
+fn frame_mirrors(skeleton: &Skeleton, partner: &[usize], frames: &[Pose]) -> (Vec<DVec3>, f64) {
     let n = skeleton.len();
     let mut mirrors = vec![REFLECTIONS[0]; n];
     let (mut miss, mut total) = (0.0, 0.0);
@@ -116,10 +123,35 @@ fn frame_mirrors(skeleton: &Skeleton, partner: &[usize]) -> (Vec<DVec3>, f64) {
                 .map(|(a, b)| (*a - m * *b).length())
                 .sum::<f64>()
         };
-        // The parent's first, so that ties keep a chain's frames alike.
-        let best = std::iter::once(inherited)
-            .chain(REFLECTIONS)
-            .min_by(|a, b| cost(*a).total_cmp(&cost(*b)))
+        // The parent's first, so that ties keep a chain's frames alike...
+        let candidates: Vec<DVec3> = std::iter::once(inherited).chain(REFLECTIONS).collect();
+        let least = candidates
+            .iter()
+            .map(|m| cost(*m))
+            .fold(f64::INFINITY, f64::min);
+        let scale = pairs.iter().map(|(a, _)| a.length()).sum::<f64>();
+        let tied: Vec<DVec3> = candidates
+            .into_iter()
+            .filter(|m| cost(*m) <= least + 1e-6 * (1.0 + scale))
+            .collect();
+        // ...unless the motion tells them apart.
+        let outer = skeleton.joints[j]
+            .parent
+            .map_or(DVec3::new(-1.0, 1.0, 1.0), |p| mirrors[p]);
+        let unlike = |m: DVec3| -> f64 {
+            frames
+                .iter()
+                .step_by((frames.len() / MOTION_SAMPLES).max(1))
+                .map(|f| {
+                    let mirrored = between(outer, f.rotations[partner[j]], m);
+                    mirrored.angle_between(f.rotations[j])
+                })
+                .sum()
+        };
+        let best = tied
+            .iter()
+            .copied()
+            .min_by(|a, b| unlike(*a).total_cmp(&unlike(*b)))
             .unwrap_or(inherited);
         mirrors[j] = best;
         miss += cost(best);
@@ -144,7 +176,7 @@ impl Clip {
         if partner.iter().enumerate().all(|(i, &p)| i == p) {
             return Err(MirrorError::NoPairs);
         }
-        let (a, miss) = frame_mirrors(sk, &partner);
+        let (a, miss) = frame_mirrors(sk, &partner, &self.frames);
         if miss > 0.05 {
             return Err(MirrorError::Asymmetric(miss * 100.0));
         }
