@@ -78,6 +78,9 @@ const REFLECTIONS: [DVec3; 4] = [
     DVec3::new(-1.0, -1.0, -1.0),
 ];
 
+/// The world's mirror: across x = 0.
+const WORLD: DVec3 = DVec3::new(-1.0, 1.0, 1.0);
+
 /// At most this many frames tell apart reflections the offsets cannot.
 const MOTION_SAMPLES: usize = 200;
 
@@ -135,9 +138,7 @@ fn frame_mirrors(skeleton: &Skeleton, partner: &[usize], frames: &[Pose]) -> (Ve
             .filter(|m| cost(*m) <= least + 1e-6 * (1.0 + scale))
             .collect();
         // ...unless the motion tells them apart.
-        let outer = skeleton.joints[j]
-            .parent
-            .map_or(DVec3::new(-1.0, 1.0, 1.0), |p| mirrors[p]);
+        let outer = skeleton.joints[j].parent.map_or(WORLD, |p| mirrors[p]);
         let unlike = |m: DVec3| -> f64 {
             frames
                 .iter()
@@ -180,15 +181,14 @@ impl Clip {
         if miss > 0.05 {
             return Err(MirrorError::Asymmetric(miss * 100.0));
         }
-        let world = DVec3::new(-1.0, 1.0, 1.0);
         let mut out = self.clone();
         for (f, src) in out.frames.iter_mut().zip(&self.frames) {
             for j in 0..sk.len() {
                 let p = partner[j];
                 match sk.joints[j].parent {
                     None => {
-                        f.rotations[j] = between(world, src.rotations[p], a[j]);
-                        f.translations[j] = world * src.translations[p];
+                        f.rotations[j] = between(WORLD, src.rotations[p], a[j]);
+                        f.translations[j] = WORLD * src.translations[p];
                     }
                     Some(parent) => {
                         f.rotations[j] = between(a[parent], src.rotations[p], a[j]);

@@ -46,8 +46,7 @@ impl Controller {
         let most = MAX_ACCEL * dt;
         let sk = &self.ch.lib.skeleton;
         let before = forward_kinematics(sk, &self.output);
-        let from = last.rotations.clone();
-        let old = vel.clone();
+        let (from, old) = (&last.rotations, &vel);
         // Joint j's local rotation `q`, its angular velocity's change kept
         // within the bound.
         let bounded = |j: usize, q: DQuat| -> DQuat {
@@ -81,7 +80,7 @@ impl Controller {
             ccd_within(sk, &mut self.output, &goals, 8, bounded);
         }
         for (j, v) in vel.iter_mut().enumerate() {
-            *v = rotation_difference(from[j], self.output.rotations[j]) / dt;
+            *v = rotation_difference(last.rotations[j], self.output.rotations[j]) / dt;
         }
         // ...and a planted foot they could not bring back (its leg held
         // back under a lunging body) stays where it stands: the body moves
