@@ -9,9 +9,10 @@
 //! medians and ratios printed: on a shared machine whose speed drifts,
 //! scenes measured minutes apart compare badly. Where the shared test
 //! characters are beside the checkout, CesiumMan skinned (one, and two
-//! tinted) joins the interleaved scenes and its composing (CPU skinning)
-//! is timed; so does the project's own skinned body (the default look),
-//! always.
+//! tinted) joins the interleaved scenes and its composing is timed; so
+//! does the project's own skinned body (the default look), always. Two
+//! figures are also drawn skinned the other way (in the vertex shader on a
+//! CPU adapter, which skins on the CPU by default; on the CPU on a GPU).
 //! `cargo bench --bench render`.
 
 #![allow(
@@ -265,23 +266,41 @@ fn bench(c: &mut Criterion) {
         if filter.is_some_and(|f| !label.contains(&f)) {
             continue;
         }
+        // The figures skinned the other way too (in the vertex shader
+        // where the adapter is a CPU, which skins them on the CPU by
+        // default; on the CPU where it is a GPU).
+        let mut other =
+            Headless::new(Gpu::new(AdapterChoice::Auto).unwrap(), w, h, samples).unwrap();
+        let default_on_gpu = other.renderer.gpu_skinning();
+        other.renderer.set_gpu_skinning(!default_on_gpu);
+        let other_way = if default_on_gpu {
+            "skinned on the CPU"
+        } else {
+            "skinned in the vertex shader"
+        };
         let mut scenes = vec![
-            ("bare 21 boxes", &boxes),
-            ("character", &character),
-            ("two characters", &two),
-            ("own skinned body", &own_skinned),
-            ("two own skinned bodies", &two_own),
+            ("bare 21 boxes".to_owned(), &boxes, 0),
+            ("character".to_owned(), &character, 1),
+            ("two characters".to_owned(), &two, 1),
+            ("own skinned body".to_owned(), &own_skinned, 1),
+            ("two own skinned bodies".to_owned(), &two_own, 1),
+            (format!("two own skinned bodies {other_way}"), &two_own, 2),
         ];
         if skin.is_some() {
-            scenes.push(("CesiumMan skinned", &skinned));
-            scenes.push(("two CesiumMan skinned", &two_skinned));
+            scenes.push(("CesiumMan skinned".to_owned(), &skinned, 1));
+            scenes.push(("two CesiumMan skinned".to_owned(), &two_skinned, 1));
+            scenes.push((format!("two CesiumMan {other_way}"), &two_skinned, 2));
         }
         let mut times = vec![Vec::new(); scenes.len()];
         // Blocks of 12 frames of one scene, the first 2 not counted (the
         // caches warm up again after the other scenes), 30 rounds.
         for _ in 0..30 {
-            for (k, (_, list)) in scenes.iter().enumerate() {
-                let target = if k == 0 { &mut bare } else { &mut full };
+            for (k, (_, list, which)) in scenes.iter().enumerate() {
+                let target = match which {
+                    0 => &mut bare,
+                    1 => &mut full,
+                    _ => &mut other,
+                };
                 for i in 0..12 {
                     let start = std::time::Instant::now();
                     target.render(list).unwrap();
@@ -298,7 +317,7 @@ fn bench(c: &mut Criterion) {
                 t[t.len() / 2]
             })
             .collect();
-        for ((name, _), m) in scenes.iter().zip(&medians) {
+        for ((name, _, _), m) in scenes.iter().zip(&medians) {
             eprintln!(
                 "{label} {name}: median {m:.2} ms, {:.2}x bare",
                 m / medians[0]

@@ -40,6 +40,54 @@ fn vs_lit(v: VertexIn) -> Surface {
     return out;
 }
 
+// A skinned figure's joint: its skinning matrix (rest pose to posed) and
+// x: whether it glows; yzw: the figure's tint (its first joint's; y < 0
+// when none).
+struct Joint {
+    skin: mat4x4<f32>,
+    extra: vec4<f32>,
+};
+
+@group(1) @binding(0) var<storage, read> joints: array<Joint>;
+
+struct SkinIn {
+    @location(0) pos: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) plain: vec3<f32>,
+    // rgb + a * tint where the figure is tinted.
+    @location(3) tinted: vec4<f32>,
+    @location(4) joint: vec4<u32>,
+    @location(5) weight: vec4<f32>,
+    @location(6) glow: u32,
+    // The figure's first joint in `joints`.
+    @builtin(instance_index) base: u32,
+};
+
+// Linear blend skinning: the rest-pose vertex and normal carried by up to
+// four joints, their matrices blended by the weights (no branches: a
+// joint of weight 0 adds nothing).
+@vertex
+fn vs_skinned(v: SkinIn) -> Surface {
+    let m = v.weight.x * joints[v.base + v.joint.x].skin
+        + v.weight.y * joints[v.base + v.joint.y].skin
+        + v.weight.z * joints[v.base + v.joint.z].skin
+        + v.weight.w * joints[v.base + v.joint.w].skin;
+    let p = (m * vec4<f32>(v.pos, 1.0)).xyz;
+    let n = (m * vec4<f32>(v.normal, 0.0)).xyz;
+    let tint = joints[v.base].extra;
+    var rgb = v.plain;
+    if (tint.y >= 0.0) {
+        rgb = v.tinted.rgb + v.tinted.a * tint.yzw;
+    }
+    var out: Surface;
+    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.world = p;
+    // Unit at each vertex, as the other meshes' normals are.
+    out.normal = normalize(n);
+    out.color = vec4<f32>(rgb, joints[v.base + v.glow].extra.x);
+    return out;
+}
+
 fn fog_amount(world: vec3<f32>) -> f32 {
     let d = length(world - g.eye.xyz);
     return smoothstep(g.fog.a, g.fog.a * 3.0, d);

@@ -493,6 +493,17 @@ fn the_shared_characters_render_over_their_skeletons() {
         );
         list.shadow = Default::default();
         let img = headless.render(&list).unwrap();
+        // Skinned in the vertex shader (as on a GPU), the same picture as
+        // skinned on the CPU (lavapipe's default).
+        headless.renderer.set_gpu_skinning(true);
+        let on_gpu = headless.render(&list).unwrap();
+        headless.renderer.set_gpu_skinning(false);
+        let differing = common::pixels_apart(&img.rgba, &on_gpu.rgba, 8);
+        eprintln!("{file}: {differing} pixels differ skinned on the GPU");
+        assert!(
+            differing <= 20,
+            "{file}: {differing} pixels differ skinned on the GPU"
+        );
         let inside = |x: i64, y: i64| {
             (x >= 0 && y >= 0 && x < i64::from(w) && y < i64::from(h)) && {
                 let i = (y as usize * w as usize + x as usize) * 4;

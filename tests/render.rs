@@ -4,6 +4,8 @@
 //! actual frame and a difference image to target/golden-failures.
 //! `MARIONETTE_UPDATE_GOLDEN=1 cargo test --test render` rewrites them.
 
+mod common;
+
 use std::path::PathBuf;
 
 use glam::{DQuat, DVec3};
@@ -406,7 +408,56 @@ fn the_own_skinned_body_at_rest_and_held() {
             }],
             &Marks::default(),
         );
+        // Skinned on the CPU (lavapipe's default) and in the vertex
+        // shader (a GPU's): the same picture.
+        assert!(!h.renderer.gpu_skinning(), "lavapipe skins on the CPU");
         let img = h.render(&list).unwrap();
         compare(name, &img);
+        h.renderer.set_gpu_skinning(true);
+        let on_gpu = h.render(&list).unwrap();
+        h.renderer.set_gpu_skinning(false);
+        compare(name, &on_gpu);
+        let differing = common::pixels_apart(&img.rgba, &on_gpu.rgba, 8);
+        assert!(
+            differing <= 20,
+            "{name}: {differing} pixels differ between skinning on the CPU and on the GPU"
+        );
+    }
+    // One sample per pixel reuses the floor: the figure redrawn where it
+    // is and was (the balls around its joints) leaves no trace of the
+    // frame before, skinned either way.
+    let posed = |clip: &str| {
+        let clip = &lib.clips[clip];
+        forward_kinematics(&clip.skeleton, &clip.frames[clip.frames.len() / 2])
+    };
+    let (a, b) = (
+        posed("pose_stance.bvh"),
+        posed("pose_reach_front_right.bvh"),
+    );
+    let list = |world: &marionette::character::skeleton::WorldPose| {
+        scene::compose_bodies(
+            &view,
+            &[scene::Body {
+                skeleton: &rest.skeleton,
+                roles: &rest.roles,
+                world,
+                held: &[],
+                tint: None,
+                figure: Some(&skin),
+            }],
+            &Marks::default(),
+        )
+    };
+    for on_gpu in [false, true] {
+        let mut one = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1).unwrap();
+        one.renderer.set_gpu_skinning(on_gpu);
+        let _ = one.render(&list(&a)).unwrap();
+        let second = one.render(&list(&b)).unwrap();
+        let mut fresh = Headless::new(Gpu::new(AdapterChoice::Cpu).unwrap(), 640, 360, 1).unwrap();
+        fresh.renderer.set_gpu_skinning(on_gpu);
+        assert!(
+            second == fresh.render(&list(&b)).unwrap(),
+            "skinned on the GPU: {on_gpu}: the earlier frame left traces"
+        );
     }
 }

@@ -198,6 +198,35 @@ pub fn damage(list: &DrawList, shadow_view_proj: Mat4, size: (u32, u32)) -> Dama
         .map(|v| project(&list.view_proj, Vec3::from(v.pos).extend(1.0)))
         .collect();
     let mut whole = !triangles(body, &mut indexed(&list.body.indices).into_iter());
+    // Skinned figures: the box around each ball holding their vertices.
+    for ball in list.figures.iter().flat_map(|f| &f.spheres) {
+        if whole {
+            break;
+        }
+        let (c, r) = (Vec3::new(ball[0], ball[1], ball[2]), ball[3]);
+        let corners: Option<Vec<Vec2>> = (0..8)
+            .map(|k| {
+                let s = Vec3::new(
+                    if k & 1 == 0 { -r } else { r },
+                    if k & 2 == 0 { -r } else { r },
+                    if k & 4 == 0 { -r } else { r },
+                );
+                project(&list.view_proj, (c + s).extend(1.0))
+            })
+            .collect();
+        // Behind the eye: give up on bounds.
+        let Some(p) = corners else {
+            whole = true;
+            break;
+        };
+        let lo = p.iter().fold(Vec2::INFINITY, |a, q| a.min(*q));
+        let hi = p.iter().fold(Vec2::NEG_INFINITY, |a, q| a.max(*q));
+        // The box as a triangle spanning it.
+        triangles(
+            vec![Some(lo), Some(hi), Some(lo)],
+            &mut std::iter::once([0, 1, 2]),
+        );
+    }
     if list.floor && !whole {
         let shadow: Vec<_> = list
             .shadow

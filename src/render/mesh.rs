@@ -366,6 +366,8 @@ pub struct DrawList {
     pub floor: bool,
     /// Lit meshes: the character, or boxes.
     pub body: Mesh,
+    /// Skinned figures, skinned as they are drawn.
+    pub figures: Vec<super::figure::SkinnedDraw>,
     /// What casts the shadow on the floor (a coarse body).
     pub shadow: Mesh,
     /// Marks, trajectories and text over the picture.

@@ -12,4 +12,5 @@ pub mod headless;
 pub mod mesh;
 pub mod renderer;
 pub mod scene;
+mod skinned;
 pub mod solid;

@@ -1,5 +1,5 @@
 //! The wgpu renderer: pipelines for the floor, the planar shadow, lit
-//! meshes and 2-D overlays, drawing a [`DrawList`] into any colour target
+//! meshes, skinned figures (`skinned`) and 2-D overlays, drawing a [`DrawList`] into any colour target
 //! (an offscreen texture for headless output and the KMS copy path, a
 //! surface texture for direct display).
 
@@ -9,6 +9,7 @@ use glam::{Mat4, Vec3, Vec4};
 use super::damage::{Damage, Rect, damage};
 use super::gpu::{Gpu, GrowBuffer};
 use super::mesh::{DrawList, Mesh, Vertex2, Vertex3};
+use super::skinned::{self, Figures};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -113,6 +114,8 @@ pub struct Renderer {
     floor: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
     overlay: wgpu::RenderPipeline,
+    skinned: wgpu::RenderPipeline,
+    figures: Figures,
     floor_mesh: (wgpu::Buffer, wgpu::Buffer, u32),
     body_vertices: GrowBuffer,
     body_indices: GrowBuffer,
@@ -191,6 +194,7 @@ impl Renderer {
         };
         let blend = Some(wgpu::BlendState::ALPHA_BLENDING);
         let make = |label: &str,
+                    pipeline_layout: &wgpu::PipelineLayout,
                     vs: &str,
                     fs: &str,
                     layout: wgpu::VertexBufferLayout<'_>,
@@ -199,7 +203,7 @@ impl Renderer {
                     blend: Option<wgpu::BlendState>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
-                layout: Some(&pipeline_layout),
+                layout: Some(pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &shader,
                     entry_point: Some(vs),
@@ -244,6 +248,7 @@ impl Renderer {
         let none = wgpu::StencilState::default();
         let lit = make(
             "lit",
+            &pipeline_layout,
             "vs_lit",
             "fs_lit",
             v3.clone(),
@@ -253,6 +258,7 @@ impl Renderer {
         );
         let floor = make(
             "floor",
+            &pipeline_layout,
             "vs_lit",
             "fs_floor",
             v3.clone(),
@@ -262,6 +268,7 @@ impl Renderer {
         );
         let shadow = make(
             "shadow",
+            &pipeline_layout,
             "vs_shadow",
             "fs_shadow",
             v3,
@@ -271,12 +278,28 @@ impl Renderer {
         );
         let overlay = make(
             "overlay",
+            &pipeline_layout,
             "vs_overlay",
             "fs_overlay",
             v2,
             None,
-            depth(false, wgpu::CompareFunction::Always, none),
+            depth(false, wgpu::CompareFunction::Always, none.clone()),
             blend,
+        );
+        let figures = Figures::new(device, !gpu.is_cpu());
+        let skinned = make(
+            "skinned",
+            &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("skinned"),
+                bind_group_layouts: &[Some(&layout), Some(figures.layout())],
+                immediate_size: 0,
+            }),
+            "vs_skinned",
+            "fs_lit",
+            skinned::VERTEX,
+            Some(wgpu::Face::Back),
+            depth(true, wgpu::CompareFunction::Less, none),
+            None,
         );
         let mut ground = Mesh::default();
         ground.ground(FLOOR_HALF, 0.0, [0.62, 0.60, 0.56, 0.0]);
@@ -305,6 +328,8 @@ impl Renderer {
             floor,
             shadow,
             overlay,
+            skinned,
+            figures,
             floor_mesh: (floor_vb, floor_ib, ground.indices.len() as u32),
             body_vertices: GrowBuffer::new(device, "body vertices", wgpu::BufferUsages::VERTEX),
             body_indices: GrowBuffer::new(device, "body indices", wgpu::BufferUsages::INDEX),
@@ -402,6 +427,18 @@ impl Renderer {
         pass.draw_indexed(0..self.floor_mesh.2, 0, 0..1);
     }
 
+    /// Whether figures are skinned in the vertex shader.
+    #[must_use]
+    pub fn gpu_skinning(&self) -> bool {
+        self.figures.on_gpu
+    }
+
+    /// Skin figures in the vertex shader (the default on a GPU) or on the
+    /// CPU (the default on a CPU renderer); both draw the same.
+    pub fn set_gpu_skinning(&mut self, on: bool) {
+        self.figures.on_gpu = on;
+    }
+
     /// Samples per pixel actually used.
     #[must_use]
     pub fn samples(&self) -> u32 {
@@ -481,6 +518,7 @@ impl Renderer {
             .write(gpu, bytemuck::cast_slice(&list.shadow.vertices));
         self.shadow_indices
             .write(gpu, bytemuck::cast_slice(&list.shadow.indices));
+        self.figures.upload(gpu, list);
         let shadow_count = list.shadow.indices.len() as u32;
         let body_count = list.body.indices.len() as u32;
         let overlay_count = list.overlay.vertices.len() as u32;
@@ -537,6 +575,9 @@ impl Renderer {
             );
             pass.set_pipeline(&self.lit);
             pass.draw_indexed(0..body_count, 0, 0..1);
+        }
+        if !list.figures.is_empty() {
+            self.figures.draw(&mut pass, &self.skinned, &self.lit);
         }
         if overlay_count > 0 {
             pass.set_pipeline(&self.overlay);

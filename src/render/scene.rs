@@ -431,7 +431,7 @@ pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawLi
             // Shown as large as the library's character, the figure casts
             // about the capsules' shadow: the coarse one, at a fraction of
             // drawing its every triangle twice.
-            super::figure::draw(&mut list, skin, b.world, b.held, b.tint, tinted);
+            super::figure::draw(&mut list, skin, b.world, b.held, b.tint);
             shadow_into(&mut list.shadow, &segs);
             continue;
         }
@@ -449,7 +449,7 @@ pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawLi
 
 /// Clothes take the tint (the shirt, the tint itself; trousers, a dark
 /// shade of it); skin and shoes stay as they are.
-fn tinted(color: [f32; 3], tint: [f32; 3]) -> [f32; 3] {
+pub(super) fn tinted(color: [f32; 3], tint: [f32; 3]) -> [f32; 3] {
     if color == SHIRT {
         tint
     } else if color == TROUSERS {

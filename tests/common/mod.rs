@@ -177,3 +177,12 @@ pub mod bandai {
         }
     }
 }
+
+/// Pixels of two pictures of one size (RGBA) whose colour differs by more
+/// than `by` of 255 in some channel.
+pub fn pixels_apart(a: &[u8], b: &[u8], by: u8) -> usize {
+    a.chunks(4)
+        .zip(b.chunks(4))
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > by))
+        .count()
+}

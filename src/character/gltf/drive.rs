@@ -381,14 +381,19 @@ impl Drive {
         fixed
     }
 
+    /// Skinning matrices (rest pose to posed) for joint transforms `w`.
+    #[must_use]
+    pub fn skinning(&self, w: &[DMat4]) -> Vec<DMat4> {
+        w.iter()
+            .zip(&self.rest_inv)
+            .map(|(now, rest_inv)| *now * *rest_inv)
+            .collect()
+    }
+
     /// Skinned positions of every part for joint transforms `w`.
     #[must_use]
     pub fn skin(&self, fig: &Figure, w: &[DMat4]) -> Vec<Vec<DVec3>> {
-        let skin: Vec<DMat4> = w
-            .iter()
-            .zip(&self.rest_inv)
-            .map(|(now, rest_inv)| *now * *rest_inv)
-            .collect();
+        let skin = self.skinning(w);
         fig.parts
             .iter()
             .map(|p| {

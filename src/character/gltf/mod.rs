@@ -6,25 +6,34 @@
 //! the library's roles by their names, else by where they stand.
 
 mod drive;
+mod geometry;
 mod parts;
 mod read;
 mod rig;
 mod texture;
 
 pub use drive::Drive;
+pub use geometry::Geometry;
 
 /// A figure with how it follows one library.
 #[derive(Clone, Debug)]
 pub struct Skin {
     pub figure: Figure,
     pub drive: Drive,
+    /// Its triangles as a renderer skins them (made once).
+    pub geometry: std::sync::Arc<Geometry>,
 }
 
 impl Skin {
     #[must_use]
     pub fn new(figure: Figure, lib: &super::library::Library, lib_roles: &RoleMap) -> Self {
         let drive = Drive::new(&figure, lib, lib_roles);
-        Self { figure, drive }
+        let geometry = std::sync::Arc::new(Geometry::new(&figure));
+        Self {
+            figure,
+            drive,
+            geometry,
+        }
     }
 
     /// The figure made as large as the library's character (its legs as
@@ -45,15 +54,21 @@ impl Skin {
     /// `world` (the own body's joints are the library's, as posed).
     #[must_use]
     pub fn posed(&self, world: &super::skeleton::WorldPose) -> Vec<Vec<glam::DVec3>> {
+        self.drive.skin(&self.figure, &self.joints(world))
+    }
+
+    /// The figure's joint transforms (world, metres) posed as the
+    /// library's `world`.
+    #[must_use]
+    pub fn joints(&self, world: &super::skeleton::WorldPose) -> Vec<DMat4> {
         let fig = &self.figure;
-        let joints = if fig.own {
+        if fig.own {
             (0..fig.skeleton.len().min(world.positions.len()))
                 .map(|j| DMat4::from_rotation_translation(world.rotations[j], world.positions[j]))
                 .collect()
         } else {
             self.drive.pose(fig, world)
-        };
-        self.drive.skin(fig, &joints)
+        }
     }
 }
 

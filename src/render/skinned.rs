@@ -1,0 +1,205 @@
+//! Skinned figures: each figure's triangles uploaded once and kept while
+//! it is drawn. On a GPU its vertices are kept too and every frame's joints
+//! go into one storage buffer (a figure's first joint passed as its
+//! instance index), skinned by the `vs_skinned` pipeline. On a CPU
+//! renderer (lavapipe) the vertex stage runs on one thread and skinning
+//! there cost more than skinning before it (CesiumMan 0.8 ms a frame at
+//! 1280x720), so the vertices are skinned by `figure::skin_on_cpu` and
+//! drawn as lit meshes; either way they come out the same.
+
+use std::sync::Arc;
+
+use super::figure::{JointGpu, SkinVertex, skin_on_cpu, vertices};
+use super::gpu::{Gpu, GrowBuffer};
+use super::mesh::DrawList;
+use crate::character::gltf::Geometry;
+
+/// A figure's buffers on the GPU.
+struct Uploaded {
+    geometry: Arc<Geometry>,
+    own: bool,
+    /// On the GPU (skinned there), or kept here (skinned here).
+    vertices: Result<wgpu::Buffer, Vec<SkinVertex>>,
+    indices: wgpu::Buffer,
+    count: u32,
+}
+
+/// The skinned figures' buffers.
+pub(super) struct Figures {
+    layout: wgpu::BindGroupLayout,
+    /// Skin in the vertex shader (else on the CPU).
+    pub(super) on_gpu: bool,
+    joints: GrowBuffer,
+    /// Vertices skinned on the CPU this frame.
+    skinned: GrowBuffer,
+    /// The joints' bind group, and the buffer size it was made for.
+    bind: Option<(wgpu::BindGroup, u64)>,
+    uploaded: Vec<Uploaded>,
+    /// This frame's draws: index into `uploaded`, and its first joint (on
+    /// the GPU) or first vertex in `skinned` (on the CPU).
+    draws: Vec<(usize, u32)>,
+}
+
+/// The vertex layout of [`SkinVertex`].
+pub(super) const VERTEX: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: std::mem::size_of::<SkinVertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![
+        0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4,
+        4 => Uint32x4, 5 => Float32x4, 6 => Uint32
+    ],
+};
+
+impl Figures {
+    pub(super) fn new(device: &wgpu::Device, on_gpu: bool) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("joints"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        Self {
+            layout,
+            on_gpu,
+            joints: GrowBuffer::new(device, "joints", wgpu::BufferUsages::STORAGE),
+            skinned: GrowBuffer::new(device, "skinned vertices", wgpu::BufferUsages::VERTEX),
+            bind: None,
+            uploaded: Vec::new(),
+            draws: Vec::new(),
+        }
+    }
+
+    /// The bind group layout of the joints (group 1 of the pipeline).
+    pub(super) fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
+    /// Upload this frame's joints, and the vertices of figures not yet on
+    /// the GPU; figures not drawn this frame are let go.
+    pub(super) fn upload(&mut self, gpu: &Gpu, list: &DrawList) {
+        let device = &gpu.device;
+        let on_gpu = self.on_gpu;
+        self.uploaded.retain(|u| {
+            u.vertices.is_ok() == on_gpu
+                && list
+                    .figures
+                    .iter()
+                    .any(|f| Arc::ptr_eq(&f.geometry, &u.geometry) && f.own == u.own)
+        });
+        self.draws.clear();
+        let mut joints: Vec<JointGpu> = Vec::new();
+        let mut skinned = Vec::new();
+        for f in &list.figures {
+            let k = match self
+                .uploaded
+                .iter()
+                .position(|u| Arc::ptr_eq(&f.geometry, &u.geometry) && f.own == u.own)
+            {
+                Some(k) => k,
+                None => {
+                    let buffer = |label, usage, bytes: &[u8]| {
+                        let b = device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some(label),
+                            size: (bytes.len() as u64).next_multiple_of(4).max(4),
+                            usage: usage | wgpu::BufferUsages::COPY_DST,
+                            mapped_at_creation: false,
+                        });
+                        gpu.queue.write_buffer(&b, 0, bytes);
+                        b
+                    };
+                    let v = vertices(&f.geometry, f.own);
+                    self.uploaded.push(Uploaded {
+                        geometry: Arc::clone(&f.geometry),
+                        own: f.own,
+                        vertices: if on_gpu {
+                            Ok(buffer(
+                                "figure vertices",
+                                wgpu::BufferUsages::VERTEX,
+                                bytemuck::cast_slice(&v),
+                            ))
+                        } else {
+                            Err(v)
+                        },
+                        indices: buffer(
+                            "figure indices",
+                            wgpu::BufferUsages::INDEX,
+                            bytemuck::cast_slice(&f.geometry.indices),
+                        ),
+                        count: f.geometry.indices.len() as u32,
+                    });
+                    self.uploaded.len() - 1
+                }
+            };
+            match &self.uploaded[k].vertices {
+                Ok(_) => {
+                    self.draws.push((k, joints.len() as u32));
+                    joints.extend_from_slice(&f.joints);
+                }
+                Err(v) => {
+                    self.draws.push((k, skinned.len() as u32));
+                    skin_on_cpu(v, &f.joints, &mut skinned);
+                }
+            }
+        }
+        if !skinned.is_empty() {
+            self.skinned.write(gpu, bytemuck::cast_slice(&skinned));
+        }
+        if joints.is_empty() {
+            return;
+        }
+        self.joints.write(gpu, bytemuck::cast_slice(&joints));
+        let size = self.joints.buffer.size();
+        if self.bind.as_ref().is_none_or(|b| b.1 != size) {
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("joints"),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.joints.buffer.as_entire_binding(),
+                }],
+            });
+            self.bind = Some((group, size));
+        }
+    }
+
+    /// Draw this frame's figures with `skinning` (the `vs_skinned`
+    /// pipeline) or `lit` (vertices skinned here); group 0 bound.
+    pub(super) fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        skinning: &wgpu::RenderPipeline,
+        lit: &wgpu::RenderPipeline,
+    ) {
+        if self.draws.is_empty() {
+            return;
+        }
+        if self.on_gpu {
+            let Some((group, _)) = &self.bind else {
+                return;
+            };
+            pass.set_pipeline(skinning);
+            pass.set_bind_group(1, group, &[]);
+        } else {
+            pass.set_pipeline(lit);
+            pass.set_vertex_buffer(0, self.skinned.buffer.slice(..));
+        }
+        for &(k, base) in &self.draws {
+            let u = &self.uploaded[k];
+            pass.set_index_buffer(u.indices.slice(..), wgpu::IndexFormat::Uint32);
+            match &u.vertices {
+                Ok(v) => {
+                    pass.set_vertex_buffer(0, v.slice(..));
+                    pass.draw_indexed(0..u.count, 0, base..base + 1);
+                }
+                Err(_) => pass.draw_indexed(0..u.count, base as i32, 0..1),
+            }
+        }
+    }
+}
