@@ -54,6 +54,10 @@ const LIMBS: [(Role, Role, Role); 4] = [
     (Role::RightShoulder, Role::RightElbow, Role::RightHand),
 ];
 
+/// The most a foot is turned flatter to keep its sole off the floor
+/// before it is lifted (rad, about 23 degrees).
+const FLATTEN_MAX: f64 = 0.4;
+
 /// How one figure follows one library's skeleton.
 #[derive(Clone, Debug)]
 pub struct Drive {
@@ -302,34 +306,57 @@ impl Drive {
         let free = vec![None; fig.rest.len()];
         let w = self.place(fig, lib, &free);
         let mut lift = [0.0f64; 2];
-        let mut fixed = self.reach(fig, lib, &w, lift);
+        let mut turn = [DQuat::IDENTITY; 2];
+        let mut fixed = self.reach(fig, lib, &w, lift, turn);
         let mut posed = self.place(fig, lib, &fixed);
         // No sole under the floor: a foot whose lowest point went under is
-        // lifted by as much (the leg bends), once more if need be.
-        for _ in 0..2 {
+        // first turned flatter about its ankle (a longer foot than the
+        // library's, pointed as steeply, reaches lower), by at most
+        // `FLATTEN_MAX`; what is left under lifts it by as much (the leg
+        // bends), once more if need be.
+        for pass in 0..3 {
             let mut under = false;
             for (k, f) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
-                let m = posed[self.fig_roles.get(f)] * self.rest_inv[self.fig_roles.get(f)];
-                let low = self.soles[k]
+                let j = self.fig_roles.get(f);
+                let m = posed[j] * self.rest_inv[j];
+                let Some(low) = self.soles[k]
                     .iter()
-                    .map(|p| m.transform_point3(*p).y)
-                    .fold(f64::INFINITY, f64::min);
-                if low < -1e-4 {
-                    lift[k] -= low;
-                    under = true;
+                    .map(|p| m.transform_point3(*p))
+                    .min_by(|a, b| a.y.total_cmp(&b.y))
+                else {
+                    continue;
+                };
+                if low.y >= -1e-4 {
+                    continue;
+                }
+                under = true;
+                let ankle = posed[j].w_axis.truncate();
+                let v = low - ankle;
+                let axis = v.cross(DVec3::Y);
+                if pass == 0 && axis.length() > 1e-9 && v.length() > 1e-9 {
+                    // The turn about the ankle that raises the lowest
+                    // point onto the floor, towards straight up.
+                    let r = v.length();
+                    let now = (v.y / r).clamp(-1.0, 1.0).asin();
+                    let want = (-ankle.y / r).clamp(-1.0, 1.0).asin();
+                    let angle = (want - now).clamp(0.0, FLATTEN_MAX);
+                    turn[k] = DQuat::from_axis_angle(axis.normalize(), angle) * turn[k];
+                } else {
+                    lift[k] -= low.y;
                 }
             }
             if !under {
                 break;
             }
-            fixed = self.reach(fig, lib, &w, lift);
+            fixed = self.reach(fig, lib, &w, lift, turn);
             posed = self.place(fig, lib, &fixed);
         }
         posed
     }
 
     /// The joint turns that put each limb's end where the library has it
-    /// (the feet raised by `lift`), from the posture `w` turned as the
+    /// (the feet raised by `lift` and turned by `turn`, world turns about
+    /// the ankles), from the posture `w` turned as the
     /// library's.
     fn reach(
         &self,
@@ -337,6 +364,7 @@ impl Drive {
         lib: &WorldPose,
         w: &[DMat4],
         lift: [f64; 2],
+        turn: [DQuat; 2],
     ) -> Vec<Option<DQuat>> {
         let mut fixed = vec![None; fig.rest.len()];
         for (k, (a, b, c)) in LIMBS.into_iter().enumerate() {
@@ -374,8 +402,10 @@ impl Drive {
                 let rot = |m: &DMat4| m.to_scale_rotation_translation().1;
                 fixed[fa] = Some((ta * rot(&w[fa])).normalize());
                 fixed[fb] = Some((tb * ta * rot(&w[fb])).normalize());
-                // The end keeps the turn the library gave it.
-                fixed[fc] = Some(rot(&w[fc]));
+                // The end keeps the turn the library gave it (a foot
+                // turned by `turn` off the floor).
+                let end = if k < 2 { turn[k] } else { DQuat::IDENTITY };
+                fixed[fc] = Some((end * rot(&w[fc])).normalize());
             }
         }
         fixed

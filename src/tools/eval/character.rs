@@ -44,7 +44,9 @@ fn span(part: Role) -> [Role; 3] {
     }
 }
 
-/// A foot this close above its standing height is planted (m).
+/// A foot this close above its standing height is planted (m; the
+/// library's, and the figure's scaled as it follows the library's
+/// motion, so that both count the same part of a step as planted).
 const PLANTED_M: f64 = 0.02;
 
 #[derive(Clone, Debug, Default, Serialize, PartialEq)]
@@ -154,8 +156,8 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
             );
             if let Some((pf, pl)) = last {
                 for k in 0..2 {
-                    if pf[k].y < fig_rest_ankle + PLANTED_M
-                        && now.0[k].y < fig_rest_ankle + PLANTED_M
+                    if pf[k].y < fig_rest_ankle + PLANTED_M * drive.scale
+                        && now.0[k].y < fig_rest_ankle + PLANTED_M * drive.scale
                     {
                         skate += (now.0[k] - pf[k]).with_y(0.0).length() * 1e3;
                         skate_n += 1;
