@@ -10,9 +10,10 @@
 use glam::{DMat4, DQuat, DVec3};
 
 use super::Figure;
+use super::limbs::{end_points, toward, two_bone};
 use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics, two_bone_turns};
+use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics};
 
 /// The role a role's bone points to, and the role above it on its limb.
 const CHAIN: [(Role, Option<Role>, Option<Role>); 16] = [
@@ -54,6 +55,14 @@ const LIMBS: [(Role, Role, Role); 4] = [
     (Role::RightShoulder, Role::RightElbow, Role::RightHand),
 ];
 
+/// How high a foot rises over its standing height (library metres) before
+/// its offset from the library's turns with the hips alone.
+const HEADING_BLEND_M: f64 = 0.1;
+
+/// Turns tried, up to [`FLATTEN_MAX`], to bring a foot's sole off the
+/// floor.
+const FLATTEN_STEPS: u8 = 8;
+
 /// The most a foot is turned flatter to keep its sole off the floor
 /// before it is lifted (rad, about 23 degrees).
 const FLATTEN_MAX: f64 = 0.4;
@@ -82,11 +91,19 @@ pub struct Drive {
     /// the library's scaled (the pelvis is raised by it, so that the legs
     /// stand as straight as the library's).
     hip_drop: f64,
+    /// Each hip's place under the pelvis at rest (along the floor): the
+    /// figure's less the library's scaled. A foot stands that much aside
+    /// of the library's (turned with the foot), so that a figure with
+    /// wider hips stands with its feet under them.
+    hip_wide: [DVec3; 2],
+    /// How each library foot lies planted, facing +Z (inverted).
+    planted_inv: [DQuat; 2],
     /// Each limb of [`LIMBS`]: the figure's length over the library's.
     limb_scale: [f64; 4],
-    /// Each foot's mesh points (rest pose): those its joint, or the
-    /// unmapped joints below it, carry most.
-    soles: [Vec<DVec3>; 2],
+    /// Each limb end's mesh points (rest pose; feet, then hands, as
+    /// [`LIMBS`]): those its joint, or the unmapped joints below it, carry
+    /// most.
+    ends: [Vec<(usize, DVec3)>; 4],
     fig_roles: RoleMap,
     lib_roles: RoleMap,
 }
@@ -232,7 +249,7 @@ impl Drive {
                 };
                 len(&fpos, &fig.roles) / len(&rest_lib.positions, lib_roles).max(1e-9)
             }),
-            soles: [Role::LeftFoot, Role::RightFoot].map(|r| foot_points(fig, fig.roles.get(r))),
+            ends: LIMBS.map(|(_, _, r)| end_points(fig, fig.roles.get(r))),
             hip_drop: {
                 let drop = |p: &[DVec3], r: &RoleMap| {
                     p[r.get(Role::Pelvis)].y
@@ -240,6 +257,34 @@ impl Drive {
                 };
                 drop(&fpos, &fig.roles) - drop(&rest_lib.positions, lib_roles) * scale
             },
+            hip_wide: [Role::LeftHip, Role::RightHip].map(|h| {
+                // The library's from its clips, facing +Z (its rest pose
+                // need not stand: the Bandai hips sit 9 cm apart in
+                // height there), the figure's from its rest.
+                let (mut sum, mut n) = (DVec3::ZERO, 0.0);
+                for w in &standing {
+                    let l = w.positions[lib_roles.get(Role::LeftHip)]
+                        - w.positions[lib_roles.get(Role::RightHip)];
+                    let ahead = l.cross(DVec3::Y);
+                    let facing = DQuat::from_rotation_y(-ahead.x.atan2(ahead.z));
+                    sum += facing
+                        * (w.positions[lib_roles.get(h)]
+                            - w.positions[lib_roles.get(Role::Pelvis)]);
+                    n += 1.0;
+                }
+                let lib_under = if n > 0.0 {
+                    sum / n
+                } else {
+                    rest_lib.positions[lib_roles.get(h)]
+                        - rest_lib.positions[lib_roles.get(Role::Pelvis)]
+                };
+                let d =
+                    fpos[fig.roles.get(h)] - fpos[fig.roles.get(Role::Pelvis)] - lib_under * scale;
+                // Across only: a figure's hips forward or back of its
+                // pelvis joint do not move its feet.
+                DVec3::new(d.x, 0.0, 0.0)
+            }),
+            planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
             rest: fig
@@ -305,7 +350,7 @@ impl Drive {
     pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
         let free = vec![None; fig.rest.len()];
         let w = self.place(fig, lib, &free);
-        let mut lift = [0.0f64; 2];
+        let mut lift = [0.0f64; 4];
         let mut turn = [DQuat::IDENTITY; 2];
         let mut fixed = self.reach(fig, lib, &w, lift, turn);
         let mut posed = self.place(fig, lib, &fixed);
@@ -313,17 +358,16 @@ impl Drive {
         // first turned flatter about its ankle (a longer foot than the
         // library's, pointed as steeply, reaches lower), by at most
         // `FLATTEN_MAX`; what is left under lifts it by as much (the leg
-        // bends), once more if need be.
+        // bends), once more if need be. A hand under the floor (long arms
+        // in a crouch) is lifted by as much.
         for pass in 0..3 {
             let mut under = false;
-            for (k, f) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+            for (k, (_, _, f)) in LIMBS.into_iter().enumerate() {
                 let j = self.fig_roles.get(f);
-                let m = posed[j] * self.rest_inv[j];
-                let Some(low) = self.soles[k]
-                    .iter()
-                    .map(|p| m.transform_point3(*p))
-                    .min_by(|a, b| a.y.total_cmp(&b.y))
-                else {
+                let points = self.end_now(&posed, k);
+                let lowest =
+                    |ps: &mut dyn Iterator<Item = DVec3>| ps.min_by(|a, b| a.y.total_cmp(&b.y));
+                let Some(low) = lowest(&mut points.iter().copied()) else {
                     continue;
                 };
                 if low.y >= -1e-4 {
@@ -331,16 +375,30 @@ impl Drive {
                 }
                 under = true;
                 let ankle = posed[j].w_axis.truncate();
-                let v = low - ankle;
-                let axis = v.cross(DVec3::Y);
-                if pass == 0 && axis.length() > 1e-9 && v.length() > 1e-9 {
-                    // The turn about the ankle that raises the lowest
-                    // point onto the floor, towards straight up.
-                    let r = v.length();
-                    let now = (v.y / r).clamp(-1.0, 1.0).asin();
-                    let want = (-ankle.y / r).clamp(-1.0, 1.0).asin();
-                    let angle = (want - now).clamp(0.0, FLATTEN_MAX);
-                    turn[k] = DQuat::from_axis_angle(axis.normalize(), angle) * turn[k];
+                let axis = (low - ankle).cross(DVec3::Y);
+                if k < 2 && pass == 0 && axis.length() > 1e-9 {
+                    // Turned towards raising the lowest point: the least
+                    // turn that brings every point onto the floor, else
+                    // the one that leaves the lowest highest (raising the
+                    // toes lowers the heel).
+                    let axis = axis.normalize();
+                    let low_after = |angle: f64| {
+                        let q = DQuat::from_axis_angle(axis, angle);
+                        lowest(&mut points.iter().map(|p| ankle + q * (*p - ankle)))
+                            .map_or(f64::NEG_INFINITY, |p| p.y)
+                    };
+                    let mut best = (0.0, low.y);
+                    for step in 1..=FLATTEN_STEPS {
+                        let angle = FLATTEN_MAX * f64::from(step) / f64::from(FLATTEN_STEPS);
+                        let y = low_after(angle);
+                        if y > best.1 + 1e-6 {
+                            best = (angle, y);
+                        }
+                        if y >= 0.0 {
+                            break;
+                        }
+                    }
+                    turn[k] = DQuat::from_axis_angle(axis, best.0) * turn[k];
                 } else {
                     lift[k] -= low.y;
                 }
@@ -351,11 +409,30 @@ impl Drive {
             fixed = self.reach(fig, lib, &w, lift, turn);
             posed = self.place(fig, lib, &fixed);
         }
+        // A limb too short to reach where it is lifted to (a stride longer
+        // than the legs, scaled): the whole figure rises by what is left.
+        let low = (0..LIMBS.len())
+            .flat_map(|k| self.end_now(&posed, k))
+            .map(|p| p.y)
+            .fold(0.0f64, f64::min);
+        if low < -1e-4 {
+            for m in &mut posed {
+                m.w_axis.y -= low;
+            }
+        }
         posed
     }
 
+    /// Where limb `k`'s end's mesh points are in the posture `posed`.
+    fn end_now(&self, posed: &[DMat4], k: usize) -> Vec<DVec3> {
+        self.ends[k]
+            .iter()
+            .map(|&(c, p)| (posed[c] * self.rest_inv[c]).transform_point3(p))
+            .collect()
+    }
+
     /// The joint turns that put each limb's end where the library has it
-    /// (the feet raised by `lift` and turned by `turn`, world turns about
+    /// (raised by `lift`, the feet turned by `turn`, world turns about
     /// the ankles), from the posture `w` turned as the
     /// library's.
     fn reach(
@@ -363,7 +440,7 @@ impl Drive {
         fig: &Figure,
         lib: &WorldPose,
         w: &[DMat4],
-        lift: [f64; 2],
+        lift: [f64; 4],
         turn: [DQuat; 2],
     ) -> Vec<Option<DQuat>> {
         let mut fixed = vec![None; fig.rest.len()];
@@ -386,9 +463,10 @@ impl Drive {
                     l.x * self.scale,
                     self.ankles.1 + (l.y - self.ankles.0) * self.scale + lift[k],
                     l.z * self.scale,
-                )
+                ) + self.heading(lib, k) * self.hip_wide[k]
             } else {
                 root + (lib.positions[lc] - lib.positions[la]) * self.limb_scale[k]
+                    + DVec3::Y * lift[k]
             };
             let (pa, pb, pc) = (root, w[fb].w_axis.truncate(), w[fc].w_axis.truncate());
             if let Some((ta, tb)) = two_bone(pa, pb, pc, goal) {
@@ -409,6 +487,27 @@ impl Drive {
             }
         }
         fixed
+    }
+
+    /// The turn about the vertical that carries foot `k`'s offset from the
+    /// library's ([`Self::hip_wide`]): a foot on the floor turns it with
+    /// itself (from how it lies planted facing +Z), so that it stays
+    /// planted as the hips swing; one raised by `HEADING_BLEND_M` or more
+    /// with the hips, as the hip it hangs from does.
+    fn heading(&self, lib: &WorldPose, k: usize) -> DQuat {
+        let foot = self.lib_roles.get([Role::LeftFoot, Role::RightFoot][k]);
+        let l = lib.positions[self.lib_roles.get(Role::LeftHip)]
+            - lib.positions[self.lib_roles.get(Role::RightHip)];
+        let hips = l.cross(DVec3::Y);
+        let hips = DQuat::from_rotation_y(hips.x.atan2(hips.z));
+        let ahead = (lib.rotations[foot] * self.planted_inv[k]) * DVec3::Z;
+        if ahead.with_y(0.0).length() < 0.5 {
+            // Pointing nearly straight down or up: no heading of its own.
+            return hips;
+        }
+        let own = DQuat::from_rotation_y(ahead.x.atan2(ahead.z));
+        let up = ((lib.positions[foot].y - self.ankles.0) / HEADING_BLEND_M).clamp(0.0, 1.0);
+        own.slerp(hips, up)
     }
 
     /// Skinning matrices (rest pose to posed) for joint transforms `w`.
@@ -446,65 +545,4 @@ impl Drive {
             })
             .collect()
     }
-}
-
-/// Two-bone IK on world positions: the turns (world, about `a` and then
-/// about `b`) that bend the limb `a`-`b`-`c` so that `c` reaches `goal`
-/// (as near as the limb's lengths allow), in the plane it bends in.
-fn two_bone(a: DVec3, b: DVec3, c: DVec3, goal: DVec3) -> Option<(DQuat, DQuat)> {
-    if !goal.is_finite() {
-        return None;
-    }
-    let (bend_a, bend_b, swing) = two_bone_turns(a, b, c, goal)?;
-    // World turn of the upper joint; the middle's own bend applies after
-    // it (world frame once the upper has turned).
-    let ta = swing * bend_a;
-    let tb = ta * bend_b * ta.inverse();
-    Some((ta, tb))
-}
-
-/// The turn about the line from `a` to `goal` that brings `middle` (a knee
-/// or elbow) to the side of it where `pole` is.
-fn toward(a: DVec3, middle: DVec3, goal: DVec3, pole: DVec3) -> DQuat {
-    let u = goal - a;
-    if u.length() < 1e-9 {
-        return DQuat::IDENTITY;
-    }
-    let u = u.normalize();
-    let off = |p: DVec3| {
-        let v = p - a;
-        v - u * v.dot(u)
-    };
-    let (m, p) = (off(middle), off(pole));
-    if m.length() < 1e-6 || p.length() < 1e-6 {
-        return DQuat::IDENTITY;
-    }
-    DQuat::from_rotation_arc(m.normalize(), p.normalize())
-}
-
-/// The mesh points (rest pose) that `foot` or the unmapped joints below it
-/// carry most, at most 256 of them spread over the foot.
-fn foot_points(fig: &Figure, foot: usize) -> Vec<DVec3> {
-    let mapped: Vec<usize> = Role::ALL.iter().map(|r| fig.roles.get(*r)).collect();
-    let mut ours = vec![false; fig.skeleton.len()];
-    ours[foot] = true;
-    for j in 0..fig.skeleton.len() {
-        if let Some(p) = fig.skeleton.joints[j].parent {
-            if ours[p] && !mapped.contains(&j) {
-                ours[j] = true;
-            }
-        }
-    }
-    let all: Vec<DVec3> = fig
-        .parts
-        .iter()
-        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
-        .filter(|((_, j), w)| {
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            ours.get(usize::from(j[k])).copied().unwrap_or(false)
-        })
-        .map(|((v, _), _)| DVec3::new(v[0].into(), v[1].into(), v[2].into()))
-        .collect();
-    let step = all.len().div_ceil(256).max(1);
-    all.into_iter().step_by(step).collect()
 }

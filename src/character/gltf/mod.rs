@@ -7,6 +7,7 @@
 
 mod drive;
 mod geometry;
+mod limbs;
 mod parts;
 mod read;
 mod rig;
