@@ -3,8 +3,12 @@
 //! overlay shapes). Pure; the scene builds them each frame and the renderer
 //! uploads them.
 
+use std::sync::Arc;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
+
+use crate::character::gltf::Geometry;
 
 /// A lit 3-D vertex. `color.a` is how strongly the surface glows (0 for a
 /// plain surface, 1 for a highlighted body part).
@@ -367,9 +371,51 @@ pub struct DrawList {
     /// Lit meshes: the character, or boxes.
     pub body: Mesh,
     /// Skinned figures, skinned as they are drawn.
-    pub figures: Vec<super::figure::SkinnedDraw>,
+    pub figures: Vec<SkinnedDraw>,
     /// What casts the shadow on the floor (a coarse body).
     pub shadow: Mesh,
     /// Marks, trajectories and text over the picture.
     pub overlay: Overlay,
+}
+
+/// A skinned vertex as the shader reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SkinVertex {
+    /// Rest pose (m).
+    pub pos: [f32; 3],
+    pub normal: [f32; 3],
+    /// Linear RGB untinted...
+    pub plain: [f32; 3],
+    /// ...and tinted: `rgb + a * tint`.
+    pub tinted: [f32; 4],
+    pub joints: [u32; 4],
+    pub weights: [f32; 4],
+    /// The joint whose glow it shows.
+    pub glow: u32,
+}
+
+/// One joint of a figure as the shader reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct JointGpu {
+    /// Rest pose to posed (columns).
+    pub skin: [[f32; 4]; 4],
+    /// x: 1 where the joint glows; yzw: the figure's tint (its first
+    /// joint's; y < 0: none).
+    pub extra: [f32; 4],
+}
+
+/// A figure to draw this frame.
+#[derive(Clone, Debug)]
+pub struct SkinnedDraw {
+    /// The triangles, shared with the figure (the renderer keeps them on
+    /// the GPU while the figure is drawn).
+    pub geometry: Arc<Geometry>,
+    /// The own body (its clothes tinted as the capsule figure's are).
+    pub own: bool,
+    pub joints: Vec<JointGpu>,
+    /// Balls (centre, radius; m) holding every posed vertex: the damage a
+    /// frame can do.
+    pub spheres: Vec<[f32; 4]>,
 }

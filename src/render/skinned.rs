@@ -4,14 +4,15 @@
 //! instance index), skinned by the `vs_skinned` pipeline. On a CPU
 //! renderer (lavapipe) the vertex stage runs on one thread and skinning
 //! there cost more than skinning before it (CesiumMan 0.8 ms a frame at
-//! 1280x720), so the vertices are skinned by `figure::skin_on_cpu` and
-//! drawn as lit meshes; either way they come out the same.
+//! 1280x720), so the vertices are skinned on the CPU and
+//! drawn as lit meshes ([`skin_on_cpu`]); either way they come out the same.
 
 use std::sync::Arc;
 
-use super::figure::{JointGpu, SkinVertex, skin_on_cpu, vertices};
+use glam::{Mat4, Vec3};
+
 use super::gpu::{Gpu, GrowBuffer};
-use super::mesh::DrawList;
+use super::mesh::{DrawList, JointGpu, SkinVertex, Vertex3};
 use crate::character::gltf::Geometry;
 
 /// A figure's buffers on the GPU.
@@ -202,4 +203,66 @@ impl Figures {
             }
         }
     }
+}
+
+/// The vertices of `g` as uploaded: the own body's clothes take the tint
+/// as the capsule figure's do (`scene::tinted`, linear in the tint), any
+/// other figure is blended half and half with it.
+#[must_use]
+pub fn vertices(g: &Geometry, own: bool) -> Vec<SkinVertex> {
+    (0..g.positions.len())
+        .map(|i| {
+            let rgb = g.colours[i];
+            let (c0, k) = if own {
+                let c0 = super::scene::tinted(rgb, [0.0; 3]);
+                (c0, super::scene::tinted(rgb, [1.0; 3])[0] - c0[0])
+            } else {
+                (rgb.map(|c| 0.5 * c), 0.5)
+            };
+            SkinVertex {
+                pos: g.positions[i],
+                normal: g.normals[i],
+                plain: rgb,
+                tinted: [c0[0], c0[1], c0[2], k],
+                joints: g.joints[i].map(u32::from),
+                weights: g.weights[i],
+                glow: u32::from(g.glow_joint[i]),
+            }
+        })
+        .collect()
+}
+
+/// What `vs_skinned` does, on the CPU: `vertices` skinned by `joints`
+/// (their tint and glow) into lit vertices appended to `out`.
+pub fn skin_on_cpu(vertices: &[SkinVertex], joints: &[JointGpu], out: &mut Vec<Vertex3>) {
+    let Some(first) = joints.first() else {
+        return;
+    };
+    let mats: Vec<Mat4> = joints
+        .iter()
+        .map(|j| Mat4::from_cols_array_2d(&j.skin))
+        .collect();
+    let tint = first.extra;
+    let joint = |k: u32| mats.get(k as usize).copied().unwrap_or(Mat4::IDENTITY);
+    out.extend(vertices.iter().map(|v| {
+        let w = v.weights;
+        let m = joint(v.joints[0]) * w[0]
+            + joint(v.joints[1]) * w[1]
+            + joint(v.joints[2]) * w[2]
+            + joint(v.joints[3]) * w[3];
+        let rgb = if tint[1] >= 0.0 {
+            [0, 1, 2].map(|c| v.tinted[c] + v.tinted[3] * tint[c + 1])
+        } else {
+            v.plain
+        };
+        let glow = joints.get(v.glow as usize).map_or(0.0, |j| j.extra[0]);
+        Vertex3 {
+            pos: m.transform_point3(Vec3::from(v.pos)).to_array(),
+            normal: m
+                .transform_vector3(Vec3::from(v.normal))
+                .normalize_or_zero()
+                .to_array(),
+            color: [rgb[0], rgb[1], rgb[2], glow],
+        }
+    }));
 }
