@@ -114,7 +114,8 @@ pub struct Renderer {
     floor: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
     overlay: wgpu::RenderPipeline,
-    skinned: wgpu::RenderPipeline,
+    /// Skinning in the vertex shader, where the adapter can.
+    skinned: Option<wgpu::RenderPipeline>,
     figures: Figures,
     floor_mesh: (wgpu::Buffer, wgpu::Buffer, u32),
     body_vertices: GrowBuffer,
@@ -286,21 +287,30 @@ impl Renderer {
             depth(false, wgpu::CompareFunction::Always, none.clone()),
             blend,
         );
-        let figures = Figures::new(device, !gpu.is_cpu());
-        let skinned = make(
-            "skinned",
-            &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("skinned"),
-                bind_group_layouts: &[Some(&layout), Some(figures.layout())],
-                immediate_size: 0,
-            }),
-            "vs_skinned",
-            "fs_lit",
-            skinned::VERTEX,
-            Some(wgpu::Face::Back),
-            depth(true, wgpu::CompareFunction::Less, none),
-            None,
-        );
+        // Skinning in the vertex shader needs storage buffers read there
+        // (every Vulkan GPU does); the default where the adapter is a GPU.
+        let vertex_storage = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::VERTEX_STORAGE);
+        let figures = Figures::new(device, !gpu.is_cpu() && vertex_storage);
+        let skinned = vertex_storage.then(|| {
+            make(
+                "skinned",
+                &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("skinned"),
+                    bind_group_layouts: &[Some(&layout), Some(figures.layout())],
+                    immediate_size: 0,
+                }),
+                "vs_skinned",
+                "fs_lit",
+                skinned::VERTEX,
+                Some(wgpu::Face::Back),
+                depth(true, wgpu::CompareFunction::Less, none),
+                None,
+            )
+        });
         let mut ground = Mesh::default();
         ground.ground(FLOOR_HALF, 0.0, [0.62, 0.60, 0.56, 0.0]);
         let floor_vb = device.create_buffer(&wgpu::BufferDescriptor {
@@ -433,10 +443,11 @@ impl Renderer {
         self.figures.on_gpu
     }
 
-    /// Skin figures in the vertex shader (the default on a GPU) or on the
-    /// CPU (the default on a CPU renderer); both draw the same.
+    /// Skin figures in the vertex shader (the default on a GPU; where the
+    /// adapter can) or on the CPU (the default on a CPU renderer); both
+    /// draw the same.
     pub fn set_gpu_skinning(&mut self, on: bool) {
-        self.figures.on_gpu = on;
+        self.figures.on_gpu = on && self.skinned.is_some();
     }
 
     /// Samples per pixel actually used.
@@ -577,7 +588,8 @@ impl Renderer {
             pass.draw_indexed(0..body_count, 0, 0..1);
         }
         if !list.figures.is_empty() {
-            self.figures.draw(&mut pass, &self.skinned, &self.lit);
+            self.figures
+                .draw(&mut pass, self.skinned.as_ref(), &self.lit);
         }
         if overlay_count > 0 {
             pass.set_pipeline(&self.overlay);

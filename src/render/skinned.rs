@@ -175,14 +175,14 @@ impl Figures {
     pub(super) fn draw(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
-        skinning: &wgpu::RenderPipeline,
+        skinning: Option<&wgpu::RenderPipeline>,
         lit: &wgpu::RenderPipeline,
     ) {
         if self.draws.is_empty() {
             return;
         }
         if self.on_gpu {
-            let Some((group, _)) = &self.bind else {
+            let (Some((group, _)), Some(skinning)) = (&self.bind, skinning) else {
                 return;
             };
             pass.set_pipeline(skinning);
