@@ -18,11 +18,9 @@ use crate::character::gltf::Geometry;
 /// A figure's buffers on the GPU.
 struct Uploaded {
     geometry: Arc<Geometry>,
-    own: bool,
     /// On the GPU (skinned there), or kept here (skinned here).
     vertices: Result<wgpu::Buffer, Vec<SkinVertex>>,
     indices: wgpu::Buffer,
-    count: u32,
 }
 
 /// The skinned figures' buffers.
@@ -87,12 +85,14 @@ impl Figures {
     pub(super) fn upload(&mut self, gpu: &Gpu, list: &DrawList) {
         let device = &gpu.device;
         let on_gpu = self.on_gpu;
+        // A figure's geometry is made once (by `Skin::new`): the same one
+        // is the same figure, own body or not.
         self.uploaded.retain(|u| {
             u.vertices.is_ok() == on_gpu
                 && list
                     .figures
                     .iter()
-                    .any(|f| Arc::ptr_eq(&f.geometry, &u.geometry) && f.own == u.own)
+                    .any(|f| Arc::ptr_eq(&f.geometry, &u.geometry))
         });
         self.draws.clear();
         let mut joints: Vec<JointGpu> = Vec::new();
@@ -101,7 +101,7 @@ impl Figures {
             let k = match self
                 .uploaded
                 .iter()
-                .position(|u| Arc::ptr_eq(&f.geometry, &u.geometry) && f.own == u.own)
+                .position(|u| Arc::ptr_eq(&f.geometry, &u.geometry))
             {
                 Some(k) => k,
                 None => {
@@ -118,7 +118,6 @@ impl Figures {
                     let v = vertices(&f.geometry, f.own);
                     self.uploaded.push(Uploaded {
                         geometry: Arc::clone(&f.geometry),
-                        own: f.own,
                         vertices: if on_gpu {
                             Ok(buffer(
                                 "figure vertices",
@@ -133,7 +132,6 @@ impl Figures {
                             wgpu::BufferUsages::INDEX,
                             bytemuck::cast_slice(&f.geometry.indices),
                         ),
-                        count: f.geometry.indices.len() as u32,
                     });
                     self.uploaded.len() - 1
                 }
@@ -193,13 +191,14 @@ impl Figures {
         }
         for &(k, base) in &self.draws {
             let u = &self.uploaded[k];
+            let count = u.geometry.indices.len() as u32;
             pass.set_index_buffer(u.indices.slice(..), wgpu::IndexFormat::Uint32);
             match &u.vertices {
                 Ok(v) => {
                     pass.set_vertex_buffer(0, v.slice(..));
-                    pass.draw_indexed(0..u.count, 0, base..base + 1);
+                    pass.draw_indexed(0..count, 0, base..base + 1);
                 }
-                Err(_) => pass.draw_indexed(0..u.count, base as i32, 0..1),
+                Err(_) => pass.draw_indexed(0..count, base as i32, 0..1),
             }
         }
     }

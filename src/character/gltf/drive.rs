@@ -101,11 +101,18 @@ pub struct Drive {
     /// Each limb of [`LIMBS`]: the figure's length over the library's.
     limb_scale: [f64; 4],
     /// Each limb end's mesh points (rest pose; feet, then hands, as
-    /// [`LIMBS`]): those its joint, or the unmapped joints below it, carry
-    /// most.
+    /// [`LIMBS`]) with the joint carrying each (see `limbs::end_points`).
     ends: [Vec<(usize, DVec3)>; 4],
     fig_roles: RoleMap,
     lib_roles: RoleMap,
+}
+
+/// The turn about the vertical from facing +Z to the way the hips of
+/// `w` face.
+fn hips_facing(w: &WorldPose, roles: &RoleMap) -> DQuat {
+    let across = w.positions[roles.get(Role::LeftHip)] - w.positions[roles.get(Role::RightHip)];
+    let ahead = across.cross(DVec3::Y);
+    DQuat::from_rotation_y(ahead.x.atan2(ahead.z))
 }
 
 fn leg(positions: &[DVec3], roles: &RoleMap) -> f64 {
@@ -154,11 +161,7 @@ impl Drive {
                 if (w.positions[f].y - stand).abs() > 0.01 {
                     continue;
                 }
-                let l = w.positions[lib_roles.get(Role::LeftHip)]
-                    - w.positions[lib_roles.get(Role::RightHip)];
-                let ahead = l.cross(DVec3::Y);
-                let yaw = ahead.x.atan2(ahead.z);
-                let q = DQuat::from_rotation_y(-yaw) * w.rotations[f];
+                let q = hips_facing(w, lib_roles).inverse() * w.rotations[f];
                 let v = glam::DVec4::from(q);
                 sum += if v.dot(sum) < 0.0 { -v } else { v };
             }
@@ -263,11 +266,7 @@ impl Drive {
                 // height there), the figure's from its rest.
                 let (mut sum, mut n) = (DVec3::ZERO, 0.0);
                 for w in &standing {
-                    let l = w.positions[lib_roles.get(Role::LeftHip)]
-                        - w.positions[lib_roles.get(Role::RightHip)];
-                    let ahead = l.cross(DVec3::Y);
-                    let facing = DQuat::from_rotation_y(-ahead.x.atan2(ahead.z));
-                    sum += facing
+                    sum += hips_facing(w, lib_roles).inverse()
                         * (w.positions[lib_roles.get(h)]
                             - w.positions[lib_roles.get(Role::Pelvis)]);
                     n += 1.0;
@@ -496,10 +495,7 @@ impl Drive {
     /// with the hips, as the hip it hangs from does.
     fn heading(&self, lib: &WorldPose, k: usize) -> DQuat {
         let foot = self.lib_roles.get([Role::LeftFoot, Role::RightFoot][k]);
-        let l = lib.positions[self.lib_roles.get(Role::LeftHip)]
-            - lib.positions[self.lib_roles.get(Role::RightHip)];
-        let hips = l.cross(DVec3::Y);
-        let hips = DQuat::from_rotation_y(hips.x.atan2(hips.z));
+        let hips = hips_facing(lib, &self.lib_roles);
         let ahead = (lib.rotations[foot] * self.planted_inv[k]) * DVec3::Z;
         if ahead.with_y(0.0).length() < 0.5 {
             // Pointing nearly straight down or up: no heading of its own.
