@@ -31,15 +31,15 @@ fn the_default_library_walks_along_random_paths() {
     // The README's figures (`marionette eval walk`, seed 1, 20 paths).
     assert_eq!(r.paths, 20);
     assert!(r.followed >= 0.95, "{r:?}");
-    // 1.0 followed, 10.0 cm from the end, 5.83 cm off the path, planted
-    // feet 1.09 mm per frame (worst step 11.9 mm: the target's 15 mm), no
+    // 1.0 followed, 10.1 cm from the end, 5.72 cm off the path, planted
+    // feet 1.12 mm per frame (worst step 9.66 mm: the target's 15 mm), no
     // pop, stepping 0.235 s after the finger left reach (the target's
     // 0.3 s).
     assert!(r.arrival_cm <= 11.0, "{r:?}");
     assert!(r.deviation_cm <= 6.4, "{r:?}");
     assert_eq!(r.pops, 0, "{r:?}");
     assert!(r.skate_mm <= 1.2, "{r:?}");
-    assert!(r.skate_max_mm <= 13.0, "{r:?}");
+    assert!(r.skate_max_mm <= 10.5, "{r:?}");
     assert!(r.start_s > 0.15 && r.start_s <= 0.26, "{r:?}");
 }
 

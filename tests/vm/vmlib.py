@@ -57,7 +57,10 @@ def boot(work, out, qemu_args, timeout_s=600):
     deadline = time.time() + timeout_s
     while qemu.poll() is None and time.time() < deadline:
         text = open(console, errors="replace").read().replace("\r", "")
-        marks = re.findall(r"^MARK (\S+)\s*$", text, re.M)
+        # Only whole lines: the guest may be half way through writing one
+        # (a mark read as "MARK sd-before-r" grabbed under the wrong name).
+        text = text[: text.rfind("\n") + 1]
+        marks = re.findall(r"^MARK (\S+)[ \t]*$", text, re.M)
         for name in marks[seen:]:
             reply = screendump(os.path.join(out, f"{name}.ppm"))
             print(f"screen '{name}' grabbed: {reply}", flush=True)

@@ -2,8 +2,10 @@
 //! down near the floor and nearly still is planted where it is shown and
 //! stays there while tracking moves the body; when the posture wants it
 //! elsewhere (farther than a short step, out of the leg's reach, or
-//! lifted) it steps there, lifted in an arc, instead of sliding. Feet held
-//! by a finger are the finger's. No sole goes below the floor.
+//! lifted) it steps there, lifted in an arc, instead of sliding; a foot
+//! comes down where it was shown last. A body pulled farther than a
+//! planted foot's leg reaches is held back over it. Feet held by a finger
+//! are the finger's. No sole goes below the floor.
 
 use glam::{DQuat, DVec3};
 
@@ -102,6 +104,7 @@ impl Controller {
             };
             self.last_feet[k] = p;
             let other_planted = self.feet[1 - k].anchor.is_some();
+            let last = self.world.positions[foot_j];
             let foot = &mut self.feet[k];
             if held.contains(&role) {
                 *foot = FootHold::default();
@@ -159,9 +162,12 @@ impl Controller {
                     }
                 }
                 None if on_floor && (contacts.is_some() || speed < LANDING_SPEED_M_S) => {
-                    // Comes down where it is shown: no jump.
-                    foot.anchor = Some(tracked);
-                    goals[k] = Some(tracked);
+                    // Comes down where it was shown last (the bound on
+                    // joint accelerations may have held it off its
+                    // track): no jump.
+                    let a = last.with_y(tracked.y);
+                    foot.anchor = Some(a);
+                    goals[k] = Some(a);
                 }
                 None => goals[k] = Some(tracked),
             }
@@ -170,11 +176,46 @@ impl Controller {
                 foot.track = Some((a, DVec3::ZERO));
             }
         }
+        self.tether(&shown);
+        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
         if goals.iter().any(Option::is_some) {
             plant_feet(sk, roles, &mut self.output, goals);
         }
         self.hold_turn(contacts.is_some(), dt);
         self.onto_floor(goals);
+    }
+
+    /// A planted foot holds the body within its leg's reach (one that
+    /// could step has stepped by now; this one stands alone, or stands
+    /// until the other comes down): what the body went beyond it, pulled
+    /// by a finger or by tracking, is taken back, from the tracked posture
+    /// too with its speed that way, so the body waits over the foot
+    /// instead of dragging it along the floor.
+    fn tether(&mut self, shown: &WorldPose) {
+        let reach = self.leg_length;
+        let mut shift = DVec3::ZERO;
+        for (k, hip) in [Role::LeftHip, Role::RightHip].into_iter().enumerate() {
+            let Some(a) = self.feet[k].anchor else {
+                continue;
+            };
+            let d = shown.positions[self.ch.roles.get(hip)] + shift - a;
+            let (flat, up) = (d.with_y(0.0), d.y);
+            let h = flat.length();
+            let within = (reach * reach - up * up).max(0.0).sqrt();
+            if h > within {
+                shift -= flat * ((h - within) / h);
+            }
+        }
+        if shift == DVec3::ZERO {
+            return;
+        }
+        self.output.translations[0] += shift;
+        self.tracker.pose.translations[0] += shift;
+        let back = shift.normalize();
+        let away = -self.tracker.root_velocity.dot(back);
+        if away > 0.0 {
+            self.tracker.root_velocity += back * away;
+        }
     }
 
     /// While walking, a planted foot keeps pointing where it stood when

@@ -156,6 +156,9 @@ pub struct Controller {
     last_feet: [DVec3; 2],
     /// How far each foot is lifted for sweeping the floor (0..1).
     swept: [f64; 2],
+    /// How high each foot that swings or steps stands off the floor
+    /// before the bound on joint accelerations (m), kept after it.
+    clear: [Option<f64>; 2],
     /// Ankle height standing at rest (m): a foot lower than this plus a
     /// little is on the floor.
     ankle_rest: f64,
@@ -249,6 +252,7 @@ impl Controller {
             feet: [FootHold::default(); 2],
             last_feet: feet_now,
             swept: [0.0; 2],
+            clear: [None; 2],
             ankle_rest: feet_now[0].y.min(feet_now[1].y),
             leg_length: leg_length(&ch.lib.skeleton, &ch.roles),
             settings,
@@ -485,6 +489,7 @@ impl Controller {
         if self.settings.settle_s > 0.0 {
             // Part of tracking: off, the synthesised postures are shown.
             self.bound_jerks(dt);
+            self.keep_feet_clear();
         }
         self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
         let idle = self.idle_s() > self.settings.home_after_s;

@@ -5,8 +5,9 @@
 //! much as its lowest point lacks of [`CLEARANCE_M`], in proportion to
 //! its speed between [`SLOW_M_S`] and [`SWING_M_S`], and set down again
 //! over [`SET_DOWN_S`] once it slows; where a straight leg cannot lift a
-//! swinging foot that far, the body rises by what it lacks. Feet held by
-//! a finger are the finger's.
+//! swinging foot that far, the body rises by what it lacks, and again
+//! where the bound on joint accelerations brought a swinging or stepping
+//! foot back down. Feet held by a finger are the finger's.
 
 use glam::DVec3;
 
@@ -16,10 +17,10 @@ use crate::character::skeleton::{WorldPose, foot_points, forward_kinematics, sol
 use crate::control::posing::ik::plant_feet;
 
 /// Up to this speed over the floor (m/s) a foot stays on it (a planted
-/// foot of the library's walks slides at about a third of it)...
-const SLOW_M_S: f64 = 0.2;
+/// foot of the library's walks slides at under half of it)...
+const SLOW_M_S: f64 = 0.15;
 /// ...from this speed on it is clear of it.
-const SWING_M_S: f64 = 0.35;
+const SWING_M_S: f64 = 0.27;
 /// How far above the floor a swinging foot's lowest point goes (m).
 const CLEARANCE_M: f64 = 0.022;
 /// Only points this near the floor count for the speed (m).
@@ -55,6 +56,35 @@ impl Controller {
             lifts[k] = CLEARANCE_M * self.swept[k];
         }
         self.lift_feet(lifts, now);
+        // What the bound on joint accelerations must not take back: a
+        // foot off the floor that carries nothing stays clear of it.
+        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
+        let w = forward_kinematics(sk, &self.output);
+        for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+            let y = sole(sk, &w, roles.get(role)).y;
+            self.clear[k] = (self.feet[k].anchor.is_none() && !held.contains(&role) && y > 0.0)
+                .then(|| y.min(CLEARANCE_M));
+        }
+    }
+
+    /// A swinging or stepping foot that the bound on joint accelerations
+    /// brought back down towards the floor (its leg may not bend that fast)
+    /// is held clear of it as [`Self::clear_swept_feet`] left it: the body
+    /// rises by what the foot lacks, its joints untouched.
+    pub(super) fn keep_feet_clear(&mut self) {
+        let sk = &self.ch.lib.skeleton;
+        let w = forward_kinematics(sk, &self.output);
+        let short = [Role::LeftFoot, Role::RightFoot]
+            .into_iter()
+            .enumerate()
+            .filter_map(|(k, role)| {
+                let want = self.clear[k]?;
+                Some(want - sole(sk, &w, self.ch.roles.get(role)).y)
+            })
+            .fold(0.0, f64::max);
+        if short > 1e-4 {
+            self.output.translations[0].y += short;
+        }
     }
 
     /// Lift each foot until its lowest point is `lifts[k]` above the
