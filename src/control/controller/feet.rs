@@ -3,7 +3,8 @@
 //! stays there while tracking moves the body; when the posture wants it
 //! elsewhere (farther than a short step, out of the leg's reach, or
 //! lifted) it steps there, lifted in an arc, instead of sliding; a foot
-//! comes down where it was shown last. A body pulled farther than a
+//! comes down where it was shown last and keeps pointing where it did
+//! while it stands. A body pulled farther than a
 //! planted foot's leg reaches is held back over it. Feet held by a finger
 //! are the finger's. No sole goes below the floor.
 
@@ -45,9 +46,12 @@ pub(super) struct FootHold {
     /// how long it takes (s) and the least it lifts the foot (a share of
     /// a full step's height).
     step: Option<(DVec3, f64, f64, f64)>,
-    /// While walking, the way the planted foot points (yaw, radians): it
-    /// stays so as the body turns over it.
+    /// The way the planted foot points (yaw, radians): it stays so as the
+    /// body turns over it...
     held_yaw: Option<f64>,
+    /// ...held since a walk (which ends with the foot stepping into line
+    /// when the body turned far over it).
+    walked: bool,
     /// The turn about the vertical added to the foot (radians): what
     /// holds it to `held_yaw`...
     twist: f64,
@@ -218,18 +222,19 @@ impl Controller {
         }
     }
 
-    /// While walking, a planted foot keeps pointing where it stood when
-    /// the walk began or where it landed as the body turns over it (its
-    /// toes would sweep the floor); a lifted foot, or every foot once the
-    /// walk is over, takes the posture's turn again, smoothly.
+    /// A planted foot keeps pointing where it stood when it was planted
+    /// (or when the walk began) as the body turns over it (its toes would
+    /// sweep the floor round its ankle); a lifted foot takes the
+    /// posture's turn again, smoothly, in the air. Once a walk is over, a
+    /// foot it left turned far against the body steps into line.
     fn hold_turn(&mut self, walking: bool, dt: f64) {
         if !walking
             && self
                 .feet
                 .iter()
-                .all(|f| f.twist == 0.0 && f.held_yaw.is_none())
+                .all(|f| f.twist == 0.0 && f.held_yaw.is_none() && f.anchor.is_none())
         {
-            // Posing with nothing held or let go: nothing to turn.
+            // Posing with nothing planted, held or let go: nothing to turn.
             return;
         }
         let sk = &self.ch.lib.skeleton;
@@ -240,6 +245,7 @@ impl Controller {
             let foot = &mut self.feet[k];
             let yaw = foot_yaw(sk, &w, j);
             let turned = !walking
+                && foot.walked
                 && foot.anchor.is_some()
                 && foot.held_yaw.is_some()
                 && foot.twist.abs() > SETTLE_TWIST;
@@ -253,11 +259,14 @@ impl Controller {
                 foot.held_yaw = None;
             } else if turned && other.step.is_some() {
                 // ...once the other foot, stepping, stands again.
-            } else if foot.anchor.is_none() || !walking {
+            } else if foot.anchor.is_none() {
                 foot.held_yaw = None;
-            } else if walking && foot.held_yaw.is_none() {
+            } else if foot.held_yaw.is_none() {
+                // Posing too: a planted foot's toes would sweep the floor
+                // round its ankle as the leg above it turns.
                 foot.held_yaw = Some(yaw);
             }
+            foot.walked = foot.held_yaw.is_some() && (foot.walked || walking);
             foot.twist = match foot.held_yaw {
                 // Followed without wrapping round; at most MAX_TWIST held:
                 // beyond, the foot turns with the body.

@@ -57,13 +57,15 @@ impl Controller {
         }
         self.lift_feet(lifts, now);
         // What the bound on joint accelerations must not take back: a
-        // foot off the floor that carries nothing stays clear of it.
+        // foot off the floor that carries nothing, or that sweeps it, stays
+        // clear of it.
         let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
         let w = forward_kinematics(sk, &self.output);
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let y = sole(sk, &w, roles.get(role)).y;
-            self.clear[k] = (self.feet[k].anchor.is_none() && !held.contains(&role) && y > 0.0)
-                .then(|| y.min(CLEARANCE_M));
+            let lifted = self.feet[k].anchor.is_none() || self.swept[k] > 0.0;
+            self.clear[k] =
+                (lifted && !held.contains(&role) && y > 0.0).then(|| y.min(CLEARANCE_M));
         }
     }
 
