@@ -32,14 +32,14 @@ fn the_default_library_walks_along_random_paths() {
     assert_eq!(r.paths, 20);
     assert!(r.followed >= 0.95, "{r:?}");
     // 1.0 followed, 10.1 cm from the end, 5.72 cm off the path, planted
-    // feet 0.99 mm per frame (worst step 9.66 mm: the target's 15 mm), no
+    // feet 0.98 mm per frame (worst step 8.70 mm: the target's 15 mm), no
     // pop, stepping 0.235 s after the finger left reach (the target's
     // 0.3 s).
     assert!(r.arrival_cm <= 11.0, "{r:?}");
     assert!(r.deviation_cm <= 6.4, "{r:?}");
     assert_eq!(r.pops, 0, "{r:?}");
     assert!(r.skate_mm <= 1.05, "{r:?}");
-    assert!(r.skate_max_mm <= 10.5, "{r:?}");
+    assert!(r.skate_max_mm <= 9.2, "{r:?}");
     assert!(r.start_s > 0.15 && r.start_s <= 0.26, "{r:?}");
 }
 
@@ -163,7 +163,7 @@ fn a_wave_dragged_while_walking_plays_on_the_upper_body_and_the_legs_keep_walkin
     // The README's figures (`marionette eval walk --layer wave_left`): the
     // wave played over every walk; the hand 1.39 cm on average, 2.98 at
     // most, from where the wave alone puts it in the character's frame
-    // (3.43 cm as shown, tracked); the legs' contacts kept: 0.81 mm a
+    // (3.43 cm as shown, tracked); the legs' contacts kept: 0.79 mm a
     // frame, no pop, the worst step the walk's own.
     assert_eq!(l.started, 1.0, "{l:?}");
     assert!(l.part_max_cm <= 3.3, "{l:?}");

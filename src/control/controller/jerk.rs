@@ -84,12 +84,14 @@ impl Controller {
         }
         // ...and a planted foot they could not bring back (its leg held
         // back under a lunging body) stays where it stands: the body moves
-        // back over it, its joints untouched.
+        // back over it, its joints untouched. Not for a foot the sweep lifts
+        // (it moves over the floor; moving the body for it slid the foot
+        // that had just begun a step).
         let after = forward_kinematics(sk, &self.output);
         let mut shift = DVec3::ZERO;
         let mut n = 0.0;
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
-            if self.feet[k].anchor.is_none() || held.contains(&role) {
+            if self.feet[k].anchor.is_none() || held.contains(&role) || self.swept[k] > 0.0 {
                 continue;
             }
             let j = self.ch.roles.get(role);

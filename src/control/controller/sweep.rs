@@ -7,7 +7,8 @@
 //! over [`SET_DOWN_S`] once it slows; where a straight leg cannot lift a
 //! swinging foot that far, the body rises by what it lacks, and again
 //! where the bound on joint accelerations brought a swinging or stepping
-//! foot back down. Feet held by a finger are the finger's.
+//! foot back down, or left a planted foot that sweeps the floor lower than
+//! the sweep asks. Feet held by a finger are the finger's.
 
 use glam::DVec3;
 
@@ -64,8 +65,10 @@ impl Controller {
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let y = sole(sk, &w, roles.get(role)).y;
             let lifted = self.feet[k].anchor.is_none() || self.swept[k] > 0.0;
-            self.clear[k] =
-                (lifted && !held.contains(&role) && y > 0.0).then(|| y.min(CLEARANCE_M));
+            // As high as the sweep asks (a planted leg may not have lifted
+            // it that far), or as the foot swings or steps.
+            let want = y.max(CLEARANCE_M * self.swept[k]).min(CLEARANCE_M);
+            self.clear[k] = (lifted && !held.contains(&role) && y > 0.0).then_some(want);
         }
     }
 
