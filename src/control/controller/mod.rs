@@ -156,8 +156,8 @@ pub struct Controller {
     last_feet: [DVec3; 2],
     /// How far each foot is lifted for sweeping the floor (0..1).
     swept: [f64; 2],
-    /// How high each foot that swings or steps stands off the floor
-    /// before the bound on joint accelerations (m), kept after it.
+    /// How high each foot that swings, steps or sweeps the floor stands
+    /// off it before the bound on joint accelerations (m), kept after it.
     clear: [Option<f64>; 2],
     /// Ankle height standing at rest (m): a foot lower than this plus a
     /// little is on the floor.
