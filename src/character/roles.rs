@@ -168,7 +168,7 @@ enum Side {
 
 /// Lower-case words of a joint name: prefixes before `:` dropped, split at
 /// separators and camel-case boundaries (`LHipJoint` → l, hip, joint).
-fn words(name: &str) -> Vec<String> {
+pub(crate) fn words(name: &str) -> Vec<String> {
     let name = name.rsplit(':').next().unwrap_or(name);
     let mut out = Vec::new();
     for part in name.split(|c: char| !c.is_ascii_alphanumeric()) {

@@ -198,6 +198,16 @@ pub fn own_figure(lib: &Library, roles: &RoleMap) -> Figure {
             .map(|j| DMat4::from_rotation_translation(rest.rotations[j], rest.positions[j]))
             .collect(),
         roles: roles.clone(),
+        evidence: roles
+            .0
+            .keys()
+            .map(|r| {
+                (
+                    *r,
+                    crate::character::gltf::humanoid::Evidence::Configuration,
+                )
+            })
+            .collect(),
         roles_by: "the library",
         parts,
         skins: 1,
@@ -207,6 +217,8 @@ pub fn own_figure(lib: &Library, roles: &RoleMap) -> Figure {
         up: "+Y".to_owned(),
         warnings: Vec::new(),
         own: true,
+        made_up: vec![false; sk.len()],
+        credit: None,
     }
 }
 

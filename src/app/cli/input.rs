@@ -12,18 +12,72 @@ use crate::input::evemu::Recording;
 use crate::input::pipeline;
 use crate::platform::evdev as live;
 
-pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
-    if file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
-    {
-        return inspect_bvh(file);
+/// What a file holds, by its first bytes (its name's extension only
+/// where they say nothing).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Content {
+    /// A glTF: a GLB (`.glb`, `.vrm`, any name) or glTF JSON.
+    Gltf,
+    Bvh,
+    /// An evemu recording.
+    Recording,
+    /// None of these (or unreadable: the reader says why).
+    Unknown,
+}
+
+/// The content of `file` from its first bytes: the GLB magic `glTF`, JSON
+/// with an `asset`, BVH's `HIERARCHY`, an evemu header or line.
+pub(super) fn sniff(file: &Path) -> Content {
+    use std::io::Read;
+    let mut head = Vec::new();
+    let read = std::fs::File::open(file).and_then(|f| f.take(4096).read_to_end(&mut head));
+    let by_name = || {
+        let ext = file
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("bvh") => Content::Bvh,
+            Some("glb" | "gltf" | "vrm") => Content::Gltf,
+            Some("evemu") => Content::Recording,
+            _ => Content::Unknown,
+        }
+    };
+    if read.is_err() || !file.is_file() {
+        return by_name();
     }
-    if file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
+    let text = String::from_utf8_lossy(&head);
+    let text = text.trim_start_matches('\u{feff}').trim_start();
+    if head.starts_with(b"glTF") || (text.starts_with('{') && text.contains("\"asset\"")) {
+        Content::Gltf
+    } else if text.starts_with("HIERARCHY") {
+        Content::Bvh
+    } else if text.starts_with("# EVEMU")
+        || ["N:", "I:", "P:", "B:", "A:", "L:", "S:", "E:"]
+            .iter()
+            .any(|p| text.starts_with(p))
     {
-        return super::motion::inspect_gltf(file);
+        Content::Recording
+    } else {
+        by_name()
+    }
+}
+
+pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
+    match sniff(file) {
+        Content::Bvh => return inspect_bvh(file),
+        Content::Gltf => return super::motion::inspect_gltf(file),
+        Content::Recording => {}
+        Content::Unknown => {
+            if file.is_file() {
+                return Err(Failure::new(
+                    exit::DATAERR,
+                    format!(
+                        "{}: neither an evemu recording, a BVH file nor a glTF character (.glb, .gltf, .vrm) by its content",
+                        file.display()
+                    ),
+                ));
+            }
+        }
     }
     // A motion library, where a recording or a BVH file was meant.
     let library = if file.is_dir() {

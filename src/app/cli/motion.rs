@@ -142,6 +142,9 @@ pub(super) fn inspect_gltf(file: &Path) -> Result<(), Failure> {
         "facing": fig.facing,
         "roles": fig.roles.names(&fig.skeleton),
         "roles_from": fig.roles_by,
+        "evidence": fig.evidence.iter().map(|(r, e)| (r.name(), e.name())).collect::<std::collections::BTreeMap<_, _>>(),
+        "made_up": fig.skeleton.joints.iter().zip(&fig.made_up).filter(|(_, m)| **m).map(|(j, _)| j.name.clone()).collect::<Vec<_>>(),
+        "credit": fig.credit,
         "unmapped": fig.unmapped(),
         "warnings": fig.warnings,
     });

@@ -103,6 +103,9 @@ pub struct Drive {
     /// Each limb end's mesh points (rest pose; feet, then hands, as
     /// [`LIMBS`]) with the joint carrying each (see `limbs::end_points`).
     ends: [Vec<(usize, DVec3)>; 4],
+    /// Each limb of [`LIMBS`]: one bone from its root to its end (its
+    /// middle made up).
+    one_bone: [bool; 4],
     fig_roles: RoleMap,
     lib_roles: RoleMap,
 }
@@ -197,6 +200,10 @@ impl Drive {
                 .unwrap_or(DQuat::IDENTITY);
             let m = fig.roles.get(role);
             let l = lib_roles.get(role);
+            // A made-up joint goes where the joint above it takes it.
+            if fig.made_up.get(m).copied().unwrap_or(false) {
+                continue;
+            }
             // From the library's rest, the bone laid along it; a foot from
             // how the library's planted foot lies.
             let from = match role {
@@ -284,6 +291,8 @@ impl Drive {
                 DVec3::new(d.x, 0.0, 0.0)
             }),
             planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
+            one_bone: LIMBS
+                .map(|(_, b, _)| fig.made_up.get(fig.roles.get(b)).copied().unwrap_or(false)),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
             rest: fig
@@ -422,6 +431,16 @@ impl Drive {
         posed
     }
 
+    /// The height of foot `k`'s lowest mesh point (0 left, 1 right) in
+    /// the posture `posed` (joint transforms from [`Self::pose`]).
+    #[must_use]
+    pub fn foot_lowest(&self, posed: &[DMat4], k: usize) -> Option<f64> {
+        self.end_now(posed, k.min(1))
+            .into_iter()
+            .map(|p| p.y)
+            .min_by(f64::total_cmp)
+    }
+
     /// Where limb `k`'s end's mesh points are in the posture `posed`.
     fn end_now(&self, posed: &[DMat4], k: usize) -> Vec<DVec3> {
         self.ends[k]
@@ -468,6 +487,17 @@ impl Drive {
                     + DVec3::Y * lift[k]
             };
             let (pa, pb, pc) = (root, w[fb].w_axis.truncate(), w[fc].w_axis.truncate());
+            if self.one_bone[k] {
+                // One bone from shoulder to hand or hip to foot: pointed
+                // where the library's limb points.
+                let (from, to) = (pc - pa, goal - pa);
+                if from.length() > 1e-9 && to.length() > 1e-9 {
+                    let turn = DQuat::from_rotation_arc(from.normalize(), to.normalize());
+                    let rot = |m: &DMat4| m.to_scale_rotation_translation().1;
+                    fixed[fa] = Some((turn * rot(&w[fa])).normalize());
+                }
+                continue;
+            }
             if let Some((ta, tb)) = two_bone(pa, pb, pc, goal) {
                 // The knee or elbow turned about the limb's line towards
                 // where the library bends it (from the limb's root).

@@ -46,6 +46,9 @@ pub(super) fn toward(a: DVec3, middle: DVec3, goal: DVec3, pole: DVec3) -> DQuat
 /// beside it or the unmapped joints below them carry most, at most 256 of
 /// them spread over it, each with that joint.
 pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
+    if fig.made_up.get(end).copied().unwrap_or(false) {
+        return made_up_end_points(fig, end);
+    }
     let mapped: Vec<usize> = Role::ALL.iter().map(|r| fig.roles.get(*r)).collect();
     let mut ours = vec![false; fig.skeleton.len()];
     ours[end] = true;
@@ -76,6 +79,36 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
                 .copied()
                 .unwrap_or(false)
                 .then(|| (j, DVec3::new(v[0].into(), v[1].into(), v[2].into())))
+        })
+        .collect();
+    let step = all.len().div_ceil(256).max(1);
+    all.into_iter().step_by(step).collect()
+}
+
+/// A made-up end's mesh points: those its nearest real joint carries
+/// that lie nearer the end than that joint's own half of the way.
+fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
+    let mut real = end;
+    while fig.made_up.get(real).copied().unwrap_or(false) {
+        match fig.skeleton.joints[real].parent {
+            Some(p) => real = p,
+            None => return Vec::new(),
+        }
+    }
+    let (from, to) = (
+        fig.rest[real].w_axis.truncate(),
+        fig.rest[end].w_axis.truncate(),
+    );
+    let along = to - from;
+    let len2 = along.length_squared().max(1e-12);
+    let all: Vec<(usize, DVec3)> = fig
+        .parts
+        .iter()
+        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
+        .filter_map(|((v, j), w)| {
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
+            (usize::from(j[k]) == real && (v - from).dot(along) / len2 > 0.5).then_some((real, v))
         })
         .collect();
     let step = all.len().div_ceil(256).max(1);

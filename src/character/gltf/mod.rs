@@ -6,9 +6,12 @@
 //! the library's roles by their names, else by where they stand.
 
 mod drive;
+mod frame;
 mod geometry;
+pub mod humanoid;
 mod limbs;
 mod parts;
+mod places;
 mod read;
 mod rig;
 mod texture;
@@ -107,13 +110,17 @@ pub enum GltfError {
     #[error("{path}: no skin: a character needs a skeleton (a glTF skin with its joints)")]
     NoSkin { path: PathBuf },
     #[error(
-        "{path}: its skeleton has {joints} joint(s): a character needs at least a pelvis, spine, head, arms and legs"
+        "{path}: its skeleton has {joints} joint(s): a character needs at least a pelvis, a head, two arms and two legs (a bone each)"
     )]
     TooFewJoints { path: PathBuf, joints: usize },
     #[error(
-        "{path}: not a humanoid skeleton: no joint found for {missing} (neither by name nor by where it stands; `RUST_LOG=debug marionette inspect` shows where each joint stands)"
+        "{path}: not a humanoid skeleton: no joint found for {missing} (neither by name, by the hierarchy nor by where it stands); found: {found}. Name the joints under [character.mesh_roles] (e.g. pelvis = \"Hips\"); `RUST_LOG=debug marionette inspect` shows where each joint stands"
     )]
-    NotHumanoid { path: PathBuf, missing: String },
+    NotHumanoid {
+        path: PathBuf,
+        missing: String,
+        found: String,
+    },
 }
 
 /// One drawable part: a primitive's triangles, skinned (joint indices into
@@ -145,8 +152,10 @@ pub struct Figure {
     /// Each joint's rest transform (normalised frame): skinning matrices
     /// are `world(pose) * rest.inverse()`.
     pub rest: Vec<DMat4>,
-    /// The roles found, and how (`names` or `places`).
+    /// The roles found, each with its evidence, and in a word where most
+    /// came from.
     pub roles: RoleMap,
+    pub evidence: std::collections::BTreeMap<super::roles::Role, humanoid::Evidence>,
     pub roles_by: &'static str,
     pub parts: Vec<Part>,
     pub skins: usize,
@@ -164,6 +173,12 @@ pub struct Figure {
     /// The project's own body (`render::body`): its parts are the capsule
     /// figure's clothes, tinted as those are.
     pub own: bool,
+    /// Joints made up where the rig has none (a hand at the end of a
+    /// forearm, the middle and end of a one-bone limb): no vertex hangs
+    /// on them; they go where the joint above them takes them.
+    pub made_up: Vec<bool>,
+    /// A VRM's title, authors and licence.
+    pub credit: Option<humanoid::Credit>,
 }
 
 impl Figure {

@@ -12,6 +12,9 @@ pub(super) struct File {
     pub(super) path: PathBuf,
     pub(super) doc: gltf::Document,
     pub(super) buffers: Vec<Vec<u8>>,
+    /// The document's root `extensions` where it uses VRM's (the humanoid
+    /// map and the credits).
+    pub(super) extensions: Option<serde_json::Value>,
 }
 
 impl File {
@@ -125,10 +128,17 @@ impl File {
             }
             buffers.push(data);
         }
+        let extensions = gltf
+            .document
+            .extensions_used()
+            .any(|e| e == "VRM" || e == "VRMC_vrm")
+            .then(|| root_extensions(data))
+            .flatten();
         Ok(Self {
             path: path.to_owned(),
             doc: gltf.document,
             buffers,
+            extensions,
         })
     }
 
@@ -212,6 +222,19 @@ impl File {
         }
         Ok(())
     }
+}
+
+/// The JSON's root `extensions` object (the GLB's JSON chunk, or the
+/// whole `.gltf`).
+fn root_extensions(data: &[u8]) -> Option<serde_json::Value> {
+    let json = if data.starts_with(b"glTF") {
+        let len = u32::from_le_bytes(data.get(12..16)?.try_into().ok()?) as usize;
+        data.get(20..20usize.checked_add(len)?)?
+    } else {
+        data
+    };
+    let mut v: serde_json::Value = serde_json::from_slice(json).ok()?;
+    v.get_mut("extensions").map(serde_json::Value::take)
 }
 
 /// What an accessor holds, for the element type it must have.

@@ -7,11 +7,11 @@ use std::collections::BTreeMap;
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::read::File;
-use super::{Figure, GltfError, Part};
+use super::read::{File, Kind};
+use super::{Figure, GltfError, Part, frame, humanoid, places};
 use crate::character::motion::detect_scale;
-use crate::character::roles::{self, Role, RoleMap};
-use crate::character::skeleton::{Joint, Skeleton, forward_kinematics};
+use crate::character::roles::{self, Role};
+use crate::character::skeleton::{Joint, Skeleton};
 
 /// Every node's world transform in the default scene's rest pose (nodes in
 /// no scene: from their own parents).
@@ -69,6 +69,239 @@ fn rigid(m: DMat4) -> DMat4 {
     DMat4::from_rotation_translation(r.normalize(), t)
 }
 
+/// The skins' joints, each once, parents first: node indices, and each
+/// joint node's joint parent (the nearest joint above it).
+struct Joints {
+    order: Vec<usize>,
+    is_joint: Vec<bool>,
+    parent_node: Vec<Option<usize>>,
+    /// Per node: its skeleton index (the made-up root counted), or
+    /// `usize::MAX` for a node that is no joint.
+    joint_of: Vec<usize>,
+    index_of: Vec<usize>,
+    extra_root: usize,
+}
+
+impl Joints {
+    fn new(file: &File) -> Self {
+        let n = file.doc.nodes().len();
+        let mut is_joint = vec![false; n];
+        for skin in file.doc.skins() {
+            for j in skin.joints() {
+                is_joint[j.index()] = true;
+            }
+        }
+        let mut parent_node = vec![None; n];
+        for node in file.doc.nodes() {
+            for c in node.children() {
+                parent_node[c.index()] = Some(node.index());
+            }
+        }
+        let mut this = Self {
+            order: Vec::new(),
+            is_joint,
+            parent_node,
+            joint_of: Vec::new(),
+            index_of: vec![usize::MAX; n],
+            extra_root: 0,
+        };
+        // Each joint's joint parent, once; then children lists, so that
+        // ordering them is linear in the joints.
+        let jp: Vec<Option<usize>> = (0..n).map(|i| this.joint_parent(i)).collect();
+        let mut kids: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for c in (0..n).rev() {
+            if let (true, Some(p)) = (this.is_joint[c], jp[c]) {
+                kids[p].push(c);
+            }
+        }
+        let mut placed = vec![false; n];
+        let mut todo: Vec<usize> = (0..n)
+            .filter(|&i| this.is_joint[i] && jp[i].is_none())
+            .collect();
+        while let Some(j) = todo.pop() {
+            if placed[j] {
+                continue;
+            }
+            placed[j] = true;
+            this.order.push(j);
+            todo.extend(kids[j].iter().copied().filter(|&c| !placed[c]));
+        }
+        for (k, &j) in this.order.iter().enumerate() {
+            this.index_of[j] = k;
+        }
+        let roots = this.order.iter().filter(|&&j| jp[j].is_none()).count();
+        // Several top joints hang under one made-up root at the first's place.
+        this.extra_root = usize::from(roots > 1);
+        this.joint_of = this
+            .index_of
+            .iter()
+            .map(|&k| k.wrapping_add(this.extra_root))
+            .collect();
+        this
+    }
+
+    /// The nearest joint above node `n`.
+    fn joint_parent(&self, mut n: usize) -> Option<usize> {
+        let mut guard = 0;
+        while let Some(p) = self.parent_node[n] {
+            if self.is_joint[p] {
+                return Some(p);
+            }
+            n = p;
+            guard += 1;
+            if guard > self.parent_node.len() {
+                break;
+            }
+        }
+        None
+    }
+
+    /// The joint that carries node `n`: itself, or the nearest above.
+    fn carrier(&self, n: usize) -> Option<usize> {
+        if self.is_joint[n] {
+            Some(n)
+        } else {
+            self.joint_parent(n)
+        }
+    }
+}
+
+/// Each node's world transform with the skinned joints in their bind
+/// pose (from the skins' inverse bind matrices), where the nodes hold
+/// another pose (an idle pose stored on the nodes): the nodes a joint
+/// carries go with it. `None` where the nodes already stand in the bind
+/// pose (within half a percent of the skeleton's size).
+fn bind_pose(
+    file: &File,
+    world: &[DMat4],
+    joints: &Joints,
+) -> Result<Option<Vec<DMat4>>, GltfError> {
+    // A figure built of rigid meshes hung on its joints looks as it should
+    // in the nodes' pose, wherever its few skinned parts were bound.
+    let (mut skinned, mut rigid) = (0usize, 0usize);
+    for node in file.doc.nodes() {
+        if let Some(mesh) = node.mesh() {
+            let count: usize = mesh
+                .primitives()
+                .filter_map(|p| p.get(&gltf::Semantic::Positions).map(|a| a.count()))
+                .sum();
+            if node.skin().is_some() {
+                skinned += count;
+            } else {
+                rigid += count;
+            }
+        }
+    }
+    if rigid * 10 > skinned {
+        return Ok(None);
+    }
+    let mut bind: Vec<Option<DMat4>> = vec![None; world.len()];
+    let mut budget = 0u64;
+    for skin in file.doc.skins() {
+        let Some(a) = skin.inverse_bind_matrices() else {
+            continue;
+        };
+        file.check(&a, "inverse bind matrices", Kind::Matrices, &mut budget)?;
+        let nodes: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        let ibms: Vec<DMat4> = skin
+            .reader(|b| file.buffer(b))
+            .read_inverse_bind_matrices()
+            .map(|it| {
+                it.map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
+                    .collect()
+            })
+            .unwrap_or_default();
+        if ibms.len() < nodes.len()
+            || ibms
+                .iter()
+                .any(|m| !m.is_finite() || m.determinant().abs() < 1e-12)
+        {
+            // Said by the parts' reader, which refuses them.
+            continue;
+        }
+        // The model's place: the skinning matrix most joints share at the
+        // nodes' pose (every joint shares it where that is the bind pose).
+        let skinning: Vec<DMat4> = nodes
+            .iter()
+            .zip(&ibms)
+            .map(|(&n, m)| world[n] * *m)
+            .collect();
+        let close = |a: &DMat4, b: &DMat4| {
+            a.to_cols_array()
+                .iter()
+                .zip(b.to_cols_array())
+                .all(|(x, y)| (x - y).abs() < 1e-4 * (1.0 + x.abs().max(y.abs())))
+        };
+        // The armature's own place where a joint (its root, unmoved)
+        // agrees with it, else the one most joints agree on.
+        let armature = nodes
+            .iter()
+            .find_map(|&n| {
+                joints
+                    .joint_parent(n)
+                    .is_none()
+                    .then(|| joints.parent_node[n])
+            })
+            .map_or(DMat4::IDENTITY, |p| p.map_or(DMat4::IDENTITY, |p| world[p]));
+        let model = if skinning.iter().any(|b| close(&armature, b)) {
+            armature
+        } else {
+            skinning
+                .iter()
+                .take(64)
+                .max_by_key(|a| skinning.iter().filter(|b| close(a, b)).count())
+                .copied()
+                .unwrap_or(DMat4::IDENTITY)
+        };
+        tracing::debug!(
+            skin = skin.index(),
+            joints = nodes.len(),
+            agree = skinning.iter().filter(|b| close(&model, b)).count(),
+            "joints whose skinning matrix at the nodes' pose is the model's"
+        );
+        for (k, &n) in nodes.iter().enumerate() {
+            if bind[n].is_none() {
+                bind[n] = Some(model * ibms[k].inverse());
+            }
+        }
+    }
+    let places: Vec<DVec3> = joints
+        .order
+        .iter()
+        .map(|&n| world[n].w_axis.truncate())
+        .collect();
+    let size = places
+        .iter()
+        .flat_map(|a| {
+            places
+                .iter()
+                .step_by((places.len() / 32).max(1))
+                .map(move |b| (*a - *b).length())
+        })
+        .fold(0.0f64, f64::max);
+    let moved = joints
+        .order
+        .iter()
+        .filter_map(|&n| bind[n].map(|b| (b.w_axis - world[n].w_axis).truncate().length()))
+        .fold(0.0f64, f64::max);
+    if !(moved > 0.005 * size) || bind.iter().flatten().any(|m| !m.is_finite()) {
+        return Ok(None);
+    }
+    // Every node in the bind pose: a joint as its skin binds it, a node a
+    // joint carries as its joint moved.
+    let mut out = world.to_vec();
+    for n in 0..world.len() {
+        if let Some(b) = bind[n] {
+            out[n] = b;
+        } else if let Some(c) = joints.carrier(n) {
+            if let Some(b) = bind[c] {
+                out[n] = b * world[c].inverse() * world[n];
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
 pub(super) fn figure(
     file: &File,
     overrides: &BTreeMap<String, String>,
@@ -77,80 +310,61 @@ pub(super) fn figure(
     if file.doc.skins().len() == 0 {
         return Err(GltfError::NoSkin { path });
     }
-    let world = world_transforms(file)?;
-    let nodes: Vec<gltf::Node<'_>> = file.doc.nodes().collect();
-    // The skins' joints, each once, parents first.
-    let mut is_joint = vec![false; nodes.len()];
-    for skin in file.doc.skins() {
-        for j in skin.joints() {
-            is_joint[j.index()] = true;
-        }
+    let node_pose = world_transforms(file)?;
+    let joints = Joints::new(file);
+    let bound = bind_pose(file, &node_pose, &joints)?;
+    let mut notes = Vec::new();
+    if bound.is_some() {
+        notes.push(
+            "its nodes hold another pose than the skin's bind pose: the bind pose is used"
+                .to_owned(),
+        );
     }
-    let mut parent_node = vec![None; nodes.len()];
-    for node in &nodes {
-        for c in node.children() {
-            parent_node[c.index()] = Some(node.index());
-        }
-    }
-    let joint_parent = |mut n: usize| -> Option<usize> {
-        let mut guard = 0;
-        while let Some(p) = parent_node[n] {
-            if is_joint[p] {
-                return Some(p);
-            }
-            n = p;
-            guard += 1;
-            if guard > nodes.len() {
-                break;
-            }
-        }
-        None
-    };
-    let mut order: Vec<usize> = Vec::new();
-    let mut placed = vec![false; nodes.len()];
-    let mut todo: Vec<usize> = (0..nodes.len())
-        .filter(|&i| is_joint[i] && joint_parent(i).is_none())
-        .collect();
-    while let Some(n) = todo.pop() {
-        if placed[n] {
-            continue;
-        }
-        placed[n] = true;
-        order.push(n);
-        for c in (0..nodes.len()).rev() {
-            if is_joint[c] && !placed[c] && joint_parent(c) == Some(n) {
-                todo.push(c);
-            }
-        }
-    }
-    if order.len() < 8 {
+    let world = bound.unwrap_or(node_pose);
+    let order = &joints.order;
+    if order.len() < MIN_JOINTS {
         return Err(GltfError::TooFewJoints {
             path,
             joints: order.len(),
         });
     }
-    let mut index_of = vec![usize::MAX; nodes.len()];
-    for (k, &n) in order.iter().enumerate() {
-        index_of[n] = k;
-    }
-    let roots = order.iter().filter(|&&n| joint_parent(n).is_none()).count();
-    // Several top joints hang under one made-up root at the first's place.
-    let extra_root = usize::from(roots > 1);
-    let joint_of: Vec<usize> = index_of
-        .iter()
-        .map(|&k| k.wrapping_add(extra_root))
-        .collect();
-
-    // Upright, facing +Z, in metres, from the skeleton and the mesh.
+    let extra_root = joints.extra_root;
+    let index_of = &joints.index_of;
+    let nodes: Vec<gltf::Node<'_>> = file.doc.nodes().collect();
     let raw: Vec<DVec3> = order.iter().map(|&n| world[n].w_axis.truncate()).collect();
-    let carrier = |n: usize| {
-        if is_joint[n] {
-            Some(n)
-        } else {
-            joint_parent(n)
-        }
-    };
-    let (parts_raw, warnings) = super::parts::parts(file, &world, &joint_of, &carrier)?;
+    let (parts_raw, warnings) =
+        super::parts::parts(file, &world, &joints.joint_of, &|n| joints.carrier(n))?;
+
+    // The joints as the roles see them: names, parents, places (the
+    // made-up root first where there is one).
+    let mut names = Vec::with_capacity(order.len() + extra_root);
+    let mut parents = Vec::with_capacity(order.len() + extra_root);
+    let mut places = Vec::with_capacity(order.len() + extra_root);
+    if extra_root == 1 {
+        names.push("(root)".to_owned());
+        parents.push(None);
+        places.push(raw[0]);
+    }
+    for (k, &n) in order.iter().enumerate() {
+        names.push(
+            nodes[n]
+                .name()
+                .map_or_else(|| format!("joint {n}"), str::to_owned),
+        );
+        parents.push(
+            joints
+                .joint_parent(n)
+                .map(|q| index_of[q] + extra_root)
+                .or((extra_root == 1).then_some(0)),
+        );
+        places.push(raw[k]);
+    }
+    let mut found = given_roles(file, &names, &joints, overrides)?;
+    {
+        let rig = humanoid::Rig::new(&names, &parents, &places);
+        humanoid::limbs_by_names(&rig, &mut found);
+        humanoid::trunk(&rig, &mut found);
+    }
     let verts: Vec<DVec3> = parts_raw
         .iter()
         .flat_map(|p| {
@@ -159,30 +373,33 @@ pub(super) fn figure(
                 .map(|v| DVec3::new(v[0].into(), v[1].into(), v[2].into()))
         })
         .collect();
-    let (turn, up_name) = upright(&raw);
-    let rot = |p: DVec3| turn * p;
-    let lowest = verts
-        .iter()
-        .chain(&raw)
-        .map(|p| rot(*p).y)
-        .fold(f64::INFINITY, f64::min);
-    let highest = verts
-        .iter()
-        .chain(&raw)
-        .map(|p| rot(*p).y)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let height_units = highest - lowest;
+    let body = frame::body_frame(&found, &places, &parents, &parts_raw, &names);
+    let (turn, up_name, facing_name) = match &body {
+        Some(b) => {
+            if b.crossed {
+                notes.push("its joints' names put left and right the other way round from where its toes point: their sides are swapped".to_owned());
+                frame::swap_sides(&mut found);
+            }
+            (b.turn, b.up.clone(), b.facing.clone())
+        }
+        None => {
+            let (turn, up_name) = upright(&raw);
+            let upright_joints: Vec<DVec3> = places.iter().map(|p| turn * *p).collect();
+            let height_units = extent_along_y(&verts, &raw, turn);
+            let (yaw, facing_name) = facing(&upright_joints, &parents, height_units, turn);
+            (DQuat::from_rotation_y(yaw) * turn, up_name, facing_name)
+        }
+    };
+    let height_units = extent_along_y(&verts, &raw, turn);
     if !(height_units.is_finite() && height_units > 0.0) {
         return Err(file.data_error("the figure has no height".to_owned()));
     }
-    let scale = detect_scale(height_units);
-    let upright_joints: Vec<DVec3> = raw.iter().map(|p| rot(*p)).collect();
-    let parents: Vec<Option<usize>> = order
+    let lowest = verts
         .iter()
-        .map(|&n| joint_parent(n).map(|q| index_of[q]))
-        .collect();
-    let (yaw, facing_name) = facing(&upright_joints, &parents, height_units, turn);
-    let turn = DQuat::from_rotation_y(yaw) * turn;
+        .chain(&raw)
+        .map(|p| (turn * *p).y)
+        .fold(f64::INFINITY, f64::min);
+    let scale = detect_scale(height_units);
     let centre = {
         let c = order
             .first()
@@ -195,37 +412,29 @@ pub(super) fn figure(
     let at = |p: DVec3| normal.transform_point3(p);
 
     // The skeleton: rest offsets in the world axes, identity rotations.
-    let mut joints = Vec::with_capacity(order.len() + extra_root);
-    let mut rest = Vec::with_capacity(order.len() + extra_root);
-    if extra_root == 1 {
-        joints.push(Joint {
-            name: "(root)".to_owned(),
-            parent: None,
-            offset: at(raw[0]),
-            end_site: None,
-        });
-        rest.push(DMat4::from_translation(at(raw[0])));
-    }
-    for (k, &n) in order.iter().enumerate() {
-        let p = at(raw[k]);
-        let parent = joint_parent(n)
-            .map(|q| index_of[q] + extra_root)
-            .or((extra_root == 1).then_some(0));
-        let offset = match parent {
+    let mut skel_joints = Vec::with_capacity(names.len());
+    let mut rest: Vec<DMat4> = Vec::with_capacity(names.len());
+    for (k, name) in names.iter().enumerate() {
+        let p = at(places[k]);
+        let offset = match parents[k] {
             Some(q) => p - rest[q].w_axis.truncate(),
             None => p,
         };
-        joints.push(Joint {
-            name: nodes[n]
-                .name()
-                .map_or_else(|| format!("joint {n}"), str::to_owned),
-            parent,
+        skel_joints.push(Joint {
+            name: name.clone(),
+            parent: parents[k],
             offset,
             end_site: None,
         });
-        rest.push(rigid(normal * world[n]));
+        rest.push(if k < extra_root {
+            DMat4::from_translation(p)
+        } else {
+            rigid(normal * world[order[k - extra_root]])
+        });
     }
-    let skeleton = Skeleton { joints };
+    let mut skeleton = Skeleton {
+        joints: skel_joints,
+    };
     let parts: Vec<Part> = parts_raw
         .into_iter()
         .map(|mut p| {
@@ -236,41 +445,28 @@ pub(super) fn figure(
             p
         })
         .collect();
-
     let height_m = height_units * scale;
-    let (roles, roles_by) = match roles::fill(&skeleton, overrides) {
-        Ok(r) => (r, "names"),
-        // A joint named for a role that the skeleton lacks is the
-        // configuration's mistake: said, not guessed around.
-        Err(e @ (roles::RolesError::UnknownRole(_) | roles::RolesError::UnknownJoint { .. })) => {
-            return Err(GltfError::Data {
-                path: file.path.clone(),
-                why: format!(
-                    "mesh_roles: {}",
-                    e.to_string().trim_start_matches("[roles] ")
-                ),
-            });
-        }
-        Err(_) => {
-            let mut by =
-                by_places(&skeleton, height_m).map_err(|missing| GltfError::NotHumanoid {
-                    path: file.path.clone(),
-                    missing,
-                })?;
-            // The configured joints over where joints stand (their names
-            // were checked above).
-            for (role, joint) in overrides {
-                if let (Some(r), Some(j)) = (roles::Role::from_name(role), skeleton.find(joint)) {
-                    by.0.insert(r, j);
-                }
-            }
-            (by, "places")
-        }
-    };
+    let mut made_up = vec![false; skeleton.len()];
+    let roles = places::settle(
+        file,
+        places::Body {
+            skeleton: &mut skeleton,
+            rest: &mut rest,
+            made_up: &mut made_up,
+        },
+        &parts,
+        height_m,
+        found,
+        &mut notes,
+    )?;
+    let roles_by = summary(&roles.1);
+    let mut warnings = warnings;
+    warnings.extend(notes);
     Ok(Figure {
         skeleton,
         rest,
-        roles,
+        roles: roles.0,
+        evidence: roles.1,
         roles_by,
         parts,
         skins: file.doc.skins().len(),
@@ -280,7 +476,92 @@ pub(super) fn figure(
         up: up_name,
         warnings,
         own: false,
+        made_up,
+        credit: file.extensions.as_ref().and_then(humanoid::vrm_credit),
     })
+}
+
+/// The fewest joints a character can have: a pelvis, a head, and two
+/// arms and two legs of a bone each.
+pub const MIN_JOINTS: usize = 6;
+
+/// How far the figure reaches along the file's axis turned up by `turn`.
+fn extent_along_y(verts: &[DVec3], raw: &[DVec3], turn: DQuat) -> f64 {
+    let (lo, hi) = verts
+        .iter()
+        .chain(raw)
+        .map(|p| (turn * *p).y)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), y| {
+            (l.min(y), h.max(y))
+        });
+    hi - lo
+}
+
+/// The roles the file (VRM's humanoid map) and the configuration name,
+/// with their evidence; a configured role or joint that does not exist
+/// is refused.
+fn given_roles(
+    file: &File,
+    names: &[String],
+    joints: &Joints,
+    overrides: &BTreeMap<String, String>,
+) -> Result<humanoid::Found, GltfError> {
+    let mut found = humanoid::Found::new();
+    for (role, joint) in overrides {
+        let bad = |e: roles::RolesError| GltfError::Data {
+            path: file.path.clone(),
+            why: format!(
+                "mesh_roles: {}",
+                e.to_string().trim_start_matches("[roles] ")
+            ),
+        };
+        let r = Role::from_name(role)
+            .ok_or_else(|| bad(roles::RolesError::UnknownRole(role.clone())))?;
+        let j = names.iter().position(|n| n == joint).ok_or_else(|| {
+            bad(roles::RolesError::UnknownJoint {
+                role: r,
+                joint: joint.clone(),
+            })
+        })?;
+        found.insert(r, (j, humanoid::Evidence::Configuration));
+    }
+    if let Some(ext) = &file.extensions {
+        let bones = humanoid::vrm_bones(ext);
+        let joint = |bone: &str| {
+            bones
+                .get(bone)
+                .and_then(|&n| joints.joint_of.get(n).copied())
+                .filter(|&j| j < names.len())
+        };
+        for (bone, role) in humanoid::VRM_BONES {
+            // The chest is where the arms branch: the upper chest, else
+            // the chest.
+            let j = match bone {
+                "upperChest" => joint(bone).or_else(|| joint("chest")),
+                _ => joint(bone),
+            };
+            if let Some(j) = j {
+                found.entry(role).or_insert((j, humanoid::Evidence::File));
+            }
+        }
+    }
+    Ok(found)
+}
+
+/// One word for where the roles came from, as before per-role evidence
+/// (`names` where every role came from names or the hierarchy).
+fn summary(evidence: &BTreeMap<Role, humanoid::Evidence>) -> &'static str {
+    use humanoid::Evidence as E;
+    let any = |e: E| evidence.values().any(|&x| x == e);
+    if any(E::File) {
+        "file"
+    } else if any(E::Place) {
+        "places"
+    } else if any(E::MadeUp) {
+        "names, made up ends"
+    } else {
+        "names"
+    }
 }
 
 /// The turn that stands the figure up: the axis along which the skeleton
@@ -379,140 +660,4 @@ fn facing(joints: &[DVec3], parents: &[Option<usize>], h: f64, up: DQuat) -> (f6
         ["X", "Y", "Z"][k]
     );
     (yaw, name)
-}
-
-/// Roles from where the joints stand in the upright figure (`h` tall,
-/// facing +Z, its left at +X): each side's lowest joint and the low ones
-/// above it are the foot, the joint above them (or beside, for a rig whose
-/// feet hang from its root) the knee and its parent the hip; the chains
-/// that leave the trunk sideways high up are the arms, the first long bone
-/// along them the upper arm; the highest joint on the middle line the head.
-/// What is missing is named.
-fn by_places(skeleton: &Skeleton, h: f64) -> Result<RoleMap, String> {
-    let p: Vec<DVec3> = forward_kinematics(skeleton, &skeleton.rest_pose()).positions;
-    let n = skeleton.len();
-    let floor = p.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
-    let y = |j: usize| p[j].y - floor;
-    let parent = |j: usize| skeleton.joints[j].parent;
-    let middle = |j: usize| p[j].x.abs() < 0.03 * h;
-    let mut size = vec![1usize; n];
-    for j in (0..n).rev() {
-        if let Some(q) = parent(j) {
-            size[q] += size[j];
-        }
-    }
-    for (joint, at) in skeleton.joints.iter().zip(&p) {
-        tracing::debug!(
-            joint = %joint.name,
-            x = at.x / h,
-            y = (at.y - floor) / h,
-            z = at.z / h,
-            "where a joint stands (shares of the height)"
-        );
-    }
-    let mut map = BTreeMap::new();
-    if let Some(head) = (0..n)
-        .filter(|&j| middle(j))
-        .max_by(|&a, &b| y(a).total_cmp(&y(b)))
-    {
-        map.insert(Role::Head, head);
-    }
-    for (sign, [foot_r, knee_r, hip_r, hand_r, elbow_r, shoulder_r]) in [
-        (
-            1.0,
-            [
-                Role::LeftFoot,
-                Role::LeftKnee,
-                Role::LeftHip,
-                Role::LeftHand,
-                Role::LeftElbow,
-                Role::LeftShoulder,
-            ],
-        ),
-        (
-            -1.0,
-            [
-                Role::RightFoot,
-                Role::RightKnee,
-                Role::RightHip,
-                Role::RightHand,
-                Role::RightElbow,
-                Role::RightShoulder,
-            ],
-        ),
-    ] {
-        let side = |j: usize| p[j].x * sign > 0.03 * h;
-        // The arm: the largest chain leaving the trunk sideways, high.
-        let arm_root = (0..n)
-            .filter(|&j| side(j) && y(j) > 0.5 * h && parent(j).is_some_and(|q| !side(q)))
-            .max_by_key(|&j| size[j]);
-        let in_arm = |j: usize| arm_root.is_some_and(|a| skeleton.is_ancestor(a, j));
-        // The foot: up from the side's lowest joint while still low.
-        let lowest = (0..n)
-            .filter(|&j| side(j) && !in_arm(j))
-            .min_by(|&a, &b| y(a).total_cmp(&y(b)))
-            .filter(|&j| y(j) < 0.12 * h);
-        let foot = lowest.map(|mut j| {
-            while let Some(q) = parent(j).filter(|&q| side(q) && y(q) < 0.12 * h) {
-                j = q;
-            }
-            j
-        });
-        let knee_band = |j: usize| side(j) && !in_arm(j) && (0.12 * h..0.45 * h).contains(&y(j));
-        let knee = foot.and_then(|f| {
-            parent(f).filter(|&q| knee_band(q)).or_else(|| {
-                // Feet that hang from the root: the knee-high joint nearest
-                // above the foot that hangs from a hip-high one.
-                (0..n)
-                    .filter(|&j| knee_band(j) && parent(j).is_some_and(|q| side(q) && y(q) > y(j)))
-                    .min_by(|&a, &b| {
-                        let d = |j: usize| (p[j] - p[f]).with_y(0.0).length();
-                        d(a).total_cmp(&d(b))
-                    })
-            })
-        });
-        let hip = knee.and_then(parent).filter(|&q| parent(q).is_some());
-        let (mut hand, mut elbow, mut shoulder) = (None, None, None);
-        if let Some(root) = arm_root {
-            let mut chain = vec![root];
-            loop {
-                let last = *chain.last().unwrap_or(&root);
-                let kids: Vec<usize> = skeleton.children(last).collect();
-                if kids.len() != 1 {
-                    break;
-                }
-                chain.push(kids[0]);
-            }
-            if let Some(i) = (0..chain.len().saturating_sub(1))
-                .find(|&i| (p[chain[i + 1]] - p[chain[i]]).length() >= 0.1 * h)
-            {
-                shoulder = Some(chain[i]);
-                elbow = Some(chain[i + 1]);
-                hand = chain.get(i + 2).copied().or_else(|| {
-                    // The forearm ends in several fingers or palms: the
-                    // one nearest their middle.
-                    let kids: Vec<usize> = skeleton.children(chain[i + 1]).collect();
-                    let mid = kids.iter().map(|&k| p[k]).sum::<DVec3>() / kids.len().max(1) as f64;
-                    kids.into_iter()
-                        .min_by(|&a, &b| (p[a] - mid).length().total_cmp(&(p[b] - mid).length()))
-                });
-            }
-        }
-        for (role, j) in [
-            (foot_r, foot),
-            (knee_r, knee),
-            (hip_r, hip),
-            (hand_r, hand),
-            (elbow_r, elbow),
-            (shoulder_r, shoulder),
-        ] {
-            if let Some(j) = j {
-                map.insert(role, j);
-            }
-        }
-    }
-    roles::complete(skeleton, map).map_err(|e| match e {
-        roles::RolesError::Missing(m) => m.iter().map(|r| r.name()).collect::<Vec<_>>().join(", "),
-        e => e.to_string(),
-    })
 }

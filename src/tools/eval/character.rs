@@ -67,6 +67,90 @@ pub struct CharacterEval {
     pub library_skate_mm: f64,
     /// Frames whose skinned mesh has a non-finite vertex.
     pub bad_frames: usize,
+    /// The angle between each of the figure's body segments and the
+    /// library's (pelvis to chest, chest to head, upper arms, forearms,
+    /// thighs, shins; shoulder to hand and hip to foot for a one-bone
+    /// limb), over every frame judged: mean and 95th percentile (deg).
+    pub dir_mean_deg: f64,
+    pub dir_p95_deg: f64,
+    /// Over frames where the library plants a foot, the 95th percentile
+    /// of that foot's lowest mesh point above the floor (mm): a figure
+    /// that floats or stands on tiptoe shows here.
+    pub float_mm: f64,
+    /// Each limb segment within 25 % of the library's, both scaled by
+    /// height; the ratios (figure over library).
+    pub human_proportions: bool,
+    pub proportions: std::collections::BTreeMap<String, f64>,
+}
+
+/// A segment judged by direction: from one role's joint to another's.
+const SEGMENTS: [(Role, Role); 10] = [
+    (Role::Pelvis, Role::Chest),
+    (Role::Chest, Role::Head),
+    (Role::LeftShoulder, Role::LeftElbow),
+    (Role::LeftElbow, Role::LeftHand),
+    (Role::RightShoulder, Role::RightElbow),
+    (Role::RightElbow, Role::RightHand),
+    (Role::LeftHip, Role::LeftKnee),
+    (Role::LeftKnee, Role::LeftFoot),
+    (Role::RightHip, Role::RightKnee),
+    (Role::RightKnee, Role::RightFoot),
+];
+
+/// The segments a figure is judged by: a limb whose middle is made up
+/// (one bone) from its root to its end.
+fn segments(fig: &Figure) -> Vec<(Role, Role)> {
+    let made_up = |r: Role| fig.made_up.get(fig.roles.get(r)).copied().unwrap_or(false);
+    let mut out = Vec::new();
+    for (a, b) in SEGMENTS {
+        if made_up(b)
+            && !matches!(
+                b,
+                Role::LeftHand | Role::RightHand | Role::LeftFoot | Role::RightFoot
+            )
+        {
+            // Upper of a one-bone limb: root to end, once.
+            let end = match b {
+                Role::LeftElbow => Role::LeftHand,
+                Role::RightElbow => Role::RightHand,
+                Role::LeftKnee => Role::LeftFoot,
+                _ => Role::RightFoot,
+            };
+            out.push((a, end));
+        } else if made_up(a) {
+            continue;
+        } else {
+            out.push((a, b));
+        }
+    }
+    out
+}
+
+/// The figure's limb segments over the library's, each over its body's
+/// height, and whether every one is within 25 %.
+fn proportions(
+    fig: &Figure,
+    lib: &Library,
+    lib_roles: &crate::character::roles::RoleMap,
+) -> (bool, std::collections::BTreeMap<String, f64>) {
+    let lib_rest = forward_kinematics(&lib.skeleton, &lib.skeleton.rest_pose());
+    let lib_h = lib
+        .clips
+        .values()
+        .next()
+        .map_or(1.7, |c| c.height_m)
+        .max(1e-6);
+    let fig_at = |r: Role| fig.rest[fig.roles.get(r)].w_axis.truncate();
+    let lib_at = |r: Role| lib_rest.positions[lib_roles.get(r)];
+    let mut out = std::collections::BTreeMap::new();
+    for (a, b) in segments(fig).into_iter().skip(2) {
+        let f = (fig_at(b) - fig_at(a)).length() / fig.height_m.max(1e-6);
+        let l = (lib_at(b) - lib_at(a)).length() / lib_h;
+        let r = (f / l.max(1e-9) * 1e3).round() / 1e3;
+        out.insert(format!("{}-{}", a.name(), b.name()), r);
+    }
+    let human = out.values().all(|r| (0.75..=1.25).contains(r));
+    (human, out)
 }
 
 /// Plays every clip of `lib` on `fig`, every `step`-th frame.
@@ -91,6 +175,10 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
         );
     }
     let mut out = CharacterEval::default();
+    let segs = segments(fig);
+    let mut angles: Vec<f64> = Vec::new();
+    let mut floats: Vec<f64> = Vec::new();
+    (out.human_proportions, out.proportions) = proportions(fig, lib, &lib_roles);
     let (mut sum, mut n) = (0.0, 0usize);
     let (mut skate, mut skate_n, mut lib_skate, mut lib_skate_n) = (0.0, 0usize, 0.0, 0usize);
     let feet = [Role::LeftFoot, Role::RightFoot];
@@ -130,6 +218,21 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
                 .fold(f64::INFINITY, f64::min);
             out.penetration_mm = out.penetration_mm.max(-lowest * 1e3);
             let floor_at = |p: DVec3| DVec3::new(p.x, 0.0, p.z);
+            for &(a, b) in &segs {
+                let f =
+                    w[fig.roles.get(b)].w_axis.truncate() - w[fig.roles.get(a)].w_axis.truncate();
+                let l = lw.positions[lib_roles.get(b)] - lw.positions[lib_roles.get(a)];
+                if f.length() > 1e-9 && l.length() > 1e-9 {
+                    angles.push(f.angle_between(l).to_degrees());
+                }
+            }
+            for (k, r) in feet.iter().enumerate() {
+                if lw.positions[lib_roles.get(*r)].y < lib_rest_ankle + PLANTED_M {
+                    if let Some(low) = drive.foot_lowest(&w, k) {
+                        floats.push(low.max(0.0) * 1e3);
+                    }
+                }
+            }
             for (r, root) in PARTS {
                 let f = w[fig.roles.get(r)].w_axis.truncate();
                 let l = lw.positions[lib_roles.get(r)];
@@ -179,5 +282,14 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     out.penetration_mm = r3(out.penetration_mm.max(0.0));
     out.skate_mm = r3(skate / skate_n.max(1) as f64);
     out.library_skate_mm = r3(lib_skate / lib_skate_n.max(1) as f64);
+    let p95 = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get((v.len() * 95 / 100).min(v.len().saturating_sub(1)))
+            .copied()
+            .unwrap_or(0.0)
+    };
+    out.dir_mean_deg = r3(angles.iter().sum::<f64>() / angles.len().max(1) as f64);
+    out.dir_p95_deg = r3(p95(&mut angles));
+    out.float_mm = r3(p95(&mut floats));
     out
 }

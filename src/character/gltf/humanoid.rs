@@ -1,0 +1,805 @@
+//! Which joint of an exhibit's rig plays which role, role by role, from
+//! the best evidence there is: the file's own humanoid map (VRM), the
+//! configuration, joint names (a table of the conventions exhibit builders
+//! meet), the hierarchy (limbs are chains that leave the trunk; the joint
+//! above a hand is the forearm's), and where joints stand once the body
+//! is upright (left and right, high and low). Each piece is checked
+//! against the others: a name the hierarchy or the places contradict is
+//! overruled, and said.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::character::roles::{Role, words};
+
+/// Where a role's joint came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Evidence {
+    /// The file's own humanoid map (VRM's `humanBones`).
+    File,
+    /// `[character.mesh_roles]` (or a library's `[roles]`).
+    Configuration,
+    /// The joint's name says the part.
+    Name,
+    /// Its place in the hierarchy (the joint above a named hand, where
+    /// the legs branch, ...).
+    Hierarchy,
+    /// Where it stands in the bind pose.
+    Place,
+    /// Made up where the rig has no joint: the end of the last bone's
+    /// mesh (a forearm with no hand, a one-bone limb).
+    MadeUp,
+}
+
+impl Evidence {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Evidence::File => "file",
+            Evidence::Configuration => "configuration",
+            Evidence::Name => "name",
+            Evidence::Hierarchy => "hierarchy",
+            Evidence::Place => "place",
+            Evidence::MadeUp => "made up",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Side {
+    Left,
+    Right,
+}
+
+/// The part a joint's name says it is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Seg {
+    Pelvis,
+    Spine,
+    Chest,
+    Neck,
+    Head,
+    Clavicle,
+    UpperArm,
+    Forearm,
+    Hand,
+    Thigh,
+    /// `leg`: the thigh in some conventions (`Left leg`), the shin in
+    /// others (`LeftLeg` under `LeftUpLeg`); the hierarchy decides.
+    Leg,
+    Shin,
+    Foot,
+    Toe,
+    Finger,
+    /// Face, hair, accessories: not part of the body's chains.
+    Face,
+    /// IK targets, poles, controls, twist and roll bones, ends.
+    Helper,
+    Unknown,
+}
+
+/// Words that carry no part: prefixes of exporters and rigs.
+const NOISE: [&str; 16] = [
+    "def",
+    "mixamorig",
+    "cc",
+    "base",
+    "bip01",
+    "bip",
+    "jnt",
+    "joint",
+    "bone",
+    "bn",
+    "skeleton",
+    "sk",
+    "j",
+    "b",
+    "rig",
+    "c",
+];
+
+/// Whole words that make a joint a helper.
+const HELPER_WORDS: [&str; 22] = [
+    "ik", "pt", "end", "nub", "top", "tip", "leaf", "roll", "twist", "share", "pole", "ctrl",
+    "mch", "org", "slot", "heel", "target", "tgt", "orient", "null", "dummy", "aux",
+];
+
+/// Pieces that make a joint a helper wherever they stand in a word
+/// (`l-LEGCONTROL`, `headtracker`, `handslot`).
+const HELPER_PIECES: [&str; 12] = [
+    "control",
+    "ctrl",
+    "target",
+    "orient",
+    "twist",
+    "tracker",
+    "helper",
+    "socket",
+    "weapon",
+    "slot",
+    "corrective",
+    "pole",
+];
+
+const FACE: [&str; 16] = [
+    "eye", "eyes", "jaw", "tongue", "teeth", "brow", "lid", "cheek", "lip", "hair", "ear", "nose",
+    "face", "mouth", "chin", "bust",
+];
+
+const FINGERS: [&str; 10] = [
+    "thumb", "index", "middle", "ring", "pinky", "little", "finger", "fingers", "palm", "f",
+];
+
+/// A name's side and part (`mixamorig:LeftForeArm` → left forearm,
+/// `DEF-upper_arm.L` → left upper arm, `lShldrBend` → left upper arm,
+/// `Left knee` → left shin).
+pub(super) fn classify(name: &str) -> (Option<Side>, Seg) {
+    let all = words(name);
+    let lower = name.to_ascii_lowercase();
+    let mut side = None;
+    let mut rest: Vec<String> = Vec::new();
+    for w in &all {
+        match w.as_str() {
+            "left" | "l" | "lft" => side = Some(Side::Left),
+            "right" | "r" | "rt" | "rgt" => side = Some(Side::Right),
+            _ => rest.push(w.clone()),
+        }
+    }
+    // Digits at a word's end are a count (`spine01`, `index1`), not a part.
+    let mut parts: Vec<String> = rest
+        .iter()
+        .map(|w| w.trim_end_matches(|c: char| c.is_ascii_digit()).to_owned())
+        .filter(|w| !w.is_empty() && !NOISE.contains(&w.as_str()))
+        .collect();
+    if side.is_none() {
+        // A side letter glued to a part (`lhand`, `rthigh`), as one word.
+        for w in &mut parts {
+            for (prefix, s) in [("l", Side::Left), ("r", Side::Right)] {
+                if let Some(tail) = w.strip_prefix(prefix) {
+                    if segment(tail).is_some() && segment(w).is_none() {
+                        side = Some(s);
+                        *w = tail.to_owned();
+                    }
+                }
+            }
+        }
+    }
+    if parts.iter().any(|w| HELPER_WORDS.contains(&w.as_str()))
+        || HELPER_PIECES.iter().any(|p| lower.contains(p))
+    {
+        return (side, Seg::Helper);
+    }
+    if parts.iter().any(|w| FACE.contains(&w.as_str())) {
+        return (side, Seg::Face);
+    }
+    if parts.iter().any(|w| FINGERS.contains(&w.as_str())) {
+        return (side, Seg::Finger);
+    }
+    let joined: String = parts.concat();
+    let mut seg = segment(&joined)
+        .or_else(|| {
+            // The first word that names a part (`shldr` of `ShldrBend`).
+            parts.iter().find_map(|w| segment(w))
+        })
+        .unwrap_or(Seg::Unknown);
+    // `Hips` is the pelvis; a hip with a side is where the thigh starts.
+    if seg == Seg::Pelvis && side.is_some() {
+        seg = Seg::Thigh;
+    }
+    if seg == Seg::Thigh && side.is_none() && joined.starts_with("hip") {
+        seg = Seg::Pelvis;
+    }
+    (side, seg)
+}
+
+/// The part one word (or several joined) names.
+fn segment(w: &str) -> Option<Seg> {
+    Some(match w {
+        "hips" | "hip" | "pelvis" => Seg::Pelvis,
+        "spine" | "abdomen" | "abdomenlower" | "abdomenupper" | "waist" | "torso" | "belly"
+        | "lowerback" | "spinelower" | "spineupper" | "body" => Seg::Spine,
+        "chest" | "upperchest" | "chestlower" | "chestupper" | "ribcage" | "thorax" => Seg::Chest,
+        "neck" | "necklower" | "neckupper" => Seg::Neck,
+        "head" => Seg::Head,
+        "shoulder" | "clavicle" | "collar" | "collarbone" | "clav" => Seg::Clavicle,
+        "upperarm" | "uparm" | "arm" | "shldr" | "shldrbend" | "humerus" | "armupper" => {
+            Seg::UpperArm
+        }
+        "forearm" | "lowerarm" | "loarm" | "lowarm" | "elbow" | "forearmbend" | "armlower" => {
+            Seg::Forearm
+        }
+        "hand" | "wrist" => Seg::Hand,
+        "thigh" | "upleg" | "upperleg" | "thighbend" | "legupper" | "femur" => Seg::Thigh,
+        "leg" => Seg::Leg,
+        "shin" | "calf" | "lowerleg" | "knee" | "loleg" | "lowleg" | "leglower" | "tibia"
+        | "shinbend" => Seg::Shin,
+        "foot" | "ankle" => Seg::Foot,
+        "toe" | "toes" | "ball" | "toebase" => Seg::Toe,
+        _ => return None,
+    })
+}
+
+/// The joints as role finding sees them: names, parents, places.
+pub(super) struct Rig<'a> {
+    pub names: &'a [String],
+    pub parents: &'a [Option<usize>],
+    pub places: &'a [DVec3],
+    pub classes: Vec<(Option<Side>, Seg)>,
+    pub depth: Vec<usize>,
+    children: Vec<Vec<usize>>,
+    /// Joints under each joint, itself included.
+    size: Vec<usize>,
+}
+
+impl<'a> Rig<'a> {
+    pub(super) fn new(
+        names: &'a [String],
+        parents: &'a [Option<usize>],
+        places: &'a [DVec3],
+    ) -> Self {
+        let n = names.len();
+        let mut children = vec![Vec::new(); n];
+        let mut depth = vec![0; n];
+        // Parents come first in the order joints are given.
+        for j in 0..n {
+            if let Some(p) = parents[j] {
+                children[p].push(j);
+                depth[j] = depth[p] + 1;
+            }
+        }
+        let mut size = vec![1usize; n];
+        for j in (0..n).rev() {
+            if let Some(p) = parents[j] {
+                size[p] += size[j];
+            }
+        }
+        Self {
+            names,
+            parents,
+            places,
+            classes: names.iter().map(|s| classify(s)).collect(),
+            depth,
+            children,
+            size,
+        }
+    }
+
+    fn seg(&self, j: usize) -> Seg {
+        self.classes[j].1
+    }
+
+    fn side(&self, j: usize) -> Option<Side> {
+        self.classes[j].0
+    }
+
+    fn is_helper(&self, j: usize) -> bool {
+        matches!(self.seg(j), Seg::Helper)
+    }
+
+    pub(super) fn is_ancestor(&self, a: usize, mut j: usize) -> bool {
+        loop {
+            if j == a {
+                return true;
+            }
+            match self.parents[j] {
+                Some(p) => j = p,
+                None => return false,
+            }
+        }
+    }
+
+    fn common_ancestor(&self, a: usize, b: usize) -> usize {
+        let mut x = a;
+        loop {
+            if self.is_ancestor(x, b) {
+                return x;
+            }
+            match self.parents[x] {
+                Some(p) => x = p,
+                None => return x,
+            }
+        }
+    }
+
+    /// The first joint above `j` that is not a helper.
+    fn limb_parent(&self, j: usize) -> Option<usize> {
+        let mut p = self.parents[j]?;
+        while self.is_helper(p) {
+            p = self.parents[p]?;
+        }
+        Some(p)
+    }
+
+    /// The child of `j` a limb goes on through: not a helper, finger or
+    /// face joint, the one with most joints under it.
+    fn limb_child(&self, j: usize) -> Option<usize> {
+        let mut best: Option<usize> = None;
+        let mut stack: Vec<usize> = self.children[j].clone();
+        while let Some(c) = stack.pop() {
+            match self.seg(c) {
+                // Through a helper to what hangs under it.
+                Seg::Helper => stack.extend(self.children[c].iter().copied()),
+                Seg::Finger | Seg::Face | Seg::Toe => {}
+                _ => {
+                    if best.is_none_or(|b| self.size[c] > self.size[b]) {
+                        best = Some(c);
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Whether a joint's name says the same part as its parent's, as
+    /// segments of one bone do (`upper_arm.L`, `upper_arm.L.001`).
+    fn same_bone(&self, j: usize, other: usize) -> bool {
+        let (a, b) = (&self.names[j], &self.names[other]);
+        let (short, long) = if a.len() <= b.len() { (a, b) } else { (b, a) };
+        // Blender numbers the segments of one bone `.001`, `.002`.
+        self.classes[j] == self.classes[other]
+            && long.strip_prefix(short.as_str()).is_some_and(|rest| {
+                rest.len() == 4
+                    && rest.starts_with(['.', '_'])
+                    && rest[1..].chars().all(|c| c.is_ascii_digit())
+            })
+    }
+
+    /// The top of the run of joints named as `j` is, up from it.
+    fn run_top(&self, mut j: usize) -> usize {
+        while let Some(p) = self.limb_parent(j).filter(|&p| self.same_bone(p, j)) {
+            j = p;
+        }
+        j
+    }
+
+    /// The bottom of the run of joints named as `j` is, down from it.
+    fn run_bottom(&self, mut j: usize) -> usize {
+        while let Some(c) = self.limb_child(j).filter(|&c| self.same_bone(c, j)) {
+            j = c;
+        }
+        j
+    }
+
+    /// The joints down a limb from `j` (its limb children, in turn), at
+    /// most eight.
+    fn chain_below(&self, mut j: usize) -> Vec<usize> {
+        let mut out = Vec::new();
+        while let Some(c) = self.limb_child(j) {
+            out.push(c);
+            if out.len() == 8 {
+                break;
+            }
+            j = c;
+        }
+        out
+    }
+
+    /// The shallowest joint on `side` whose name says one of `segs`.
+    fn named(&self, side: Option<Side>, segs: &[Seg]) -> Option<usize> {
+        (0..self.names.len())
+            .filter(|&j| self.side(j) == side && segs.contains(&self.seg(j)))
+            .min_by_key(|&j| (self.depth[j], j))
+    }
+}
+
+/// A limb found: its root (upper arm or thigh), middle (forearm or shin)
+/// and end (hand or foot), each with its evidence.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Limb {
+    pub upper: Option<(usize, Evidence)>,
+    pub middle: Option<(usize, Evidence)>,
+    pub end: Option<(usize, Evidence)>,
+}
+
+/// The arm or leg on `side` from names, filled in by the hierarchy.
+pub(super) fn limb_by_names(rig: &Rig<'_>, side: Side, arm: bool) -> Limb {
+    let (upper_segs, middle_segs, end_segs): (&[Seg], &[Seg], &[Seg]) = if arm {
+        (&[Seg::UpperArm], &[Seg::Forearm], &[Seg::Hand])
+    } else {
+        (
+            &[Seg::Thigh, Seg::Leg],
+            &[Seg::Shin, Seg::Leg],
+            &[Seg::Foot],
+        )
+    };
+    let mut limb = Limb::default();
+    let side = Some(side);
+    // From the end up: the end by name, or the joint above a named toe.
+    let end = rig
+        .named(side, end_segs)
+        .map(|j| (j, Evidence::Name))
+        .or_else(|| {
+            (!arm)
+                .then(|| rig.named(side, &[Seg::Toe]))
+                .flatten()
+                .and_then(|t| rig.limb_parent(t))
+                .filter(|&f| rig.side(f) == side || rig.side(f).is_none())
+                .map(|f| (f, Evidence::Hierarchy))
+        });
+    if let Some((e, _)) = end {
+        limb.end = end;
+        // The middle: the nearest joint above whose name says it (within
+        // two steps), else the joint above.
+        let above = |j: usize, segs: &[Seg]| -> Option<(usize, Evidence)> {
+            let first = rig.limb_parent(j)?;
+            let second = rig.limb_parent(first);
+            if segs.contains(&rig.seg(first)) {
+                Some((rig.run_top(first), Evidence::Name))
+            } else if let Some(s) = second.filter(|&s| segs.contains(&rig.seg(s))) {
+                Some((rig.run_top(s), Evidence::Name))
+            } else {
+                Some((first, Evidence::Hierarchy))
+            }
+        };
+        // A foot the rig hangs from its root (IK style) says nothing of
+        // the leg above it: the leg by its names.
+        limb.middle = above(e, middle_segs)
+            .filter(|&(m, _)| rig.side(m) == side)
+            .or_else(|| {
+                rig.named(side, &middle_segs[..1])
+                    .or_else(|| {
+                        (0..rig.names.len()).find(|&j| {
+                            rig.side(j) == side
+                                && rig.seg(j) == Seg::Leg
+                                && rig.limb_parent(j).is_some_and(|p| rig.seg(p) == Seg::Thigh)
+                        })
+                    })
+                    .map(|m| (m, Evidence::Name))
+            });
+        if let Some((m, _)) = limb.middle {
+            limb.upper = above(m, upper_segs);
+        }
+        return limb;
+    }
+    // From the root down: the upper by name, the rest along the chain.
+    let upper = if arm {
+        rig.named(side, upper_segs)
+    } else {
+        rig.named(side, &[Seg::Thigh])
+            .or_else(|| rig.named(side, &[Seg::Leg]))
+    };
+    if let Some(u) = upper {
+        limb.upper = Some((u, Evidence::Name));
+        // Down the chain: the first joint named as the next part, else the
+        // first that is not a segment of the same bone.
+        let next = |from: usize, segs: &[Seg]| -> Option<(usize, Evidence)> {
+            let chain = rig.chain_below(from);
+            chain
+                .iter()
+                .find(|&&c| segs.contains(&rig.seg(c)) && rig.seg(c) != rig.seg(from))
+                .map(|&c| (c, Evidence::Name))
+                .or_else(|| {
+                    chain
+                        .iter()
+                        .find(|&&c| !rig.same_bone(c, from))
+                        .map(|&c| (c, Evidence::Hierarchy))
+                })
+        };
+        limb.middle = next(u, middle_segs);
+        if let Some((m, _)) = limb.middle {
+            limb.end = next(m, end_segs).or_else(|| {
+                // A forearm that ends in several palms or fingers: the one
+                // nearest their middle is the hand.
+                arm.then(|| middle_child(rig, rig.run_bottom(m)))
+                    .flatten()
+                    .map(|h| (h, Evidence::Hierarchy))
+            });
+        }
+    } else if arm {
+        // A forearm named, the rest by the hierarchy.
+        if let Some(m) = rig.named(side, middle_segs) {
+            limb.middle = Some((m, Evidence::Name));
+            limb.upper = rig.limb_parent(m).map(|u| (u, Evidence::Hierarchy));
+            limb.end = rig
+                .limb_child(m)
+                .or_else(|| middle_child(rig, m))
+                .map(|h| (h, Evidence::Hierarchy));
+        }
+    }
+    limb
+}
+
+/// Of a joint's finger or palm children, the one nearest their middle.
+fn middle_child(rig: &Rig<'_>, j: usize) -> Option<usize> {
+    let kids: Vec<usize> = rig.children[j]
+        .iter()
+        .copied()
+        .filter(|&k| rig.seg(k) == Seg::Finger)
+        .collect();
+    if kids.len() < 2 {
+        return None;
+    }
+    let mid = kids.iter().map(|&k| rig.places[k]).sum::<DVec3>() / kids.len() as f64;
+    kids.into_iter().min_by(|&a, &b| {
+        (rig.places[a] - mid)
+            .length()
+            .total_cmp(&(rig.places[b] - mid).length())
+    })
+}
+
+/// The roles found so far, each with its evidence.
+pub(super) type Found = BTreeMap<Role, (usize, Evidence)>;
+
+/// The limb roles of (side, arm): upper, middle, end.
+pub(super) fn limb_roles(side: Side, arm: bool) -> [Role; 3] {
+    match (side, arm) {
+        (Side::Left, true) => [Role::LeftShoulder, Role::LeftElbow, Role::LeftHand],
+        (Side::Right, true) => [Role::RightShoulder, Role::RightElbow, Role::RightHand],
+        (Side::Left, false) => [Role::LeftHip, Role::LeftKnee, Role::LeftFoot],
+        (Side::Right, false) => [Role::RightHip, Role::RightKnee, Role::RightFoot],
+    }
+}
+
+pub(super) const LIMBS: [(Side, bool); 4] = [
+    (Side::Left, true),
+    (Side::Right, true),
+    (Side::Left, false),
+    (Side::Right, false),
+];
+
+/// Every limb the names and the hierarchy give, into `found` (roles
+/// already there kept).
+pub(super) fn limbs_by_names(rig: &Rig<'_>, found: &mut Found) {
+    for (side, arm) in LIMBS {
+        let roles = limb_roles(side, arm);
+        if roles.iter().any(|r| found.contains_key(r)) {
+            continue;
+        }
+        let limb = limb_by_names(rig, side, arm);
+        for (r, j) in roles.into_iter().zip([limb.upper, limb.middle, limb.end]) {
+            if let Some(j) = j {
+                found.insert(r, j);
+            }
+        }
+    }
+}
+
+/// The trunk from the limbs: the pelvis where the legs meet (a joint
+/// named for it just above, where the rig puts one there), the chest where
+/// the arms meet, the head by name under the chest or else the top of the
+/// chain that leaves the chest upwards, the neck on the way to it (the
+/// head where there is none).
+pub(super) fn trunk(rig: &Rig<'_>, found: &mut Found) {
+    let get = |f: &Found, r: Role| f.get(&r).map(|x| x.0);
+    if !found.contains_key(&Role::Pelvis) {
+        if let (Some(l), Some(r)) = (get(found, Role::LeftHip), get(found, Role::RightHip)) {
+            let p = rig.common_ancestor(l, r);
+            let ev = if rig.seg(p) == Seg::Pelvis {
+                Evidence::Name
+            } else {
+                Evidence::Hierarchy
+            };
+            found.insert(Role::Pelvis, (p, ev));
+        }
+    }
+    if !found.contains_key(&Role::Chest) {
+        if let (Some(l), Some(r)) = (
+            get(found, Role::LeftShoulder),
+            get(found, Role::RightShoulder),
+        ) {
+            let c = rig.common_ancestor(l, r);
+            let ev = if rig.seg(c) == Seg::Chest {
+                Evidence::Name
+            } else {
+                Evidence::Hierarchy
+            };
+            found.insert(Role::Chest, (c, ev));
+        }
+    }
+    let Some(chest) = get(found, Role::Chest) else {
+        return;
+    };
+    if !found.contains_key(&Role::Head) {
+        // A head by name below the chest (an IK target named `HEAD`
+        // elsewhere in the rig is not it).
+        let named = (0..rig.names.len())
+            .filter(|&j| rig.seg(j) == Seg::Head && j != chest && rig.is_ancestor(chest, j))
+            .min_by_key(|&j| (rig.depth[j], j));
+        let head = named.map(|h| (h, Evidence::Name)).or_else(|| {
+            // The top of the chain leaving the chest that holds no arm.
+            let arms: Vec<usize> = [Role::LeftShoulder, Role::RightShoulder]
+                .iter()
+                .filter_map(|r| get(found, *r))
+                .collect();
+            let mut j = rig.children[chest]
+                .iter()
+                .copied()
+                .filter(|&c| {
+                    !rig.is_helper(c)
+                        && !matches!(rig.seg(c), Seg::Face | Seg::Finger)
+                        && !arms.iter().any(|&a| rig.is_ancestor(c, a))
+                        && rig.side(c).is_none()
+                })
+                .max_by_key(|&c| rig.size[c])?;
+            while let Some(c) = rig.limb_child(j) {
+                if rig.side(c).is_some() {
+                    break;
+                }
+                j = c;
+            }
+            Some((j, Evidence::Hierarchy))
+        });
+        if let Some(h) = head {
+            found.insert(Role::Head, h);
+        }
+    }
+    if !found.contains_key(&Role::Neck) {
+        if let Some(head) = get(found, Role::Head) {
+            // The chest's child on the way to the head.
+            let mut j = head;
+            while let Some(p) = rig.parents[j] {
+                if p == chest {
+                    break;
+                }
+                j = p;
+            }
+            let neck = if j != head && rig.is_ancestor(chest, j) {
+                let ev = if rig.seg(j) == Seg::Neck {
+                    Evidence::Name
+                } else {
+                    Evidence::Hierarchy
+                };
+                (j, ev)
+            } else {
+                // No neck: the head rides on the chest.
+                (head, Evidence::Hierarchy)
+            };
+            found.insert(Role::Neck, neck);
+        }
+    }
+}
+
+/// VRM's humanoid bone names and the role each plays (`chest` is where
+/// the arms branch: the upper chest where there is one).
+pub(super) const VRM_BONES: [(&str, Role); 16] = [
+    ("hips", Role::Pelvis),
+    ("upperChest", Role::Chest),
+    ("neck", Role::Neck),
+    ("head", Role::Head),
+    ("leftUpperArm", Role::LeftShoulder),
+    ("leftLowerArm", Role::LeftElbow),
+    ("leftHand", Role::LeftHand),
+    ("rightUpperArm", Role::RightShoulder),
+    ("rightLowerArm", Role::RightElbow),
+    ("rightHand", Role::RightHand),
+    ("leftUpperLeg", Role::LeftHip),
+    ("leftLowerLeg", Role::LeftKnee),
+    ("leftFoot", Role::LeftFoot),
+    ("rightUpperLeg", Role::RightHip),
+    ("rightLowerLeg", Role::RightKnee),
+    ("rightFoot", Role::RightFoot),
+];
+
+/// The VRM humanoid map of a glTF's root `extensions` (VRM 0.x `VRM`, or
+/// 1.0 `VRMC_vrm`): VRM bone name → node index.
+pub(super) fn vrm_bones(ext: &serde_json::Value) -> BTreeMap<String, usize> {
+    let mut out = BTreeMap::new();
+    // 0.x: an array of { bone, node }.
+    if let Some(list) = ext
+        .pointer("/VRM/humanoid/humanBones")
+        .and_then(|v| v.as_array())
+    {
+        for b in list.iter().take(256) {
+            if let (Some(bone), Some(node)) = (
+                b.get("bone").and_then(|v| v.as_str()),
+                b.get("node").and_then(serde_json::Value::as_u64),
+            ) {
+                out.insert(bone.to_owned(), node as usize);
+            }
+        }
+    }
+    // 1.0: an object of bone → { node }.
+    if let Some(map) = ext
+        .pointer("/VRMC_vrm/humanoid/humanBones")
+        .and_then(|v| v.as_object())
+    {
+        for (bone, b) in map.iter().take(256) {
+            if let Some(node) = b.get("node").and_then(serde_json::Value::as_u64) {
+                out.insert(bone.clone(), node as usize);
+            }
+        }
+    }
+    out
+}
+
+/// Who made a VRM character and under what licence (its `meta`), for the
+/// operator to credit it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Credit {
+    pub vrm: String,
+    pub title: String,
+    pub authors: String,
+    pub licence: String,
+}
+
+/// The credit fields of a VRM's meta, each cut to 120 characters with
+/// control characters left out.
+pub(super) fn vrm_credit(ext: &serde_json::Value) -> Option<Credit> {
+    let s = |v: Option<&serde_json::Value>| -> String {
+        let text = match v {
+            Some(serde_json::Value::String(s)) => s.clone(),
+            Some(serde_json::Value::Array(a)) => a
+                .iter()
+                .filter_map(|x| x.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            _ => String::new(),
+        };
+        text.chars().filter(|c| !c.is_control()).take(120).collect()
+    };
+    if let Some(m) = ext.pointer("/VRMC_vrm/meta") {
+        return Some(Credit {
+            vrm: "1.0".to_owned(),
+            title: s(m.get("name")),
+            authors: s(m.get("authors")),
+            licence: s(m.get("licenseUrl")),
+        });
+    }
+    let m = ext.pointer("/VRM/meta")?;
+    let licence = match s(m.get("licenseName")).as_str() {
+        "Other" | "" => s(m.get("otherLicenseUrl")),
+        name => name.to_owned(),
+    };
+    Some(Credit {
+        vrm: "0.x".to_owned(),
+        title: s(m.get("title")),
+        authors: s(m.get("author")),
+        licence,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_of_the_common_conventions_say_their_part() {
+        for (name, side, seg) in [
+            ("mixamorig:LeftForeArm", Some(Side::Left), Seg::Forearm),
+            ("mixamorig:LeftUpLeg", Some(Side::Left), Seg::Thigh),
+            ("mixamorig:LeftLeg", Some(Side::Left), Seg::Leg),
+            ("mixamorig:Hips", None, Seg::Pelvis),
+            ("DEF-upper_arm.L", Some(Side::Left), Seg::UpperArm),
+            ("DEF-thigh.R", Some(Side::Right), Seg::Thigh),
+            ("MCH-thigh_ik.L", Some(Side::Left), Seg::Helper),
+            ("upperarm_l", Some(Side::Left), Seg::UpperArm),
+            ("calf_r", Some(Side::Right), Seg::Shin),
+            ("ball_l", Some(Side::Left), Seg::Toe),
+            ("clavicle_l", Some(Side::Left), Seg::Clavicle),
+            ("UpperLeg.L", Some(Side::Left), Seg::Thigh),
+            ("LowerArm.R", Some(Side::Right), Seg::Forearm),
+            ("Wrist.L", Some(Side::Left), Seg::Hand),
+            ("CC_Base_L_Upperarm", Some(Side::Left), Seg::UpperArm),
+            ("CC_Base_R_Calf", Some(Side::Right), Seg::Shin),
+            ("lShldrBend", Some(Side::Left), Seg::UpperArm),
+            ("rForearmBend", Some(Side::Right), Seg::Forearm),
+            ("lThighBend", Some(Side::Left), Seg::Thigh),
+            ("lShldrTwist", Some(Side::Left), Seg::Helper),
+            ("rShin", Some(Side::Right), Seg::Shin),
+            ("l-forearm", Some(Side::Left), Seg::Forearm),
+            ("l-thigh", Some(Side::Left), Seg::Thigh),
+            ("l-LEGCONTROL", Some(Side::Left), Seg::Helper),
+            ("Left elbow", Some(Side::Left), Seg::Forearm),
+            ("Left knee", Some(Side::Left), Seg::Shin),
+            ("Left arm", Some(Side::Left), Seg::UpperArm),
+            ("Right ankle", Some(Side::Right), Seg::Foot),
+            ("kneeIK.l", Some(Side::Left), Seg::Helper),
+            ("IK-foot.l", Some(Side::Left), Seg::Helper),
+            ("handslot.l", Some(Side::Left), Seg::Helper),
+            ("LeftHandIndex1", Some(Side::Left), Seg::Finger),
+            ("DEF-f_index.01.L", Some(Side::Left), Seg::Finger),
+            ("headtracker", None, Seg::Helper),
+            ("HeadTop_End", None, Seg::Helper),
+            ("LeftFootCtrl", Some(Side::Left), Seg::Helper),
+            ("spine_01", None, Seg::Spine),
+            ("leg-left", Some(Side::Left), Seg::Leg),
+            ("LHand", Some(Side::Left), Seg::Hand),
+            ("lhand", Some(Side::Left), Seg::Hand),
+        ] {
+            assert_eq!(classify(name), (side, seg), "{name}");
+        }
+    }
+}
