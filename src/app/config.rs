@@ -468,6 +468,18 @@ impl Config {
         c
     }
 
+    /// The configuration with `mesh` as every character's figure (its
+    /// roles found from the file alone).
+    #[must_use]
+    pub fn with_mesh(&self, mesh: &Path) -> Config {
+        let mut c = self.clone();
+        for ch in &mut c.character.0 {
+            ch.mesh = mesh.to_owned();
+            ch.mesh_roles.clear();
+        }
+        c
+    }
+
     /// This configuration with every character's library set to `dir`
     /// (`--library` given to a command that replays).
     #[must_use]

@@ -39,6 +39,10 @@ pub(super) enum Command {
         /// camera) and written as `recording.evemu` beside the frames.
         #[arg(long, value_name = "DIR", conflicts_with = "scene")]
         library: Option<PathBuf>,
+        /// An exhibit's own character (.glb, .gltf, .vrm) to show instead
+        /// of the configuration's, its roles found from the file alone.
+        #[arg(long, value_name = "FILE")]
+        mesh: Option<PathBuf>,
     },
     Inspect {
         /// An evemu recording, or a .bvh file
@@ -75,6 +79,10 @@ pub(super) enum Command {
         /// configuration's (a recording `demo --library DIR` authored).
         #[arg(long, value_name = "DIR")]
         library: Option<PathBuf>,
+        /// With --headless: an exhibit's own character (.glb, .gltf,
+        /// .vrm) to show instead of the configuration's.
+        #[arg(long, value_name = "FILE", requires = "headless")]
+        mesh: Option<PathBuf>,
     },
     /// Write the motion the character performs for a recording as BVH
     /// (the library's skeleton, at its frame rate).

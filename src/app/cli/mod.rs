@@ -143,6 +143,15 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
         }
         _ => config,
     };
+    // `--mesh` stands for the configuration's character mesh.
+    let meshed;
+    let config = match &command {
+        Command::Demo { mesh: Some(m), .. } | Command::Replay { mesh: Some(m), .. } => {
+            meshed = config.with_mesh(m);
+            &meshed
+        }
+        _ => config,
+    };
     match command {
         Command::Demo {
             out,

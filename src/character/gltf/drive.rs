@@ -3,14 +3,18 @@
 //! is laid along the library's rest bone (an A-pose figure under a T-pose
 //! library); unmapped joints (fingers, tails, helpers) keep their rest
 //! pose on their parents; the pelvis goes where the library's goes, its
-//! height and travel scaled by leg length; the figure's own legs and arms
-//! then reach where the library puts feet and hands (two-bone IK); a joint
-//! the rig hangs elsewhere (feet from the root) is hung on its limb.
+//! height over the ankles and its travel scaled by leg length; the
+//! figure's own legs then reach where the library puts the feet (two-bone
+//! IK; a one-bone leg pointed along the library's), its arms keep the
+//! library's turns and are bent to reach only where a hand must be lifted
+//! off the floor; a joint the rig hangs elsewhere (feet from the root) is
+//! hung on its limb; nothing it carries low (a cape, a tail, a shin) goes
+//! under the floor.
 
 use glam::{DMat4, DQuat, DVec3};
 
 use super::Figure;
-use super::limbs::{end_points, toward, two_bone};
+use super::limbs::{end_points, foot_points, low_points, toward, two_bone};
 use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics};
@@ -106,6 +110,9 @@ pub struct Drive {
     /// Each limb of [`LIMBS`]: one bone from its root to its end (its
     /// middle made up).
     one_bone: [bool; 4],
+    /// Mesh points the figure carries low at rest off its legs (a cape, a
+    /// skirt, a tail), each with its joint: none goes under the floor.
+    low: Vec<(usize, DVec3)>,
     fig_roles: RoleMap,
     lib_roles: RoleMap,
 }
@@ -259,7 +266,13 @@ impl Drive {
                 };
                 len(&fpos, &fig.roles) / len(&rest_lib.positions, lib_roles).max(1e-9)
             }),
-            ends: LIMBS.map(|(_, _, r)| end_points(fig, fig.roles.get(r))),
+            ends: LIMBS.map(|(_, m, r)| {
+                if matches!(r, Role::LeftFoot | Role::RightFoot) {
+                    foot_points(fig, fig.roles.get(r), fig.roles.get(m))
+                } else {
+                    end_points(fig, fig.roles.get(r))
+                }
+            }),
             hip_drop: {
                 let drop = |p: &[DVec3], r: &RoleMap| {
                     p[r.get(Role::Pelvis)].y
@@ -293,6 +306,7 @@ impl Drive {
             planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
             one_bone: LIMBS
                 .map(|(_, b, _)| fig.made_up.get(fig.roles.get(b)).copied().unwrap_or(false)),
+            low: low_points(fig),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
             rest: fig
@@ -342,8 +356,15 @@ impl Drive {
         }
         // The pelvis where the library's is, scaled by leg length.
         let pelvis = self.fig_roles.get(Role::Pelvis);
-        let want =
-            lib.positions[self.lib_roles.get(Role::Pelvis)] * self.scale + DVec3::Y * self.hip_drop;
+        // Its height over the ankles scaled, not over the floor: a figure
+        // whose ankles stand higher for its legs (big feet) stands as
+        // straight as the library's.
+        let lp = lib.positions[self.lib_roles.get(Role::Pelvis)];
+        let want = DVec3::new(
+            lp.x * self.scale,
+            self.ankles.1 + (lp.y - self.ankles.0) * self.scale,
+            lp.z * self.scale,
+        ) + DVec3::Y * self.hip_drop;
         let shift = want - w[pelvis].w_axis.truncate();
         for m in &mut w {
             m.w_axis += shift.extend(0.0);
@@ -421,6 +442,11 @@ impl Drive {
         // than the legs, scaled): the whole figure rises by what is left.
         let low = (0..LIMBS.len())
             .flat_map(|k| self.end_now(&posed, k))
+            .chain(
+                self.low
+                    .iter()
+                    .map(|&(c, p)| (posed[c] * self.rest_inv[c]).transform_point3(p)),
+            )
             .map(|p| p.y)
             .fold(0.0f64, f64::min);
         if low < -1e-4 {
@@ -487,6 +513,12 @@ impl Drive {
                     + DVec3::Y * lift[k]
             };
             let (pa, pb, pc) = (root, w[fb].w_axis.truncate(), w[fc].w_axis.truncate());
+            // An arm keeps the library's turns (its upper arm and forearm
+            // point as the library's, whatever their proportions) unless
+            // its hand must be lifted off the floor.
+            if k >= 2 && lift[k] <= 0.0 {
+                continue;
+            }
             if self.one_bone[k] {
                 // One bone from shoulder to hand or hip to foot: pointed
                 // where the library's limb points.

@@ -81,8 +81,59 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
                 .then(|| (j, DVec3::new(v[0].into(), v[1].into(), v[2].into())))
         })
         .collect();
-    let step = all.len().div_ceil(256).max(1);
-    all.into_iter().step_by(step).collect()
+    spread(all, fig.rest[end].w_axis.truncate())
+}
+
+/// At most 256 of `all` spread over them, the 64 furthest from `from`
+/// (the tip of a sword in a hand, a toe cap) and the furthest out in each
+/// of 26 directions (what goes lowest however the part turns), whatever
+/// the spread left out.
+fn spread(mut all: Vec<(usize, DVec3)>, from: DVec3) -> Vec<(usize, DVec3)> {
+    if all.len() <= 346 {
+        return all;
+    }
+    let mut out: Vec<(usize, DVec3)> = Vec::with_capacity(346);
+    for x in -1..=1 {
+        for y in -1..=1 {
+            for z in -1..=1 {
+                let d = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
+                if d == DVec3::ZERO {
+                    continue;
+                }
+                if let Some(p) = all.iter().max_by(|a, b| a.1.dot(d).total_cmp(&b.1.dot(d))) {
+                    out.push(*p);
+                }
+            }
+        }
+    }
+    all.sort_by(|a, b| (b.1 - from).length().total_cmp(&(a.1 - from).length()));
+    let rest = all.split_off(64);
+    let step = rest.len().div_ceil(256).max(1);
+    out.extend(all);
+    out.extend(rest.into_iter().step_by(step));
+    out
+}
+
+/// A foot's points and the points of the leg above it that stand as low
+/// as the ankle at rest (a shin's mesh that reaches past the ankle, a
+/// trouser cuff).
+pub(super) fn foot_points(fig: &Figure, foot: usize, shin: usize) -> Vec<(usize, DVec3)> {
+    let mut points = end_points(fig, foot);
+    let ankle = fig.rest[foot].w_axis.truncate();
+    if shin != foot && !fig.made_up.get(shin).copied().unwrap_or(false) {
+        let low: Vec<(usize, DVec3)> = fig
+            .parts
+            .iter()
+            .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
+            .filter_map(|((v, j), w)| {
+                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+                let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
+                (usize::from(j[k]) == shin && v.y < 0.5 * ankle.y).then_some((shin, v))
+            })
+            .collect();
+        points.extend(spread(low, ankle));
+    }
+    points
 }
 
 /// A made-up end's mesh points: those its nearest real joint carries
@@ -113,4 +164,35 @@ fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
         .collect();
     let step = all.len().div_ceil(256).max(1);
     all.into_iter().step_by(step).collect()
+}
+
+/// The mesh points below a quarter of the figure's height at rest that
+/// its legs do not carry (a cape, a skirt, a tail, a weapon on the back),
+/// at most 256 spread over them, each with its joint.
+pub(super) fn low_points(fig: &Figure) -> Vec<(usize, DVec3)> {
+    let n = fig.skeleton.len();
+    let mut leg = vec![false; n];
+    for r in [Role::LeftHip, Role::RightHip, Role::LeftFoot, Role::RightFoot] {
+        leg[fig.roles.get(r)] = true;
+    }
+    for j in 0..n {
+        if let Some(p) = fig.skeleton.joints[j].parent {
+            if leg[p] {
+                leg[j] = true;
+            }
+        }
+    }
+    let floor = 0.25 * fig.height_m;
+    let all: Vec<(usize, DVec3)> = fig
+        .parts
+        .iter()
+        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
+        .filter_map(|((v, j), w)| {
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            let j = usize::from(j[k]);
+            let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
+            (v.y < floor && !leg.get(j).copied().unwrap_or(true)).then_some((j, v))
+        })
+        .collect();
+    spread(all, DVec3::new(0.0, floor, 0.0))
 }

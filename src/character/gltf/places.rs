@@ -233,6 +233,13 @@ fn made_up_end(
         .fold(0.0f64, f64::max);
     let reach = if reach > 1e-3 * h { reach } else { 0.1 * h };
     let end = at(last) + dir * reach;
+    tracing::debug!(
+        joint = %body.skeleton.joints[last].name,
+        points = carried.len(),
+        ?dir,
+        reach,
+        "a made-up end along the last bone's mesh"
+    );
     ((at(upper) + end) / 2.0, end)
 }
 

@@ -59,8 +59,10 @@ pub struct CharacterEval {
     pub mean_pct: f64,
     pub max_pct: f64,
     pub worst: String,
-    /// Deepest skinned vertex under the floor (mm).
+    /// Deepest skinned vertex under the floor (mm), and the joint that
+    /// carries it most.
     pub penetration_mm: f64,
+    pub penetration_at: String,
     /// Mean slide of a planted foot per frame (mm): the figure's, and the
     /// library's own skeleton's measured the same way.
     pub skate_mm: f64,
@@ -73,6 +75,8 @@ pub struct CharacterEval {
     /// limb), over every frame judged: mean and 95th percentile (deg).
     pub dir_mean_deg: f64,
     pub dir_p95_deg: f64,
+    /// The segment furthest from the library's on the mean.
+    pub dir_worst: String,
     /// Over frames where the library plants a foot, the 95th percentile
     /// of that foot's lowest mesh point above the floor (mm): a figure
     /// that floats or stands on tiptoe shows here.
@@ -134,21 +138,25 @@ fn proportions(
     lib_roles: &crate::character::roles::RoleMap,
 ) -> (bool, std::collections::BTreeMap<String, f64>) {
     let lib_rest = forward_kinematics(&lib.skeleton, &lib.skeleton.rest_pose());
-    let lib_h = lib
-        .clips
-        .values()
-        .next()
-        .map_or(1.7, |c| c.height_m)
-        .max(1e-6);
+    let lib_h = 1.0;
     let fig_at = |r: Role| fig.rest[fig.roles.get(r)].w_axis.truncate();
     let lib_at = |r: Role| lib_rest.positions[lib_roles.get(r)];
-    let mut out = std::collections::BTreeMap::new();
+    let mut ratios = Vec::new();
     for (a, b) in segments(fig).into_iter().skip(2) {
         let f = (fig_at(b) - fig_at(a)).length() / fig.height_m.max(1e-6);
         let l = (lib_at(b) - lib_at(a)).length() / lib_h;
-        let r = (f / l.max(1e-9) * 1e3).round() / 1e3;
-        out.insert(format!("{}-{}", a.name(), b.name()), r);
+        ratios.push((format!("{}-{}", a.name(), b.name()), f / l.max(1e-9)));
     }
+    // Each over their geometric mean: the figure made as large as the
+    // library's character overall (a mesh's height counts a helmet or
+    // hair that the library's stature does not).
+    let mean = (ratios.iter().map(|(_, r)| r.max(1e-9).ln()).sum::<f64>()
+        / ratios.len().max(1) as f64)
+        .exp();
+    let out: std::collections::BTreeMap<String, f64> = ratios
+        .into_iter()
+        .map(|(k, r)| (k, (r / mean * 1e3).round() / 1e3))
+        .collect();
     let human = out.values().all(|r| (0.75..=1.25).contains(r));
     (human, out)
 }
@@ -177,6 +185,7 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     let mut out = CharacterEval::default();
     let segs = segments(fig);
     let mut angles: Vec<f64> = Vec::new();
+    let mut by_seg = vec![(0.0f64, 0usize); segs.len()];
     let mut floats: Vec<f64> = Vec::new();
     (out.human_proportions, out.proportions) = proportions(fig, lib, &lib_roles);
     let (mut sum, mut n) = (0.0, 0usize);
@@ -211,19 +220,31 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
                 last = None;
                 continue;
             }
-            let lowest = skinned
+            let (lowest, at) = skinned
                 .iter()
-                .flatten()
-                .map(|v| v.y)
-                .fold(f64::INFINITY, f64::min);
-            out.penetration_mm = out.penetration_mm.max(-lowest * 1e3);
+                .enumerate()
+                .flat_map(|(k, p)| p.iter().enumerate().map(move |(i, v)| (v.y, (k, i))))
+                .fold((f64::INFINITY, (0, 0)), |a, b| if b.0 < a.0 { b } else { a });
+            if -lowest * 1e3 > out.penetration_mm {
+                out.penetration_mm = -lowest * 1e3;
+                let part = &fig.parts[at.0];
+                let (j, w) = (part.joints[at.1], part.weights[at.1]);
+                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+                out.penetration_at = format!(
+                    "{} in {name}",
+                    fig.skeleton.joints[usize::from(j[k])].name
+                );
+            }
             let floor_at = |p: DVec3| DVec3::new(p.x, 0.0, p.z);
-            for &(a, b) in &segs {
+            for (si, &(a, b)) in segs.iter().enumerate() {
                 let f =
                     w[fig.roles.get(b)].w_axis.truncate() - w[fig.roles.get(a)].w_axis.truncate();
                 let l = lw.positions[lib_roles.get(b)] - lw.positions[lib_roles.get(a)];
                 if f.length() > 1e-9 && l.length() > 1e-9 {
-                    angles.push(f.angle_between(l).to_degrees());
+                    let deg = f.angle_between(l).to_degrees();
+                    angles.push(deg);
+                    by_seg[si].0 += deg;
+                    by_seg[si].1 += 1;
                 }
             }
             for (k, r) in feet.iter().enumerate() {
@@ -291,5 +312,13 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     out.dir_mean_deg = r3(angles.iter().sum::<f64>() / angles.len().max(1) as f64);
     out.dir_p95_deg = r3(p95(&mut angles));
     out.float_mm = r3(p95(&mut floats));
+    if let Some((k, (sum, n))) = by_seg
+        .iter()
+        .enumerate()
+        .max_by(|a, b| (a.1.0 / a.1.1.max(1) as f64).total_cmp(&(b.1.0 / b.1.1.max(1) as f64)))
+    {
+        let (a, b) = segs[k];
+        out.dir_worst = format!("{}-{}: {:.1} deg", a.name(), b.name(), sum / (*n).max(1) as f64);
+    }
     out
 }
