@@ -172,7 +172,12 @@ fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
 pub(super) fn low_points(fig: &Figure) -> Vec<(usize, DVec3)> {
     let n = fig.skeleton.len();
     let mut leg = vec![false; n];
-    for r in [Role::LeftHip, Role::RightHip, Role::LeftFoot, Role::RightFoot] {
+    for r in [
+        Role::LeftHip,
+        Role::RightHip,
+        Role::LeftFoot,
+        Role::RightFoot,
+    ] {
         leg[fig.roles.get(r)] = true;
     }
     for j in 0..n {

@@ -224,16 +224,17 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
                 .iter()
                 .enumerate()
                 .flat_map(|(k, p)| p.iter().enumerate().map(move |(i, v)| (v.y, (k, i))))
-                .fold((f64::INFINITY, (0, 0)), |a, b| if b.0 < a.0 { b } else { a });
+                .fold(
+                    (f64::INFINITY, (0, 0)),
+                    |a, b| if b.0 < a.0 { b } else { a },
+                );
             if -lowest * 1e3 > out.penetration_mm {
                 out.penetration_mm = -lowest * 1e3;
                 let part = &fig.parts[at.0];
                 let (j, w) = (part.joints[at.1], part.weights[at.1]);
                 let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                out.penetration_at = format!(
-                    "{} in {name}",
-                    fig.skeleton.joints[usize::from(j[k])].name
-                );
+                out.penetration_at =
+                    format!("{} in {name}", fig.skeleton.joints[usize::from(j[k])].name);
             }
             let floor_at = |p: DVec3| DVec3::new(p.x, 0.0, p.z);
             for (si, &(a, b)) in segs.iter().enumerate() {
@@ -318,7 +319,12 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
         .max_by(|a, b| (a.1.0 / a.1.1.max(1) as f64).total_cmp(&(b.1.0 / b.1.1.max(1) as f64)))
     {
         let (a, b) = segs[k];
-        out.dir_worst = format!("{}-{}: {:.1} deg", a.name(), b.name(), sum / (*n).max(1) as f64);
+        out.dir_worst = format!(
+            "{}-{}: {:.1} deg",
+            a.name(),
+            b.name(),
+            sum / (*n).max(1) as f64
+        );
     }
     out
 }
