@@ -63,21 +63,11 @@ pub(super) fn sniff(file: &Path) -> Content {
 }
 
 pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
-    match sniff(file) {
+    let content = sniff(file);
+    match content {
         Content::Bvh => return inspect_bvh(file),
         Content::Gltf => return super::motion::inspect_gltf(file),
-        Content::Recording => {}
-        Content::Unknown => {
-            if file.is_file() {
-                return Err(Failure::new(
-                    exit::DATAERR,
-                    format!(
-                        "{}: neither an evemu recording, a BVH file nor a glTF character (.glb, .gltf, .vrm) by its content",
-                        file.display()
-                    ),
-                ));
-            }
-        }
+        Content::Recording | Content::Unknown => {}
     }
     // A motion library, where a recording or a BVH file was meant.
     let library = if file.is_dir() {
@@ -93,6 +83,15 @@ pub(super) fn inspect(config: &Config, file: &Path) -> Result<(), Failure> {
                 "{} is a motion library, not a recording or a BVH file: `marionette library check {}` shows what its drags start",
                 file.display(),
                 dir.display()
+            ),
+        ));
+    }
+    if content == Content::Unknown && file.is_file() {
+        return Err(Failure::new(
+            exit::DATAERR,
+            format!(
+                "{}: neither an evemu recording, a BVH file nor a glTF character (.glb, .gltf, .vrm) by its content",
+                file.display()
             ),
         ));
     }

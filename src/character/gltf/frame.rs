@@ -128,13 +128,10 @@ fn toes_ahead(
             // The middle of the mesh the foot (and what hangs from it)
             // carries most, from the ankle.
             let (mut s, mut n) = (DVec3::ZERO, 0.0);
-            for p in parts {
-                for (v, (j, w)) in p.positions.iter().zip(p.joints.iter().zip(&p.weights)) {
-                    let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                    if under(usize::from(j[k])) {
-                        s += DVec3::new(v[0].into(), v[1].into(), v[2].into());
-                        n += 1.0;
-                    }
+            for (j, v) in super::carried(parts) {
+                if under(j) {
+                    s += v;
+                    n += 1.0;
                 }
             }
             if n == 0.0 {

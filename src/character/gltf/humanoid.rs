@@ -802,4 +802,91 @@ mod tests {
             assert_eq!(classify(name), (side, seg), "{name}");
         }
     }
+
+    /// A made-up rig: (name, parent) in order, each joint a step below
+    /// and beside its parent.
+    fn roles_of(joints: &[(&str, Option<usize>)]) -> BTreeMap<Role, String> {
+        let names: Vec<String> = joints.iter().map(|j| j.0.to_owned()).collect();
+        let parents: Vec<Option<usize>> = joints.iter().map(|j| j.1).collect();
+        let places: Vec<DVec3> = (0..joints.len()).map(|k| DVec3::splat(k as f64)).collect();
+        let rig = Rig::new(&names, &parents, &places);
+        let mut found = Found::new();
+        limbs_by_names(&rig, &mut found);
+        trunk(&rig, &mut found);
+        found
+            .into_iter()
+            .map(|(r, (j, _))| (r, names[j].clone()))
+            .collect()
+    }
+
+    #[test]
+    fn segments_of_one_bone_helpers_and_feet_hung_from_the_root_are_seen_through() {
+        let rig = [
+            ("root", None),               // 0
+            ("DEF-hips", Some(0)),        // 1
+            ("DEF-spine.001", Some(1)),   // 2
+            ("DEF-spine.003", Some(2)),   // 3
+            ("DEF-neck", Some(3)),        // 4
+            ("DEF-head", Some(4)),        // 5
+            ("DEF-upper_arm.L", Some(3)), // 6
+            ("DEF-upper_arm.L.001", Some(6)),
+            ("DEF-forearm.L", Some(7)), // 8
+            ("DEF-forearm.L.001", Some(8)),
+            ("DEF-hand.L", Some(9)),      // 10
+            ("DEF-upper_arm.R", Some(3)), // 11
+            ("DEF-forearm.R", Some(11)),  // 12
+            ("DEF-hand.R", Some(12)),     // 13
+            ("DEF-thigh.L", Some(1)),     // 14
+            ("DEF-shin.L", Some(14)),     // 15
+            ("thigh_twist_01_l", Some(15)),
+            ("DEF-thigh.R", Some(1)), // 17
+            ("DEF-shin.R", Some(17)), // 18
+            ("DEF-foot.L", Some(0)),  // 19: hung from the root
+            ("IK-foot.R", Some(0)),   // 20
+            ("DEF-foot.R", Some(18)), // 21
+        ];
+        let r = roles_of(&rig);
+        assert_eq!(r[&Role::LeftShoulder], "DEF-upper_arm.L");
+        assert_eq!(r[&Role::LeftElbow], "DEF-forearm.L");
+        assert_eq!(r[&Role::LeftHand], "DEF-hand.L");
+        assert_eq!(r[&Role::LeftKnee], "DEF-shin.L");
+        assert_eq!(r[&Role::LeftHip], "DEF-thigh.L");
+        assert_eq!(r[&Role::LeftFoot], "DEF-foot.L");
+        assert_eq!(r[&Role::RightFoot], "DEF-foot.R");
+        assert_eq!(r[&Role::Pelvis], "DEF-hips");
+        assert_eq!(r[&Role::Chest], "DEF-spine.003");
+        assert_eq!(
+            (r[&Role::Neck].as_str(), r[&Role::Head].as_str()),
+            ("DEF-neck", "DEF-head")
+        );
+    }
+
+    #[test]
+    fn a_rig_without_neck_hands_or_head_names_is_read_from_its_hierarchy() {
+        let rig = [
+            ("hip", None),          // 0
+            ("waist", Some(0)),     // 1
+            ("chest", Some(1)),     // 2
+            ("skull", Some(2)),     // 3: the head, by the hierarchy
+            ("l-arm", Some(2)),     // 4
+            ("l-forearm", Some(4)), // 5: no hand
+            ("r-arm", Some(2)),
+            ("r-forearm", Some(6)),
+            ("l-thigh", Some(0)), // 8
+            ("l-leg", Some(8)),   // 9: the shin under a thigh
+            ("l-foot", Some(9)),
+            ("r-thigh", Some(0)),
+            ("r-leg", Some(11)),
+            ("r-foot", Some(12)),
+            ("HEAD", None), // an IK target named for the head
+        ];
+        let r = roles_of(&rig);
+        assert_eq!(r[&Role::LeftKnee], "l-leg");
+        assert_eq!(r[&Role::LeftHip], "l-thigh");
+        assert_eq!(r[&Role::LeftElbow], "l-forearm");
+        assert!(!r.contains_key(&Role::LeftHand), "{r:?}");
+        assert_eq!(r[&Role::Pelvis], "hip");
+        assert_eq!(r[&Role::Head], "skull");
+        assert_eq!(r[&Role::Neck], "skull");
+    }
 }

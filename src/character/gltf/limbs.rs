@@ -4,7 +4,7 @@
 
 use glam::{DQuat, DVec3};
 
-use super::Figure;
+use super::{Figure, carried};
 use crate::character::roles::Role;
 use crate::character::skeleton::two_bone_turns;
 
@@ -68,38 +68,28 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
             }
         }
     }
-    let all: Vec<(usize, DVec3)> = fig
-        .parts
-        .iter()
-        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
-        .filter_map(|((v, j), w)| {
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            let j = usize::from(j[k]);
-            ours.get(j)
-                .copied()
-                .unwrap_or(false)
-                .then(|| (j, DVec3::new(v[0].into(), v[1].into(), v[2].into())))
-        })
+    let all: Vec<(usize, DVec3)> = carried(&fig.parts)
+        .filter(|(j, _)| ours.get(*j).copied().unwrap_or(false))
         .collect();
     spread(all, fig.rest[end].w_axis.truncate())
 }
 
 /// At most 256 of `all` spread over them, the 64 furthest from `from`
 /// (the tip of a sword in a hand, a toe cap) and the furthest out in each
-/// of 26 directions (what goes lowest however the part turns), whatever
+/// of 98 directions (what goes lowest however the part turns), whatever
 /// the spread left out.
 fn spread(mut all: Vec<(usize, DVec3)>, from: DVec3) -> Vec<(usize, DVec3)> {
-    if all.len() <= 346 {
+    if all.len() <= 418 {
         return all;
     }
-    let mut out: Vec<(usize, DVec3)> = Vec::with_capacity(346);
-    for x in -1..=1 {
-        for y in -1..=1 {
-            for z in -1..=1 {
-                let d = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
-                if d == DVec3::ZERO {
+    let mut out: Vec<(usize, DVec3)> = Vec::with_capacity(418);
+    for x in -2..=2i32 {
+        for y in -2..=2i32 {
+            for z in -2..=2i32 {
+                if x.abs().max(y.abs()).max(z.abs()) < 2 {
                     continue;
                 }
+                let d = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
                 if let Some(p) = all.iter().max_by(|a, b| a.1.dot(d).total_cmp(&b.1.dot(d))) {
                     out.push(*p);
                 }
@@ -121,15 +111,8 @@ pub(super) fn foot_points(fig: &Figure, foot: usize, shin: usize) -> Vec<(usize,
     let mut points = end_points(fig, foot);
     let ankle = fig.rest[foot].w_axis.truncate();
     if shin != foot && !fig.made_up.get(shin).copied().unwrap_or(false) {
-        let low: Vec<(usize, DVec3)> = fig
-            .parts
-            .iter()
-            .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
-            .filter_map(|((v, j), w)| {
-                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
-                (usize::from(j[k]) == shin && v.y < 0.5 * ankle.y).then_some((shin, v))
-            })
+        let low: Vec<(usize, DVec3)> = carried(&fig.parts)
+            .filter(|(j, v)| *j == shin && v.y < 0.5 * ankle.y)
             .collect();
         points.extend(spread(low, ankle));
     }
@@ -152,15 +135,8 @@ fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
     );
     let along = to - from;
     let len2 = along.length_squared().max(1e-12);
-    let all: Vec<(usize, DVec3)> = fig
-        .parts
-        .iter()
-        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
-        .filter_map(|((v, j), w)| {
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
-            (usize::from(j[k]) == real && (v - from).dot(along) / len2 > 0.5).then_some((real, v))
-        })
+    let all: Vec<(usize, DVec3)> = carried(&fig.parts)
+        .filter(|(j, v)| *j == real && (*v - from).dot(along) / len2 > 0.5)
         .collect();
     let step = all.len().div_ceil(256).max(1);
     all.into_iter().step_by(step).collect()
@@ -188,16 +164,8 @@ pub(super) fn low_points(fig: &Figure) -> Vec<(usize, DVec3)> {
         }
     }
     let floor = 0.25 * fig.height_m;
-    let all: Vec<(usize, DVec3)> = fig
-        .parts
-        .iter()
-        .flat_map(|p| p.positions.iter().zip(&p.joints).zip(&p.weights))
-        .filter_map(|((v, j), w)| {
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            let j = usize::from(j[k]);
-            let v = DVec3::new(v[0].into(), v[1].into(), v[2].into());
-            (v.y < floor && !leg.get(j).copied().unwrap_or(true)).then_some((j, v))
-        })
+    let all: Vec<(usize, DVec3)> = carried(&fig.parts)
+        .filter(|(j, v)| v.y < floor && !leg.get(*j).copied().unwrap_or(true))
         .collect();
     spread(all, DVec3::new(0.0, floor, 0.0))
 }

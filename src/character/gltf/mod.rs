@@ -143,6 +143,21 @@ pub struct Part {
     pub role: Option<super::roles::Role>,
 }
 
+/// Every vertex of `parts` (rest pose) with the joint that carries it
+/// most.
+pub(crate) fn carried(parts: &[Part]) -> impl Iterator<Item = (usize, glam::DVec3)> + '_ {
+    parts
+        .iter()
+        .flat_map(|p| p.positions.iter().zip(p.joints.iter().zip(&p.weights)))
+        .map(|(v, (j, w))| {
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            (
+                usize::from(j[k]),
+                glam::DVec3::new(v[0].into(), v[1].into(), v[2].into()),
+            )
+        })
+}
+
 /// A skinned figure ready to be driven.
 #[derive(Clone, Debug)]
 pub struct Figure {

@@ -62,11 +62,11 @@ pub(super) fn settle(
         let rig = Rig::new(&names, &parents, &p);
         humanoid::trunk(&rig, &mut found);
     }
-    if !found.contains_key(&Role::Head) {
-        if let Some(&j) = by_place.get(&Role::Head) {
-            found.insert(Role::Head, (j, Evidence::Place));
-            found.entry(Role::Neck).or_insert((j, Evidence::Place));
-        }
+    if let (std::collections::btree_map::Entry::Vacant(head), Some(&j)) =
+        (found.entry(Role::Head), by_place.get(&Role::Head))
+    {
+        head.insert((j, Evidence::Place));
+        found.entry(Role::Neck).or_insert((j, Evidence::Place));
     }
     let missing = |found: &Found| -> Vec<Role> {
         [
@@ -256,16 +256,9 @@ fn carried_points(skeleton: &Skeleton, parts: &[Part], joint: usize) -> Vec<DVec
             }
         }
     }
-    parts
-        .iter()
-        .flat_map(|p| p.positions.iter().zip(p.joints.iter().zip(&p.weights)))
-        .filter_map(|(v, (j, w))| {
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            ours.get(usize::from(j[k]))
-                .copied()
-                .unwrap_or(false)
-                .then(|| DVec3::new(v[0].into(), v[1].into(), v[2].into()))
-        })
+    super::carried(parts)
+        .filter(|(j, _)| ours.get(*j).copied().unwrap_or(false))
+        .map(|(_, v)| v)
         .collect()
 }
 

@@ -284,7 +284,7 @@ fn bind_pose(
         .iter()
         .filter_map(|&n| bind[n].map(|b| (b.w_axis - world[n].w_axis).truncate().length()))
         .fold(0.0f64, f64::max);
-    if !(moved > 0.005 * size) || bind.iter().flatten().any(|m| !m.is_finite()) {
+    if moved.is_nan() || moved <= 0.005 * size || bind.iter().flatten().any(|m| !m.is_finite()) {
         return Ok(None);
     }
     // Every node in the bind pose: a joint as its skin binds it, a node a
