@@ -259,6 +259,26 @@ fn bench(c: &mut Criterion) {
                 b.iter(|| scene::compose_bodies(&v, &one, &marks))
             });
         }
+        // Every shared character (a file added there is timed too).
+        let shared = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/characters");
+        let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(&shared)
+            .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+            .unwrap_or_default();
+        files.sort();
+        for file in files {
+            let Ok(fig) = marionette::character::gltf::load(&file, &Default::default()) else {
+                continue;
+            };
+            let each = marionette::character::gltf::Skin::life_size(fig, &lib, &clip.roles);
+            let body = [figured(clip, &world, &held, None, Some(&each))];
+            let name = file
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            g.bench_function(format!("{w}x{h} compose shared {name}"), |b| {
+                b.iter(|| scene::compose_bodies(&v, &body, &marks))
+            });
+        }
         // Bare, one, two in turn (same renderer settings as above), unless
         // a filter given to the bench leaves them out.
         let filter = std::env::args().skip(1).find(|a| !a.starts_with('-'));
