@@ -564,9 +564,11 @@ fn summary(evidence: &BTreeMap<Role, humanoid::Evidence>) -> &'static str {
     }
 }
 
-/// The turn that stands the figure up: the axis along which the skeleton
-/// is longest is the body's; its feet are at the end where the joints
-/// spread widest across it (two feet apart, against one head).
+/// The turn that stands the figure up where its names do not say up: the
+/// file's Y unless the skeleton is less than half as long along it as
+/// along its longest axis (then that axis is the body's); its feet are at
+/// the end where the joints spread widest across it (two feet apart,
+/// against one head).
 fn upright(joints: &[DVec3]) -> (DQuat, String) {
     let pts = joints;
     let axes = [DVec3::X, DVec3::Y, DVec3::Z];
@@ -578,13 +580,21 @@ fn upright(joints: &[DVec3]) -> (DQuat, String) {
             });
         (hi - lo, lo, hi)
     };
-    let (k, _) = axes
+    let (k, longest) = axes
         .iter()
         .enumerate()
         .map(|(k, a)| (k, extent(*a).0))
         .fold((1, f64::NEG_INFINITY), |best, (k, e)| {
             if e > best.1 + 1e-9 { (k, e) } else { best }
         });
+    // glTF's up (+Y) unless the figure clearly lies along another axis: a
+    // T-pose's arm span, fingers and all, can outreach its height, never
+    // twice it.
+    let k = if extent(DVec3::Y).0 >= 0.5 * longest {
+        1
+    } else {
+        k
+    };
     let axis = axes[k];
     let (len, lo, hi) = extent(axis);
     // The spread across the axis of the points within 8% of each end.
