@@ -437,16 +437,16 @@ fn shared_characters() -> Vec<PathBuf> {
 /// max shares of its height, mm into the floor, segment directions' mean
 /// and 95th percentile (deg), a planted foot's float (mm).
 const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
-    ("CesiumMan.glb", 1.302, 5.848, 0.384, 1.055, 3.26, 0.0),
-    ("RiggedFigure.glb", 1.19, 5.985, 0.306, 0.747, 3.107, 0.0),
+    ("CesiumMan.glb", 1.302, 5.848, 0.1, 1.056, 3.268, 0.0),
+    ("RiggedFigure.glb", 1.19, 5.985, 0.1, 0.748, 3.107, 0.0),
     (
         "RobotExpressive.glb",
         5.762,
         27.282,
-        0.539,
-        5.48,
+        0.099,
+        5.479,
         18.954,
-        17.429,
+        17.425,
     ),
     (
         "gdquest_mannequiny.glb",
@@ -468,12 +468,12 @@ const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
     ),
     (
         "kaykit_knight.glb",
-        1.521,
+        1.52,
         32.079,
         7.766,
-        6.393,
-        29.035,
-        1.983,
+        6.39,
+        29.036,
+        1.553,
     ),
     (
         "kenney_mini_female_a.glb",
@@ -495,12 +495,12 @@ const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
     ),
     (
         "quaternius_modular_men_suit.glb",
-        2.702,
+        2.701,
         12.083,
-        1.637,
-        0.746,
-        3.262,
-        0.0,
+        0.1,
+        0.743,
+        3.229,
+        0.555,
     ),
     (
         "quaternius_ual1_rigify_def.glb",

@@ -106,13 +106,13 @@ pub struct Drive {
     limb_scale: [f64; 4],
     /// Each limb end's mesh points (rest pose; feet, then hands, as
     /// [`LIMBS`]) with the joint carrying each (see `limbs::end_points`).
-    ends: [Vec<(usize, DVec3)>; 4],
+    ends: [Vec<super::Point>; 4],
     /// Each limb of [`LIMBS`]: one bone from its root to its end (its
     /// middle made up).
     one_bone: [bool; 4],
     /// Mesh points the figure carries low at rest off its legs (a cape, a
     /// skirt, a tail), each with its joint: none goes under the floor.
-    low: Vec<(usize, DVec3)>,
+    low: Vec<super::Point>,
     fig_roles: RoleMap,
     lib_roles: RoleMap,
 }
@@ -442,11 +442,13 @@ impl Drive {
         // than the legs, scaled): the whole figure rises by what is left.
         let low = (0..LIMBS.len())
             .flat_map(|k| self.end_now(&posed, k))
-            .chain(
+            .chain({
+                let skin = self.skinning(&posed);
                 self.low
                     .iter()
-                    .map(|&(c, p)| (posed[c] * self.rest_inv[c]).transform_point3(p)),
-            )
+                    .map(move |p| p.now(&skin))
+                    .collect::<Vec<_>>()
+            })
             .map(|p| p.y)
             .fold(0.0f64, f64::min);
         if low < -1e-4 {
@@ -469,10 +471,8 @@ impl Drive {
 
     /// Where limb `k`'s end's mesh points are in the posture `posed`.
     fn end_now(&self, posed: &[DMat4], k: usize) -> Vec<DVec3> {
-        self.ends[k]
-            .iter()
-            .map(|&(c, p)| (posed[c] * self.rest_inv[c]).transform_point3(p))
-            .collect()
+        let skin = self.skinning(posed);
+        self.ends[k].iter().map(|p| p.now(&skin)).collect()
     }
 
     /// The joint turns that put each limb's end where the library has it

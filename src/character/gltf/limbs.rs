@@ -4,7 +4,7 @@
 
 use glam::{DQuat, DVec3};
 
-use super::{Figure, carried};
+use super::{Figure, Point, carried_blended};
 use crate::character::roles::Role;
 use crate::character::skeleton::two_bone_turns;
 
@@ -45,7 +45,7 @@ pub(super) fn toward(a: DVec3, middle: DVec3, goal: DVec3, pole: DVec3) -> DQuat
 /// The mesh points (rest pose) that a limb's `end`, the unmapped joints
 /// beside it or the unmapped joints below them carry most, at most 256 of
 /// them spread over it, each with that joint.
-pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
+pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<Point> {
     if fig.made_up.get(end).copied().unwrap_or(false) {
         return made_up_end_points(fig, end);
     }
@@ -68,8 +68,8 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
             }
         }
     }
-    let all: Vec<(usize, DVec3)> = carried(&fig.parts)
-        .filter(|(j, _)| ours.get(*j).copied().unwrap_or(false))
+    let all: Vec<Point> = carried_blended(&fig.parts)
+        .filter(|p| ours.get(p.joint).copied().unwrap_or(false))
         .collect();
     spread(all, fig.rest[end].w_axis.truncate())
 }
@@ -78,11 +78,11 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
 /// (the tip of a sword in a hand, a toe cap) and the furthest out in each
 /// of 98 directions (what goes lowest however the part turns), whatever
 /// the spread left out.
-fn spread(mut all: Vec<(usize, DVec3)>, from: DVec3) -> Vec<(usize, DVec3)> {
+fn spread(mut all: Vec<Point>, from: DVec3) -> Vec<Point> {
     if all.len() <= 418 {
         return all;
     }
-    let mut out: Vec<(usize, DVec3)> = Vec::with_capacity(418);
+    let mut out: Vec<Point> = Vec::with_capacity(418);
     for x in -2..=2i32 {
         for y in -2..=2i32 {
             for z in -2..=2i32 {
@@ -90,13 +90,16 @@ fn spread(mut all: Vec<(usize, DVec3)>, from: DVec3) -> Vec<(usize, DVec3)> {
                     continue;
                 }
                 let d = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
-                if let Some(p) = all.iter().max_by(|a, b| a.1.dot(d).total_cmp(&b.1.dot(d))) {
+                if let Some(p) = all
+                    .iter()
+                    .max_by(|a, b| a.at.dot(d).total_cmp(&b.at.dot(d)))
+                {
                     out.push(*p);
                 }
             }
         }
     }
-    all.sort_by(|a, b| (b.1 - from).length().total_cmp(&(a.1 - from).length()));
+    all.sort_by(|a, b| (b.at - from).length().total_cmp(&(a.at - from).length()));
     let rest = all.split_off(64);
     let step = rest.len().div_ceil(256).max(1);
     out.extend(all);
@@ -107,12 +110,12 @@ fn spread(mut all: Vec<(usize, DVec3)>, from: DVec3) -> Vec<(usize, DVec3)> {
 /// A foot's points and the points of the leg above it that stand as low
 /// as the ankle at rest (a shin's mesh that reaches past the ankle, a
 /// trouser cuff).
-pub(super) fn foot_points(fig: &Figure, foot: usize, shin: usize) -> Vec<(usize, DVec3)> {
+pub(super) fn foot_points(fig: &Figure, foot: usize, shin: usize) -> Vec<Point> {
     let mut points = end_points(fig, foot);
     let ankle = fig.rest[foot].w_axis.truncate();
     if shin != foot && !fig.made_up.get(shin).copied().unwrap_or(false) {
-        let low: Vec<(usize, DVec3)> = carried(&fig.parts)
-            .filter(|(j, v)| *j == shin && v.y < 0.5 * ankle.y)
+        let low: Vec<Point> = carried_blended(&fig.parts)
+            .filter(|p| p.joint == shin && p.at.y < 0.5 * ankle.y)
             .collect();
         points.extend(spread(low, ankle));
     }
@@ -121,7 +124,7 @@ pub(super) fn foot_points(fig: &Figure, foot: usize, shin: usize) -> Vec<(usize,
 
 /// A made-up end's mesh points: those its nearest real joint carries
 /// that lie nearer the end than that joint's own half of the way.
-fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
+fn made_up_end_points(fig: &Figure, end: usize) -> Vec<Point> {
     let mut real = end;
     while fig.made_up.get(real).copied().unwrap_or(false) {
         match fig.skeleton.joints[real].parent {
@@ -135,8 +138,8 @@ fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
     );
     let along = to - from;
     let len2 = along.length_squared().max(1e-12);
-    let all: Vec<(usize, DVec3)> = carried(&fig.parts)
-        .filter(|(j, v)| *j == real && (*v - from).dot(along) / len2 > 0.5)
+    let all: Vec<Point> = carried_blended(&fig.parts)
+        .filter(|p| p.joint == real && (p.at - from).dot(along) / len2 > 0.5)
         .collect();
     let step = all.len().div_ceil(256).max(1);
     all.into_iter().step_by(step).collect()
@@ -145,7 +148,7 @@ fn made_up_end_points(fig: &Figure, end: usize) -> Vec<(usize, DVec3)> {
 /// The mesh points below a quarter of the figure's height at rest that
 /// its legs do not carry (a cape, a skirt, a tail, a weapon on the back),
 /// at most 256 spread over them, each with its joint.
-pub(super) fn low_points(fig: &Figure) -> Vec<(usize, DVec3)> {
+pub(super) fn low_points(fig: &Figure) -> Vec<Point> {
     let n = fig.skeleton.len();
     let mut leg = vec![false; n];
     for r in [
@@ -164,8 +167,8 @@ pub(super) fn low_points(fig: &Figure) -> Vec<(usize, DVec3)> {
         }
     }
     let floor = 0.25 * fig.height_m;
-    let all: Vec<(usize, DVec3)> = carried(&fig.parts)
-        .filter(|(j, v)| v.y < floor && !leg.get(*j).copied().unwrap_or(true))
+    let all: Vec<Point> = carried_blended(&fig.parts)
+        .filter(|p| p.at.y < floor && !leg.get(p.joint).copied().unwrap_or(true))
         .collect();
     spread(all, DVec3::new(0.0, floor, 0.0))
 }

@@ -146,15 +146,47 @@ pub struct Part {
 /// Every vertex of `parts` (rest pose) with the joint that carries it
 /// most.
 pub(crate) fn carried(parts: &[Part]) -> impl Iterator<Item = (usize, glam::DVec3)> + '_ {
+    carried_blended(parts).map(|p| (p.joint, p.at))
+}
+
+/// A mesh point as it is skinned: where it is at rest, the joint that
+/// carries it most, and its joints and weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Point {
+    pub joint: usize,
+    pub at: glam::DVec3,
+    pub joints: [u16; 4],
+    pub weights: [f32; 4],
+}
+
+impl Point {
+    /// Where it is for skinning matrices `skin` (rest to posed).
+    #[must_use]
+    pub fn now(&self, skin: &[DMat4]) -> glam::DVec3 {
+        (0..4)
+            .filter(|&k| self.weights[k] > 0.0)
+            .map(|k| {
+                skin.get(usize::from(self.joints[k]))
+                    .map_or(self.at, |m| m.transform_point3(self.at))
+                    * f64::from(self.weights[k])
+            })
+            .sum()
+    }
+}
+
+/// Every vertex of `parts` as a [`Point`].
+pub(crate) fn carried_blended(parts: &[Part]) -> impl Iterator<Item = Point> + '_ {
     parts
         .iter()
         .flat_map(|p| p.positions.iter().zip(p.joints.iter().zip(&p.weights)))
         .map(|(v, (j, w))| {
             let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            (
-                usize::from(j[k]),
-                glam::DVec3::new(v[0].into(), v[1].into(), v[2].into()),
-            )
+            Point {
+                joint: usize::from(j[k]),
+                at: glam::DVec3::new(v[0].into(), v[1].into(), v[2].into()),
+                joints: *j,
+                weights: *w,
+            }
         })
 }
 
