@@ -588,9 +588,9 @@ fn every_shared_character_plays_the_default_library() {
         assert_eq!(e.bad_frames, 0, "{file}");
         match MEASURED.iter().find(|m| m.0 == file) {
             Some(&(_, mean, max, pen, dir, p95, float)) => {
-                // Near what the README gives (a hundredth of a share, a
-                // tenth of a millimetre or degree, or 2 % over).
-                let near = |got: f64, want: f64, abs: f64| got <= want * 1.02 + abs;
+                // Near what the README gives, either way (a hundredth of
+                // a share, a tenth of a millimetre or degree, or 2 %).
+                let near = |got: f64, want: f64, abs: f64| (got - want).abs() <= want * 0.02 + abs;
                 assert!(near(e.mean_pct, mean, 0.01), "{file}: {e:?}");
                 assert!(near(e.max_pct, max, 0.01), "{file}: {e:?}");
                 assert!(near(e.penetration_mm, pen, 0.1), "{file}: {e:?}");
@@ -1099,8 +1099,18 @@ fn with_its_names_left_out_a_character_is_read_the_same_or_refused_saying_why() 
         }
     }
     eprintln!("read without names, the same: {loaded:?}");
-    // The README gives how many: the figures whose names were not needed
+    // The README gives which: the figures whose names were not needed
     // (7 of the 12: the modular man's short upper arm is taken for its
     // clavicle by where its joints stand).
-    assert!(loaded.len() >= 7, "{loaded:?}");
+    for file in [
+        "CesiumMan.glb",
+        "RiggedFigure.glb",
+        "RobotExpressive.glb",
+        "gdquest_mannequiny.glb",
+        "kenney_retro_characterMedium.glb",
+        "quaternius_ual1_rigify_def.glb",
+        "quaternius_ual2_mannequin_f.glb",
+    ] {
+        assert!(loaded.iter().any(|l| l == file), "{file}: {loaded:?}");
+    }
 }

@@ -391,9 +391,10 @@ impl Drive {
         // in a crouch) is lifted by as much.
         for pass in 0..3 {
             let mut under = false;
+            let skin = self.skinning(&posed);
             for (k, (_, _, f)) in LIMBS.into_iter().enumerate() {
                 let j = self.fig_roles.get(f);
-                let points = self.end_now(&posed, k);
+                let points = self.end_now(&skin, k);
                 let lowest =
                     |ps: &mut dyn Iterator<Item = DVec3>| ps.min_by(|a, b| a.y.total_cmp(&b.y));
                 let Some(low) = lowest(&mut points.iter().copied()) else {
@@ -440,15 +441,10 @@ impl Drive {
         }
         // A limb too short to reach where it is lifted to (a stride longer
         // than the legs, scaled): the whole figure rises by what is left.
+        let skin = self.skinning(&posed);
         let low = (0..LIMBS.len())
-            .flat_map(|k| self.end_now(&posed, k))
-            .chain({
-                let skin = self.skinning(&posed);
-                self.low
-                    .iter()
-                    .map(move |p| p.now(&skin))
-                    .collect::<Vec<_>>()
-            })
+            .flat_map(|k| self.end_now(&skin, k))
+            .chain(self.low.iter().map(|p| p.now(&skin)))
             .map(|p| p.y)
             .fold(0.0f64, f64::min);
         if low < -1e-4 {
@@ -463,16 +459,17 @@ impl Drive {
     /// the posture `posed` (joint transforms from [`Self::pose`]).
     #[must_use]
     pub fn foot_lowest(&self, posed: &[DMat4], k: usize) -> Option<f64> {
-        self.end_now(posed, k.min(1))
+        self.end_now(&self.skinning(posed), k.min(1))
             .into_iter()
             .map(|p| p.y)
             .min_by(f64::total_cmp)
     }
 
-    /// Where limb `k`'s end's mesh points are in the posture `posed`.
-    fn end_now(&self, posed: &[DMat4], k: usize) -> Vec<DVec3> {
-        let skin = self.skinning(posed);
-        self.ends[k].iter().map(|p| p.now(&skin)).collect()
+    /// Where limb `k`'s end's mesh points are for skinning matrices
+    /// `skin` (from [`Self::skinning`] of a posture, made once for all
+    /// four limbs).
+    fn end_now(&self, skin: &[DMat4], k: usize) -> Vec<DVec3> {
+        self.ends[k].iter().map(|p| p.now(skin)).collect()
     }
 
     /// The joint turns that put each limb's end where the library has it

@@ -50,15 +50,12 @@ pub(super) fn body_frame(
     let up = up.normalize();
     let flat = |v: DVec3| v - up * v.dot(up);
     let mut left = DVec3::ZERO;
-    for (l, r) in [
-        (Role::LeftShoulder, Role::RightShoulder),
-        (Role::LeftElbow, Role::RightElbow),
-        (Role::LeftHand, Role::RightHand),
-        (Role::LeftHip, Role::RightHip),
-        (Role::LeftKnee, Role::RightKnee),
-        (Role::LeftFoot, Role::RightFoot),
-    ] {
-        if let (Some(a), Some(b)) = (at(l), at(r)) {
+    // Each left role against its mirror image.
+    for l in Role::ALL
+        .into_iter()
+        .filter(|r| r.name().starts_with("left_"))
+    {
+        if let (Some(a), Some(b)) = (at(l), at(l.mirrored())) {
             left += flat(a - b);
         }
     }
