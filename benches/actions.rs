@@ -14,11 +14,11 @@ use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
+use marionette::character::body::{Anchor, Placement};
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::control::action::model::ActionModel;
 use marionette::control::action::trail::{StartRule, TrailPoint, match_trail};
-use marionette::control::posing::sample::{Anchor, Placement};
 
 fn actions(c: &mut Criterion) {
     let lib =

@@ -14,13 +14,13 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use marionette::character::body::Placement;
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
 use marionette::control::posing::constraint::{Constraint, SynthOptions, Target};
 use marionette::control::posing::model::{LearnedModel, posing_samples};
-use marionette::control::posing::sample::Placement;
 use marionette::control::posing::synth::{select, synthesize};
 
 fn posing(c: &mut Criterion) {

@@ -8,12 +8,12 @@
 )]
 
 use glam::{DQuat, DVec3};
+use marionette::character::body::{Anchor, Placement};
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::roles::Role;
 use marionette::control::action::model::{ActionModel, recognize};
 use marionette::control::action::trail::{StartRule, TrailPoint};
-use marionette::control::posing::sample::{Anchor, Placement};
 
 fn setup() -> (Library, Vec<ActionModel>) {
     let lib =

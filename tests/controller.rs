@@ -338,10 +338,10 @@ fn the_ragdoll_never_explodes() {
     use marionette::physics::ragdoll::{Ragdoll, RagdollSettings};
     let ch = common::character();
     let sk = &ch.lib.skeleton;
-    let rest = ch.rest_pose(&marionette::control::posing::sample::Placement {
+    let rest = ch.rest_pose(&marionette::character::body::Placement {
         position: glam::DVec3::ZERO,
         yaw: 0.0,
-        anchor: marionette::control::posing::sample::Anchor::ClipStart,
+        anchor: marionette::character::body::Anchor::ClipStart,
     });
     let w = forward_kinematics(sk, &rest);
     let mut ragdoll = Ragdoll::new(sk, &ch.roles, &w, &w, RagdollSettings::default());

@@ -10,8 +10,9 @@ mod common;
 
 use std::path::Path;
 
+use marionette::character::body::leg_length_mean;
 use marionette::character::library::{Library, Release};
-use marionette::character::motion::{Clip, ImportSettings, leg_length};
+use marionette::character::motion::{Clip, ImportSettings};
 use marionette::character::roles::Role;
 use marionette::character::skeleton::forward_kinematics;
 
@@ -269,8 +270,8 @@ fn another_performers_proportions_are_carried_onto_the_library_skeleton() {
         assert_ne!(before.skeleton, first.skeleton, "{name}: another build");
         let after = &lib.clips[name];
         assert_eq!(after.skeleton, lib.skeleton, "{name}");
-        let ratio =
-            leg_length(&lib.skeleton, &after.roles) / leg_length(&before.skeleton, &before.roles);
+        let ratio = leg_length_mean(&lib.skeleton, &after.roles)
+            / leg_length_mean(&before.skeleton, &before.roles);
         for (a, b) in after.frames.iter().zip(&before.frames) {
             // Every joint turns as the performer's did; the pelvis moves
             // by as much more as the legs are longer.

@@ -11,6 +11,7 @@
 mod common;
 
 use glam::DVec3;
+use marionette::character::body::{Anchor, Placement};
 use marionette::character::camera::Camera;
 use marionette::character::library::Library;
 use marionette::character::motion::Clip;
@@ -21,7 +22,6 @@ use marionette::control::posing::fit::refit_limbs;
 use marionette::control::posing::ik::two_bone;
 use marionette::control::posing::model::{LearnedModel, posing_samples};
 use marionette::control::posing::pick::pick;
-use marionette::control::posing::sample::{Anchor, Placement};
 use marionette::control::posing::synth::{blend, choose, select, synthesize};
 use marionette::tools::eval::posing as eval;
 use marionette::tools::eval::posing::{Method, Mode};

@@ -3,6 +3,7 @@
 //! camera that shows it. Pure: no control, no devices, no caches.
 //!
 //! - [`skeleton`]: joints, poses, forward kinematics (the conventions).
+//! - [`body`]: where the character stands, its facing, its legs' lengths.
 //! - [`bvh`]: BVH files in and out.
 //! - [`motion`]: a clip in metres, with units and T-pose frame resolved.
 //! - [`roles`]: which joint is the head, a hand, a foot...
@@ -10,6 +11,7 @@
 //!   the clip names in it, kept inside the clips folder.
 //! - [`camera`]: projection to screen pixels and rays back from them.
 
+pub mod body;
 pub mod bvh;
 pub mod camera;
 pub mod clip_ref;

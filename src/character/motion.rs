@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use glam::DVec3;
 
+use super::body::leg_length_mean;
 use super::bvh::BvhFile;
 use super::roles::{self, Role, RoleMap, RolesError};
 use super::skeleton::{Pose, Skeleton, forward_kinematics};
@@ -367,8 +368,8 @@ impl Clip {
         if same {
             return 1.0;
         }
-        let from = leg_length(&self.skeleton, &self.roles);
-        let to = leg_length(onto, &self.roles);
+        let from = leg_length_mean(&self.skeleton, &self.roles);
+        let to = leg_length_mean(onto, &self.roles);
         let ratio = if from > 0.0 && to > 0.0 {
             to / from
         } else {
@@ -391,16 +392,6 @@ impl Clip {
         self.height_m = chain_stature(&self.skeleton, &self.roles);
         ratio
     }
-}
-
-/// Thigh plus shin, the mean of both legs, in the skeleton's units.
-#[must_use]
-pub fn leg_length(skeleton: &Skeleton, roles: &RoleMap) -> f64 {
-    let leg = |knee: Role, foot: Role| {
-        skeleton.joints[roles.get(knee)].offset.length()
-            + skeleton.joints[roles.get(foot)].offset.length()
-    };
-    0.5 * (leg(Role::LeftKnee, Role::LeftFoot) + leg(Role::RightKnee, Role::RightFoot))
 }
 
 /// Fold the root into its only child when the pelvis hangs below it: every

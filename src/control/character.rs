@@ -1,6 +1,7 @@
 //! What the character is made of: the library, its posing model and its
 //! action models, built once and shared by every controller.
 
+use crate::character::body::Placement;
 use crate::character::library::{ActionDef, Library};
 use crate::character::roles::Role;
 use crate::character::roles::RoleMap;
@@ -11,7 +12,7 @@ use crate::control::action::model::ActionModel;
 use crate::control::action::recogniser::{Recogniser, TemplateRule};
 use crate::control::locomotion::gait::{self, Gait};
 use crate::control::posing::model::{LearnedModel, posing_samples};
-use crate::control::posing::sample::{Placement, pose_of, samples_of};
+use crate::control::posing::sample::{pose_of, samples_of};
 
 /// What the character is made of: the library, its posing model and its
 /// action models. Built once, shared by controllers.

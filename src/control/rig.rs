@@ -140,7 +140,7 @@ impl Rig {
                 let d0 = a0.distance(*b0);
                 let d1 = a1.distance(*b1);
                 let ang = |p: &ScreenPoint, q: &ScreenPoint| (q.y - p.y).atan2(q.x - p.x);
-                let twist = crate::control::posing::sample::wrap(ang(a1, b1) - ang(a0, b0));
+                let twist = crate::character::body::wrap(ang(a1, b1) - ang(a0, b0));
                 if d0 > 10.0 {
                     self.pinch(d1 / d0, twist);
                 }
@@ -158,7 +158,7 @@ impl Rig {
         if go_home {
             let h = self.home;
             let o = &mut self.orbit;
-            let dyaw = crate::control::posing::sample::wrap(h.yaw - o.yaw);
+            let dyaw = crate::character::body::wrap(h.yaw - o.yaw);
             o.yaw += dyaw * k;
             o.pitch += (h.pitch - o.pitch) * k;
             o.distance += (h.distance - o.distance) * k;

@@ -45,8 +45,8 @@ const MAX_OFFSET: f64 = 0.1;
 /// The effects' own acceleration is bounded (rad/s², m/s²): added to
 /// tracking's bound (200 rad/s²) a joint's speed still changes by less than
 /// 10 rad/s in a 1/30 s frame, so the effects never pop.
-const MAX_ACCEL: f64 = 90.0;
-const MAX_ACCEL_ROOT: f64 = 10.0;
+const MAX_EFFECT_ACCEL: f64 = 90.0;
+const MAX_EFFECT_ACCEL_ROOT: f64 = 10.0;
 
 /// Move `value` (changing by `rate` per frame) towards `next`, changing
 /// its rate by at most `max_change`: the new value and rate.
@@ -116,12 +116,16 @@ impl Effects {
                 // axes for the pelvis.
                 let change = rotation_difference(last[k], relative[k]);
                 let next = (self.delta[k] * s1 + change * s2).clamp_length_max(MAX_ROTATION);
-                (self.delta[k], self.delta_rate[k]) =
-                    bounded(self.delta[k], self.delta_rate[k], next, MAX_ACCEL * dt2);
+                (self.delta[k], self.delta_rate[k]) = bounded(
+                    self.delta[k],
+                    self.delta_rate[k],
+                    next,
+                    MAX_EFFECT_ACCEL * dt2,
+                );
             }
             let next = (self.root * s1 + (root_pos - *last_root) * s2).clamp_length_max(MAX_OFFSET);
             (self.root, self.root_rate) =
-                bounded(self.root, self.root_rate, next, MAX_ACCEL_ROOT * dt2);
+                bounded(self.root, self.root_rate, next, MAX_EFFECT_ACCEL_ROOT * dt2);
         }
         if relative.iter().all(|q| q.is_finite()) && root_pos.is_finite() {
             self.last = Some((relative, root_pos));

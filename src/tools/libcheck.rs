@@ -12,12 +12,12 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::character::body::{Anchor, Placement};
 use crate::character::camera::Camera;
 use crate::character::library::Library;
 use crate::control::action::calibrate::{Calibration, SLOW_BUDGET, calibrate};
 use crate::control::action::model::ActionModel;
 use crate::control::action::recogniser::{DragMatch, Recogniser, TemplateRule, Thresholds};
-use crate::control::posing::sample::{Anchor, Placement};
 
 /// A drag from one view confused with another action this often is a pair
 /// the builder should hear about.

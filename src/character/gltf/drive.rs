@@ -15,6 +15,7 @@ use glam::{DMat4, DQuat, DVec3};
 
 use super::Figure;
 use super::limbs::{end_points, foot_points, low_points, toward, two_bone};
+use crate::character::body::{facing, leg_length_posed};
 use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics};
@@ -117,26 +118,6 @@ pub struct Drive {
     lib_roles: RoleMap,
 }
 
-/// The turn about the vertical from facing +Z to the way the hips of
-/// `w` face.
-fn hips_facing(w: &WorldPose, roles: &RoleMap) -> DQuat {
-    let across = w.positions[roles.get(Role::LeftHip)] - w.positions[roles.get(Role::RightHip)];
-    let ahead = across.cross(DVec3::Y);
-    DQuat::from_rotation_y(ahead.x.atan2(ahead.z))
-}
-
-fn leg(positions: &[DVec3], roles: &RoleMap) -> f64 {
-    let at = |r: Role| positions[roles.get(r)];
-    [
-        (Role::LeftHip, Role::LeftKnee, Role::LeftFoot),
-        (Role::RightHip, Role::RightKnee, Role::RightFoot),
-    ]
-    .iter()
-    .map(|&(h, k, f)| (at(k) - at(h)).length() + (at(f) - at(k)).length())
-    .sum::<f64>()
-        / 2.0
-}
-
 impl Drive {
     /// How `fig` follows the postures of `library` (whose roles are
     /// `lib_roles`).
@@ -171,7 +152,7 @@ impl Drive {
                 if (w.positions[f].y - stand).abs() > 0.01 {
                     continue;
                 }
-                let q = hips_facing(w, lib_roles).inverse() * w.rotations[f];
+                let q = facing(w, lib_roles).inverse() * w.rotations[f];
                 let v = glam::DVec4::from(q);
                 sum += if v.dot(sum) < 0.0 { -v } else { v };
             }
@@ -286,7 +267,7 @@ impl Drive {
                 // height there), the figure's from its rest.
                 let (mut sum, mut n) = (DVec3::ZERO, 0.0);
                 for w in &standing {
-                    sum += hips_facing(w, lib_roles).inverse()
+                    sum += facing(w, lib_roles).inverse()
                         * (w.positions[lib_roles.get(h)]
                             - w.positions[lib_roles.get(Role::Pelvis)]);
                     n += 1.0;
@@ -327,7 +308,8 @@ impl Drive {
     pub fn leg_ratio(fig: &Figure, lib: &Skeleton, lib_roles: &RoleMap) -> f64 {
         let fpos: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
         let rest_lib = forward_kinematics(lib, &lib.rest_pose());
-        leg(&fpos, &fig.roles) / leg(&rest_lib.positions, lib_roles).max(1e-9)
+        leg_length_posed(&fpos, &fig.roles)
+            / leg_length_posed(&rest_lib.positions, lib_roles).max(1e-9)
     }
 
     /// The figure's joint transforms for a library posture (world), with
@@ -554,7 +536,7 @@ impl Drive {
     /// with the hips, as the hip it hangs from does.
     fn heading(&self, lib: &WorldPose, k: usize) -> DQuat {
         let foot = self.lib_roles.get([Role::LeftFoot, Role::RightFoot][k]);
-        let hips = hips_facing(lib, &self.lib_roles);
+        let hips = facing(lib, &self.lib_roles);
         let ahead = (lib.rotations[foot] * self.planted_inv[k]) * DVec3::Z;
         if ahead.with_y(0.0).length() < 0.5 {
             // Pointing nearly straight down or up: no heading of its own.

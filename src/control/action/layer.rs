@@ -11,10 +11,10 @@
 
 use glam::DQuat;
 
+use crate::character::body::facing_yaw;
 use crate::character::library::{ActionDef, Library};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
-use crate::control::posing::sample::facing_yaw;
 
 /// A hand that moves less than this (m, its farthest from where it
 /// starts, relative to the chest) in every clip of an action is not the
@@ -207,8 +207,8 @@ impl Regions {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::character::body::Placement;
     use crate::character::library::Library;
-    use crate::control::posing::sample::Placement;
 
     fn default_library() -> Library {
         Library::load(std::path::Path::new(concat!(

@@ -6,10 +6,11 @@
 use glam::DVec3;
 
 use super::trail::{Match, StartRule, TrailPoint, match_trail, view_angle_deg};
+use crate::character::body::Placement;
 use crate::character::camera::Camera;
 use crate::character::library::{ActionDef, Library};
 use crate::control::posing::model::{LearnedModel, sample_stride};
-use crate::control::posing::sample::{Placement, Sample, samples_of};
+use crate::control::posing::sample::{Sample, samples_of};
 
 /// Points of an action's average trajectory, at generalized times k/32:
 /// an odd count, so that "more than half of its points" is reached at

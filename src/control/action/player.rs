@@ -10,12 +10,13 @@ use std::collections::BTreeMap;
 
 use super::model::ActionModel;
 use super::timeline::{ActionEvent, ActionTimeline, Drive, Status};
+use crate::character::body::Placement;
 use crate::character::library::Library;
 use crate::character::skeleton::Pose;
 use crate::control::posing::constraint::{Constraint, SynthOptions};
 use crate::control::posing::ik::apply_ik;
 use crate::control::posing::model::LearnedModel;
-use crate::control::posing::sample::{Placement, samples_of};
+use crate::control::posing::sample::samples_of;
 use crate::control::posing::synth::{blend, choose};
 
 /// The clips' blend weights follow the touches with this time constant (s).

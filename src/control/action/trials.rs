@@ -12,11 +12,11 @@
 use glam::{DQuat, DVec3};
 
 use super::trail::TrailPoint;
+use crate::character::body::{Anchor, Placement};
 use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
-use crate::control::posing::sample::{Anchor, Placement};
 use crate::screen::ScreenPoint;
 
 /// The camera of a trial: `angle_deg` around the character at `at`,

@@ -271,7 +271,7 @@ impl Controller {
                 // Followed without wrapping round; at most MAX_TWIST held:
                 // beyond, the foot turns with the body.
                 Some(y) => {
-                    let wrap = crate::control::posing::sample::wrap;
+                    let wrap = crate::character::body::wrap;
                     let t = foot.twist + wrap(wrap(y - yaw) - foot.twist);
                     let held = t.clamp(-MAX_TWIST, MAX_TWIST);
                     if held != t {
@@ -434,17 +434,4 @@ fn toes_onto_floor(sk: &Skeleton, w: &WorldPose, j: usize) -> DQuat {
         return DQuat::IDENTITY;
     }
     DQuat::from_axis_angle(ahead.cross(DVec3::Y).normalize(), turn.min(1.2))
-}
-
-/// Hip to ankle along the bones of the rest skeleton (m), the shorter leg.
-pub(super) fn leg_length(sk: &crate::character::skeleton::Skeleton, roles: &RoleMap) -> f64 {
-    [
-        (Role::LeftKnee, Role::LeftFoot),
-        (Role::RightKnee, Role::RightFoot),
-    ]
-    .into_iter()
-    .map(|(knee, foot)| {
-        sk.joints[roles.get(knee)].offset.length() + sk.joints[roles.get(foot)].offset.length()
-    })
-    .fold(f64::INFINITY, f64::min)
 }

@@ -1,5 +1,5 @@
 //! No joint snaps: the shown posture's joints may change their angular
-//! velocity by at most [`MAX_ACCEL`] a second. Foot IK over a yanked body
+//! velocity by at most [`MAX_SHOWN_ACCEL`] a second. Foot IK over a yanked body
 //! can flip a knee or an ankle in one frame (a target out of reach, then
 //! back in it); the change is spread over the next frames instead. The
 //! library's quickest motions turn their joints at about a third of this,
@@ -20,8 +20,10 @@ use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, forward_kinematics, rotation_difference};
 use crate::control::posing::ik::{ccd_within, chain};
 
-/// The most a joint's angular velocity changes in a second (rad/s²).
-const MAX_ACCEL: f64 = 240.0;
+/// The most a shown joint's angular velocity changes in a second
+/// (rad/s²): the bound on the posture on the screen, above tracking's own
+/// ([`crate::control::tracking::accel::MAX_TRACKING_ACCEL`]).
+const MAX_SHOWN_ACCEL: f64 = 240.0;
 
 /// The posture shown last and its joints' angular velocities.
 #[derive(Clone, Debug, Default)]
@@ -43,7 +45,7 @@ impl Controller {
             ));
             return;
         };
-        let most = MAX_ACCEL * dt;
+        let most = MAX_SHOWN_ACCEL * dt;
         let sk = &self.ch.lib.skeleton;
         let before = forward_kinematics(sk, &self.output);
         let (from, old) = (&last.rotations, &vel);

@@ -25,11 +25,12 @@ mod surface;
 mod sweep;
 mod walk;
 
-use self::feet::{FootHold, leg_length};
+use self::feet::FootHold;
 pub use self::layer::Layered;
 pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
 use super::rig::Rig;
+use crate::character::body::{Anchor, Placement, leg_length_shorter};
 use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
 use crate::control::action::player::ActionPlayer;
@@ -38,7 +39,6 @@ use crate::control::action::timeline::{ActionEvent, Status};
 use crate::control::action::trail::{StartRule, TrailPoint};
 use crate::control::character::upper;
 use crate::control::posing::constraint::{Constraint, SynthOptions};
-use crate::control::posing::sample::{Anchor, Placement};
 use crate::control::posing::synth::synthesize;
 use crate::control::tracking::accel::{AccelTracker, Gains};
 use crate::input::touch::ContactId;
@@ -254,7 +254,7 @@ impl Controller {
             swept: [0.0; 2],
             clear: [None; 2],
             ankle_rest: feet_now[0].y.min(feet_now[1].y),
-            leg_length: leg_length(&ch.lib.skeleton, &ch.roles),
+            leg_length: leg_length_shorter(&ch.lib.skeleton, &ch.roles),
             settings,
             rig: Rig::new(width, height),
             mode: Mode::Posing,

@@ -6,11 +6,11 @@
 
 use glam::{DQuat, DVec3};
 
+use crate::character::body::{facing_yaw, wrap};
 use crate::character::library::Library;
 use crate::character::motion::Clip;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::forward_kinematics;
-use crate::control::posing::sample::{facing_yaw, wrap};
 
 /// Seconds ahead at which the root's future places are matched.
 pub(crate) const FUTURE_S: [f64; 3] = [0.3, 0.6, 0.9];

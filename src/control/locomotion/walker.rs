@@ -9,9 +9,9 @@
 use glam::{DQuat, DVec3};
 
 use super::gait::{FEATURES, FUTURE_S, Gait, cost};
+use crate::character::body::{facing_yaw, wrap};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
-use crate::control::posing::sample::{facing_yaw, wrap};
 
 /// How often a better frame is looked for (s).
 const SEARCH_S: f64 = 0.1;

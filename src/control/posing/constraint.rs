@@ -4,7 +4,7 @@
 
 use glam::{DQuat, DVec3};
 
-use super::sample::Placement;
+use crate::character::body::Placement;
 use crate::character::camera::HalfLine;
 use crate::character::roles::Role;
 

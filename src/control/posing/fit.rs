@@ -9,7 +9,7 @@ use super::constraint::{Constraint, SynthOptions, Target, localize};
 use super::limbs::{self, limb_index};
 use super::model::LearnedModel;
 use super::rank::smallest;
-use super::sample::Placement;
+use crate::character::body::Placement;
 use crate::character::roles::RoleMap;
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 

@@ -7,7 +7,8 @@
 
 use super::mds;
 use super::reach::{BOX_M, ReachGrid};
-use super::sample::{Anchor, Sample, distance};
+use super::sample::{Sample, distance};
+use crate::character::body::Anchor;
 
 /// A grid cell: its samples and the one that represents it.
 #[derive(Clone, Debug, PartialEq)]

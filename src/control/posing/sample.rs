@@ -7,21 +7,10 @@
 use glam::{DQuat, DVec3};
 
 use super::limbs;
+use crate::character::body::{Anchor, Placement, facing_yaw, wrap};
 use crate::character::motion::Clip;
-use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
-
-/// The facing of a posture: yaw (radians, 0 = +Z, positive turns towards
-/// +X) of the direction the hips point, from the left and right hips.
-#[must_use]
-pub fn facing_yaw(world: &WorldPose, roles: &RoleMap) -> f64 {
-    let l = world.positions[roles.get(Role::LeftHip)] - world.positions[roles.get(Role::RightHip)];
-    let fwd = l.cross(DVec3::Y);
-    if fwd.x.hypot(fwd.z) < 1e-9 {
-        return 0.0;
-    }
-    fwd.x.atan2(fwd.z)
-}
+use crate::character::roles::Role;
+use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 
 /// A sample posture.
 #[derive(Clone, Debug, PartialEq)]
@@ -101,14 +90,6 @@ pub fn samples_of(
         .collect()
 }
 
-/// An angle in (−π, π].
-#[must_use]
-pub fn wrap(a: f64) -> f64 {
-    let t = std::f64::consts::TAU;
-    let r = a.rem_euclid(t);
-    if r > std::f64::consts::PI { r - t } else { r }
-}
-
 /// The posture distance: mean distance between corresponding joints after
 /// aligning pelvis position and facing.
 #[must_use]
@@ -119,60 +100,6 @@ pub fn distance(a: &Sample, b: &Sample) -> f64 {
         .map(|(p, q)| (*p - *q).length())
         .sum::<f64>()
         / a.aligned.len().max(1) as f64
-}
-
-/// What of a sample is put at the placement.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Anchor {
-    /// The start of the sample's clip (the paper: the sample's offset and
-    /// turn since its clip began are added to where the character stood
-    /// when posing began).
-    #[default]
-    ClipStart,
-    /// The sample's own pelvis: it stands exactly where the placement is,
-    /// facing its way (for evaluations and for holding the character in
-    /// place).
-    Root,
-}
-
-/// Where the character stands: its floor position and facing.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Placement {
-    pub position: DVec3,
-    pub yaw: f64,
-    pub anchor: Anchor,
-}
-
-impl Placement {
-    /// World position of a sample's joint placed here (`p` from
-    /// [`Sample::local`]).
-    #[must_use]
-    pub fn place(&self, p: DVec3) -> DVec3 {
-        DVec3::new(self.position.x, 0.0, self.position.z) + DQuat::from_rotation_y(self.yaw) * p
-    }
-
-    /// The placement of a pose: its root's floor point and its facing.
-    #[must_use]
-    pub fn of(skeleton: &Skeleton, roles: &RoleMap, pose: &Pose) -> Self {
-        let w = forward_kinematics(skeleton, pose);
-        let r = w.positions[0];
-        Self {
-            position: DVec3::new(r.x, 0.0, r.z),
-            yaw: facing_yaw(&w, roles),
-            anchor: Anchor::Root,
-        }
-    }
-}
-
-impl Anchor {
-    /// Index into [`Sample::parts`].
-    #[must_use]
-    pub fn index(self) -> usize {
-        match self {
-            Anchor::ClipStart => 0,
-            Anchor::Root => 1,
-        }
-    }
 }
 
 impl Sample {

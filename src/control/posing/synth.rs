@@ -14,7 +14,8 @@ use super::fit::{mean_rotation, refit, refit_limbs};
 use super::ik::apply_ik;
 use super::model::{LearnedModel, PartColumns};
 use super::rank::keep_best;
-use super::sample::{Placement, Sample, pose_of, wrap};
+use super::sample::{Sample, pose_of};
+use crate::character::body::{Placement, wrap};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 

@@ -15,11 +15,11 @@ use crate::character::skeleton::{Pose, rotation_difference};
 /// 100 rad/s²), low enough that a jump in the target shows as a quick
 /// motion (at most 6.7 rad/s of speed change per 1/30 s frame) rather than
 /// a pop. With the default gains it causes no overshoot.
-pub const MAX_ACCEL: f64 = 200.0;
+pub const MAX_TRACKING_ACCEL: f64 = 200.0;
 
 /// Default bound on the pelvis's acceleration (m/s²): a jump's take-off
 /// needs about 2 g.
-pub const MAX_ACCEL_ROOT: f64 = 40.0;
+pub const MAX_TRACKING_ACCEL_ROOT: f64 = 40.0;
 
 /// PD gains on accelerations.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,8 +45,8 @@ impl Gains {
         Self {
             k: w * w,
             d: 2.0 * w,
-            max_accel: MAX_ACCEL,
-            max_accel_root: MAX_ACCEL_ROOT,
+            max_accel: MAX_TRACKING_ACCEL,
+            max_accel_root: MAX_TRACKING_ACCEL_ROOT,
         }
     }
 }

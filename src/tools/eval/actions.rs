@@ -12,6 +12,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::character::body::Placement;
 use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
@@ -20,7 +21,6 @@ use crate::control::action::recogniser::{DragMatch, Recogniser};
 use crate::control::action::trail::{StartRule, TrailPoint};
 pub use crate::control::action::trials::Drag;
 use crate::control::action::trials::each_drag;
-use crate::control::posing::sample::Placement;
 
 /// What `eval actions` prints.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

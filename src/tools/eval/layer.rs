@@ -9,12 +9,12 @@
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 
+use crate::character::body::Placement;
 use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, forward_kinematics};
 use crate::control::action::trail::TrailPoint;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode};
-use crate::control::posing::sample::Placement;
 use crate::input::touch::Phase;
 use crate::screen::ScreenPoint;
 

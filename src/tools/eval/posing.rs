@@ -13,6 +13,7 @@ use std::time::Instant;
 use glam::{DQuat, DVec3};
 use serde::Serialize;
 
+use crate::character::body::Placement;
 use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
@@ -22,7 +23,7 @@ use crate::control::controller::MAX_SUBSTEP;
 use crate::control::posing::constraint::{Constraint, SynthOptions, Target};
 use crate::control::posing::ik::apply_ik;
 use crate::control::posing::model::LearnedModel;
-use crate::control::posing::sample::{Placement, pose_of};
+use crate::control::posing::sample::pose_of;
 use crate::control::posing::synth::synthesize;
 use crate::control::tracking::accel::{AccelTracker, Gains};
 

@@ -11,12 +11,12 @@
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::character::body::{Anchor, Placement};
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::control::action::model::ActionModel;
 use crate::control::action::trail::{StartRule, TrailPoint, match_trail};
 use crate::control::action::trials::{Trial, camera, side_of};
-use crate::control::posing::sample::{Anchor, Placement};
 
 /// What `eval actions` adds under `separation`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

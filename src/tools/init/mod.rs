@@ -13,13 +13,13 @@ use std::path::{Path, PathBuf};
 
 use glam::{DQuat, DVec3};
 
+use crate::character::body::facing_yaw;
 use crate::character::bvh;
 use crate::character::library::{Release, Segment, hierarchy_difference};
 use crate::character::motion::{Clip, ImportSettings, KNOWN_UNITS};
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
 use crate::control::locomotion::gait::{MIN_TRAVEL_M, travel_m};
-use crate::control::posing::sample::facing_yaw;
 
 /// The parts an action can be led by, in the order ties are broken.
 const CANDIDATES: [Role; 6] = [

@@ -39,9 +39,9 @@ use self::template::{Seen, see};
 use super::model::ActionModel;
 use super::trail::TrailPoint;
 use super::trail::tempo_gap;
+use crate::character::body::Placement;
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
-use crate::control::posing::sample::Placement;
 
 /// The fixed parts of the template rule (the thresholds that depend on the
 /// library are in [`Thresholds`]).

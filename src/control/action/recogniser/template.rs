@@ -5,9 +5,9 @@
 use glam::DVec2;
 
 use super::TemplateRule;
+use crate::character::body::Placement;
 use crate::character::camera::Camera;
 use crate::control::action::model::ClipPath;
-use crate::control::posing::sample::Placement;
 
 /// A template seen from the drag's view.
 #[derive(Clone, Debug)]

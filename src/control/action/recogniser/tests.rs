@@ -1,10 +1,10 @@
 //! The template recogniser on synthetic actions: left-out takes, slow
 //! drags, rests and turns, views.
 use super::*;
+use crate::character::body::Anchor;
 use crate::character::library::{ActionDef, Release, Segment};
 use crate::control::action::model::{ClipPath, lead_in};
 use crate::control::posing::model::LearnedModel;
-use crate::control::posing::sample::Anchor;
 use crate::screen::ScreenPoint;
 
 /// An action of the right hand whose clips follow `path(s, k)` for
