@@ -103,7 +103,7 @@ fn bandai_styles_left_out_and_what_library_check_says() {
 
     // The styles nobody recorded for the library, through the recogniser
     // (`marionette eval actions` without `--models-only` runs them through
-    // the controller: see the README).
+    // the controller: see docs/measurements.md).
     let eval = json(&run(
         &[
             "eval",

@@ -97,7 +97,7 @@ fn cmu_actions_are_recognised_from_held_out_takes() {
         // default library's variants do: the only jump of the set is one
         // person's (24 of the 54 trials), and the three punch heights are
         // near ties. What is asserted is what this library reaches today
-        // (see the README), so that a change that loses it shows.
+        // (see docs/measurements.md), so that a change that loses it shows.
         assert!(f("correct") >= floor, "{r}");
     }
 }

@@ -433,7 +433,7 @@ fn shared_characters() -> Vec<PathBuf> {
 }
 
 /// What `marionette eval character --mesh FILE --library assets/library`
-/// measured for each shared character (the README's table): mean and
+/// measured for each shared character (the table of docs/measurements.md): mean and
 /// max shares of its height, mm into the floor, segment directions' mean
 /// and 95th percentile (deg), a planted foot's float (mm).
 const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
@@ -588,7 +588,7 @@ fn every_shared_character_plays_the_default_library() {
         assert_eq!(e.bad_frames, 0, "{file}");
         match MEASURED.iter().find(|m| m.0 == file) {
             Some(&(_, mean, max, pen, dir, p95, float)) => {
-                // Near what the README gives, either way (a hundredth of
+                // Near what docs/measurements.md gives, either way (a hundredth of
                 // a share, a tenth of a millimetre or degree, or 2 %).
                 let near = |got: f64, want: f64, abs: f64| (got - want).abs() <= want * 0.02 + abs;
                 assert!(near(e.mean_pct, mean, 0.01), "{file}: {e:?}");
@@ -1099,7 +1099,7 @@ fn with_its_names_left_out_a_character_is_read_the_same_or_refused_saying_why() 
         }
     }
     eprintln!("read without names, the same: {loaded:?}");
-    // The README gives which: the figures whose names were not needed
+    // docs/measurements.md gives which: the figures whose names were not needed
     // (7 of the 12: the modular man's short upper arm is taken for its
     // clavicle by where its joints stand).
     for file in [

@@ -351,7 +351,7 @@ segments = [{ until = 0.3, still = true, release = "backward" }, { until = 1.0, 
         1,
     );
     eprintln!("a right punch against mirrored left punches: {r:?}");
-    // 6 of 6, as the README says.
+    // 6 of 6, as docs/exhibit.md says.
     assert_eq!(r.trials, 6, "{r:?}");
     assert!((r.correct - 1.0).abs() < 1e-9, "{r:?}");
     // A middle-line part has no other side.

@@ -47,7 +47,7 @@ fn mirror_images_of_real_rigs_put_every_joint_where_its_partner_was() {
     // left and right bones differ by up to a centimetre or two, which adds
     // up to 3 cm at the fingertips) and the Bandai rig (bones along x,
     // mirrored across local z).
-    // (The README's figures: the Bandai clip exactly, the CMU one within
+    // (The figures of docs/measurements.md: the Bandai clip exactly, the CMU one within
     // 2.4 cm.)
     for (path, within) in [
         (mocap.join("cmu-mixed/wave/141_16.bvh"), 0.025),

@@ -258,7 +258,7 @@ fn eval_actions_without_test_clips_says_so_and_a_folder_is_no_file() {
     ]);
     assert_eq!(out.status.code(), Some(66), "{}", stderr(&out));
     assert!(stderr(&out).contains("no test clips"), "{}", stderr(&out));
-    // A folder where a file is expected: 66, as the README's table says.
+    // A folder where a file is expected: 66, as the table of docs/commands.md says.
     for args in [
         vec!["inspect", dir.path().to_str().unwrap()],
         vec![

@@ -1,5 +1,5 @@
-//! The README's "Your own motion capture", word for word: its commands are
-//! read from the README and run in a folder whose `takes/` holds the
+//! The exhibit builder's guide's "Your own motion capture" (docs/exhibit.md),
+//! word for word: its commands are read from the guide and run in a folder whose `takes/` holds the
 //! Bandai share's takes (six styles of ten actions, the single takes of
 //! punch, kick and slash). The library is made with `--copy-clips` and
 //! then moved, the takes removed, before the rest runs: a moved library
@@ -16,14 +16,15 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-/// The commands of the README's section: the lines of its first `sh`
+/// The commands of the guide's section: the lines of its first `sh`
 /// block.
-fn readme_commands() -> Vec<String> {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
-    let section = &readme[readme
+fn guide_commands() -> Vec<String> {
+    let guide =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/exhibit.md"))
+            .unwrap();
+    let section = &guide[guide
         .find("## Your own motion capture")
-        .expect("the README has its section")..];
+        .expect("the guide has its section")..];
     let block = &section[section.find("```sh\n").expect("a sh block") + 6..];
     let block = &block[..block.find("```").unwrap()];
     block
@@ -64,7 +65,7 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
     std::fs::create_dir_all(first.join("takes")).unwrap();
     std::fs::create_dir_all(&here).unwrap();
     common::bandai::split(&first.join("takes"), None);
-    let commands = readme_commands();
+    let commands = guide_commands();
     assert_eq!(commands.len(), 5, "{commands:#?}");
     assert!(commands[0].starts_with("marionette library init takes --out my-library"));
 
@@ -101,7 +102,7 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
     for side in ["punch_left", "punch_right", "kick_right", "kick_left"] {
         assert!(dragged.iter().any(|d| d == side), "{dragged:?}");
     }
-    // All 17 start (the README), from a turned view where the home view
+    // All 17 start (docs/exhibit.md), from a turned view where the home view
     // starts nothing; `library check` names the ones the home view
     // cannot draw.
     assert_eq!(started.len(), 17, "{not:?}");
@@ -120,7 +121,7 @@ fn the_readme_walk_through_runs_on_the_bandai_share() {
         serde_json::from_slice(&std::fs::read(here.join("my-demo/metrics.json")).unwrap()).unwrap();
     eprintln!("metrics: {metrics}");
     assert_eq!(metrics["nan_frames"], 0, "{metrics}");
-    // The README's figures: no pop, 0.50 mm a frame on average (the
+    // The figures of docs/exhibit.md: no pop, 0.50 mm a frame on average (the
     // target's 3 mm), nothing into the floor (the feet stand on it: before
     // the library was moved onto its floor they floated 4 cm above it).
     let f = |k: &str| metrics[k].as_f64().unwrap();

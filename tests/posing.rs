@@ -852,7 +852,7 @@ fn a_static_top_bone_above_the_pelvis_no_longer_misplaces_the_character() {
         "bandai, normal style held out, 5 parts: touch {:.2} cm ({:.2} px), targets {:.2} cm, ccd-rest touch {:.2} cm",
         touch.mpjpe_cm, touch.constraint_err_px, targets.mpjpe_cm, rest_touch.mpjpe_cm
     );
-    // The README's figures: 3.96 cm from 5 touches (0.38 px), 2.17 cm
+    // The figures of docs/measurements.md: 3.96 cm from 5 touches (0.38 px), 2.17 cm
     // from 5 targets, 1.39 times better than IK from the rest pose
     // (5.50 cm).
     assert!(touch.mpjpe_cm < 4.2, "{touch:?}");

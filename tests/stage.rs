@@ -176,7 +176,7 @@ fn a_landed_hit_moves_the_hit_part_and_the_character_recovers() {
     assert_eq!((h.striker, h.struck), (0, 1));
     assert!(h.impulse_ns > 0.5, "{h:?}");
     assert!(most > 0.03, "the hit moved B by {most:.3} m");
-    // Under 1 cm after a step, as the README says (0 measured).
+    // Under 1 cm after a step, as docs/exhibit.md says (0 measured).
     assert!(deepest < 0.01, "bodies sank {deepest:.3} m into each other");
     // Back within 2 s of the last contact.
     let mut back_at = None;

@@ -28,7 +28,7 @@ fn the_default_library_walks_along_random_paths() {
         "followed {} arrival {} cm deviation {} cm skate {} mm (worst {}) pops {} start {} s",
         r.followed, r.arrival_cm, r.deviation_cm, r.skate_mm, r.skate_max_mm, r.pops, r.start_s
     );
-    // The README's figures (`marionette eval walk`, seed 1, 20 paths).
+    // The figures of docs/measurements.md (`marionette eval walk`, seed 1, 20 paths).
     assert_eq!(r.paths, 20);
     assert!(r.followed >= 0.95, "{r:?}");
     // 1.0 followed, 10.1 cm from the end, 5.72 cm off the path, planted
@@ -160,7 +160,7 @@ fn a_wave_dragged_while_walking_plays_on_the_upper_body_and_the_legs_keep_walkin
         "layered {l:?}; skate {} mm (worst {}), pops {}; without: {} mm (worst {})",
         r.skate_mm, r.skate_max_mm, r.pops, alone.skate_mm, alone.skate_max_mm
     );
-    // The README's figures (`marionette eval walk --layer wave_left`): the
+    // The figures of docs/measurements.md (`marionette eval walk --layer wave_left`): the
     // wave played over every walk; the hand 1.39 cm on average, 2.98 at
     // most, from where the wave alone puts it in the character's frame
     // (3.43 cm as shown, tracked); the legs' contacts kept: 0.79 mm a

@@ -41,6 +41,8 @@ install -m 644 assets/recordings/*.evemu "$pkg/usr/share/marionette/recordings/"
 install -m 644 ARCHITECTURE.md "$pkg/usr/share/doc/marionette/"
 install -m 644 systemd/README.md "$pkg/usr/share/doc/marionette/README.systemd.md"
 install -m 644 README.md "$pkg/usr/share/doc/marionette/README.md"
+install -d "$pkg/usr/share/doc/marionette/docs"
+install -m 644 docs/*.md "$pkg/usr/share/doc/marionette/docs/"
 cat > "$pkg/usr/share/doc/marionette/copyright" <<COPYRIGHT
 Format: https://www.debian.org/doc/packaging-manuals/copyright-format/1.0/
 Upstream-Name: marionette

@@ -45,7 +45,7 @@ trap 'rm -rf "$work"' EXIT
 rootfs="$work/rootfs"
 cp -a "$base" "$rootfs"
 
-# Installed as the README's "Installing a kiosk" says: the package built
+# Installed as the operator's guide's "Installing a kiosk" says: the package built
 # (from the binary under test), `apt install`ed, the unit enabled (started
 # when the guest boots: a chroot runs no services).
 deb=$(MARIONETTE_DEB_BIN="$bin" bash "$root/systemd/deb/build.sh" | tail -n 1)
@@ -56,7 +56,7 @@ rm "$rootfs/root/$(basename "$deb")"
 chroot "$rootfs" systemctl enable marionette.service
 for f in /usr/bin/marionette /lib/systemd/system/marionette.service /etc/marionette/marionette.toml \
          /usr/share/marionette/library/library.toml /usr/share/marionette/recordings/demo.evemu \
-         /usr/share/doc/marionette/README.md; do
+         /usr/share/doc/marionette/README.md /usr/share/doc/marionette/docs/operator.md; do
     [ -e "$rootfs$f" ] || { echo "vm test: the package did not install $f" >&2; exit 1; }
 done
 chroot "$rootfs" id -nG marionette | grep -qw render \
