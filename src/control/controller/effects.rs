@@ -33,7 +33,7 @@ impl Controller {
         .enumerate()
         {
             let sole = crate::character::skeleton::sole(sk, &shown, roles.get(role)).y;
-            if self.feet[k].anchor.is_some() || sole < GROUND_CONTACT_M {
+            if self.feet.planted(k) || sole < GROUND_CONTACT_M {
                 touching.push(region);
             }
         }

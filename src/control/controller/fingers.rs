@@ -132,7 +132,7 @@ impl Controller {
                         // never into the floor.
                         let now = self.world.positions[self.ch.roles.get(*role)];
                         let q = ray.closest(now);
-                        Target::Point(q.with_y(q.y.max(self.ankle_rest)))
+                        Target::Point(q.with_y(q.y.max(self.feet.ankle_rest())))
                     } else {
                         Target::Ray(ray)
                     };

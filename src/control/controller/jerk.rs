@@ -14,10 +14,9 @@
 
 use glam::{DQuat, DVec3};
 
-use super::Controller;
 use super::feet::rise_over_floor;
-use crate::character::roles::Role;
-use crate::character::skeleton::{Pose, forward_kinematics, rotation_difference};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, forward_kinematics, rotation_difference};
 use crate::control::posing::ik::{ccd_within, chain};
 
 /// The most a shown joint's angular velocity changes in a second
@@ -25,29 +24,36 @@ use crate::control::posing::ik::{ccd_within, chain};
 /// ([`crate::control::tracking::accel::MAX_TRACKING_ACCEL`]).
 const MAX_SHOWN_ACCEL: f64 = 240.0;
 
-/// The posture shown last and its joints' angular velocities.
+/// The bound on the shown posture's joint accelerations: the posture
+/// shown last and its joints' angular velocities.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Jerk {
     last: Option<(Pose, Vec<DVec3>)>,
 }
 
-impl Controller {
-    /// Bound the shown posture's joint accelerations against the last
-    /// frame's (see the module).
-    pub(super) fn bound_jerks(&mut self, dt: f64) {
+impl Jerk {
+    /// Bound the joint accelerations of `output`, the posture to show,
+    /// against the last frame's (see the module); `held` are the parts
+    /// fingers hold and `standing[k]` says whether foot `k` (left, right)
+    /// stands planted where it is to stay.
+    pub(super) fn bound(
+        &mut self,
+        sk: &Skeleton,
+        roles: &RoleMap,
+        output: &mut Pose,
+        held: &[Role],
+        standing: [bool; 2],
+        dt: f64,
+    ) {
         if dt <= 0.0 {
             return;
         }
-        let Some((mut last, mut vel)) = self.jerk.last.take() else {
-            self.jerk.last = Some((
-                self.output.clone(),
-                vec![DVec3::ZERO; self.output.rotations.len()],
-            ));
+        let Some((mut last, mut vel)) = self.last.take() else {
+            self.last = Some((output.clone(), vec![DVec3::ZERO; output.rotations.len()]));
             return;
         };
         let most = MAX_SHOWN_ACCEL * dt;
-        let sk = &self.ch.lib.skeleton;
-        let before = forward_kinematics(sk, &self.output);
+        let before = forward_kinematics(sk, output);
         let (from, old) = (&last.rotations, &vel);
         // Joint j's local rotation `q`, its angular velocity's change kept
         // within the bound.
@@ -62,54 +68,53 @@ impl Controller {
                 q
             }
         };
-        for (j, q) in self.output.rotations.iter_mut().enumerate() {
+        for (j, q) in output.rotations.iter_mut().enumerate() {
             *q = bounded(j, *q);
         }
         // The feet go back where the feet passes put them as far as the
         // bound lets their legs turn...
-        let held = self.held();
-        let after = forward_kinematics(sk, &self.output);
+        let after = forward_kinematics(sk, output);
         let goals: Vec<(usize, Vec<usize>, DVec3)> = [Role::LeftFoot, Role::RightFoot]
             .into_iter()
             .filter(|r| !held.contains(r))
             .filter_map(|r| {
-                let j = self.ch.roles.get(r);
+                let j = roles.get(r);
                 let moved = (before.positions[j] - after.positions[j]).length() > 5e-4;
-                moved.then(|| (j, chain(sk, &self.ch.roles, r), before.positions[j]))
+                moved.then(|| (j, chain(sk, roles, r), before.positions[j]))
             })
             .collect();
         if !goals.is_empty() {
-            ccd_within(sk, &mut self.output, &goals, 8, bounded);
+            ccd_within(sk, output, &goals, 8, bounded);
         }
         for (j, v) in vel.iter_mut().enumerate() {
-            *v = rotation_difference(last.rotations[j], self.output.rotations[j]) / dt;
+            *v = rotation_difference(last.rotations[j], output.rotations[j]) / dt;
         }
         // ...and a planted foot they could not bring back (its leg held
         // back under a lunging body) stays where it stands: the body moves
         // back over it, its joints untouched. Not for a foot the sweep lifts
         // (it moves over the floor; moving the body for it slid the foot
         // that had just begun a step).
-        let after = forward_kinematics(sk, &self.output);
+        let after = forward_kinematics(sk, output);
         let mut shift = DVec3::ZERO;
         let mut n = 0.0;
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
-            if self.feet[k].anchor.is_none() || held.contains(&role) || self.swept[k] > 0.0 {
+            if !standing[k] || held.contains(&role) {
                 continue;
             }
-            let j = self.ch.roles.get(role);
+            let j = roles.get(role);
             shift += (before.positions[j] - after.positions[j]).with_y(0.0);
             n += 1.0;
         }
         if n > 0.0 {
-            self.output.translations[0] += shift / n;
+            output.translations[0] += shift / n;
         }
         // The floor still holds: a foot or a hand the bound (or a finger)
         // left under it lifts the body, its joints untouched (bending the leg
         // to lift the foot undid the bound: a knee popped as a kick began).
         rise_over_floor(
-            &self.ch.lib.skeleton,
-            &self.ch.roles,
-            &mut self.output,
+            sk,
+            roles,
+            output,
             &[
                 Role::LeftFoot,
                 Role::RightFoot,
@@ -117,7 +122,66 @@ impl Controller {
                 Role::RightHand,
             ],
         );
-        last.clone_from(&self.output);
-        self.jerk.last = Some((last, vel));
+        last.clone_from(output);
+        self.last = Some((last, vel));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DQuat;
+
+    use super::super::testbody::{body, crouched};
+    use super::{Jerk, MAX_SHOWN_ACCEL};
+    use crate::character::roles::Role;
+    use crate::character::skeleton::rotation_difference;
+
+    const DT: f64 = 1.0 / 30.0;
+
+    #[test]
+    fn a_joint_that_would_snap_is_spread_over_the_next_frames() {
+        let (sk, roles) = body();
+        let still = crouched(&sk, &roles, 0.05);
+        let mut jerk = Jerk::default();
+        let mut shown = still.clone();
+        jerk.bound(&sk, &roles, &mut shown, &[], [true; 2], DT);
+        jerk.bound(&sk, &roles, &mut shown, &[], [true; 2], DT);
+        // The left elbow asked to turn a radian in one frame (30 rad/s).
+        let elbow = roles.get(Role::LeftElbow);
+        let mut snapped = still.clone();
+        snapped.rotations[elbow] = DQuat::from_rotation_y(1.0) * still.rotations[elbow];
+        let mut out = snapped.clone();
+        jerk.bound(&sk, &roles, &mut out, &[], [true; 2], DT);
+        let turned = rotation_difference(still.rotations[elbow], out.rotations[elbow]).length();
+        let most = MAX_SHOWN_ACCEL * DT * DT;
+        assert!(
+            turned <= most + 1e-9,
+            "turned {turned:.4} rad in a frame, at most {most:.4}"
+        );
+        assert!(turned > 0.5 * most, "it turns on, {turned:.4} rad");
+        // Kept on, it gets there.
+        for _ in 0..30 {
+            out = snapped.clone();
+            jerk.bound(&sk, &roles, &mut out, &[], [true; 2], DT);
+        }
+        let left = rotation_difference(snapped.rotations[elbow], out.rotations[elbow]).length();
+        assert!(left < 0.01, "{left:.4} rad short after a second");
+    }
+
+    #[test]
+    fn what_the_library_moves_is_left_alone() {
+        let (sk, roles) = body();
+        let still = crouched(&sk, &roles, 0.05);
+        let mut jerk = Jerk::default();
+        let mut shown = still.clone();
+        jerk.bound(&sk, &roles, &mut shown, &[], [true; 2], DT);
+        // A head turning at 3 rad/s from rest: 3 rad/s of change in a
+        // frame, under the bound's 8.
+        let head = roles.get(Role::Head);
+        let mut turning = still.clone();
+        turning.rotations[head] = DQuat::from_rotation_y(0.1) * still.rotations[head];
+        let mut out = turning.clone();
+        jerk.bound(&sk, &roles, &mut out, &[], [true; 2], DT);
+        assert_eq!(out.rotations, turning.rotations);
     }
 }

@@ -20,12 +20,12 @@ mod feet;
 mod fingers;
 mod jerk;
 mod layer;
-mod stance;
 mod surface;
-mod sweep;
+#[cfg(test)]
+mod testbody;
 mod walk;
 
-use self::feet::FootHold;
+use self::feet::{Feet, FeetStep};
 pub use self::layer::Layered;
 pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
@@ -150,21 +150,8 @@ pub struct Controller {
     tracker: AccelTracker,
     /// The tracked posture with supporting feet fixed: what is shown.
     output: Pose,
-    /// Foot IK state, left and right.
-    feet: [FootHold; 2],
-    /// The target's foot positions last step, for their speed.
-    last_feet: [DVec3; 2],
-    /// How far each foot is lifted for sweeping the floor (0..1).
-    swept: [f64; 2],
-    /// How high each foot that swings, steps or sweeps the floor stands
-    /// off it before the bound on joint accelerations (m), kept after it.
-    clear: [Option<f64>; 2],
-    /// Ankle height standing at rest (m): a foot lower than this plus a
-    /// little is on the floor.
-    ankle_rest: f64,
-    /// Hip to ankle along the bones (m): a planted foot farther than
-    /// this from its hip steps.
-    leg_length: f64,
+    /// The feet that carry the body: planted, stepping, sweeping.
+    feet: Feet,
     world: WorldPose,
     /// Physics-based tracking: the ragdoll and the effects taken from it.
     ragdoll: Ragdoll,
@@ -234,10 +221,6 @@ impl Controller {
         let pose = ch.rest_pose(&at);
         let world = forward_kinematics(&ch.lib.skeleton, &pose);
         let pelvis_h = world.positions[ch.roles.get(Role::Pelvis)].y;
-        let feet_now = [
-            world.positions[ch.roles.get(Role::LeftFoot)],
-            world.positions[ch.roles.get(Role::RightFoot)],
-        ];
         let ragdoll = Ragdoll::new(
             &ch.lib.skeleton,
             &ch.roles,
@@ -249,12 +232,11 @@ impl Controller {
             ragdoll,
             effects: Effects::new(settings.attenuation),
             output: pose.clone(),
-            feet: [FootHold::default(); 2],
-            last_feet: feet_now,
-            swept: [0.0; 2],
-            clear: [None; 2],
-            ankle_rest: feet_now[0].y.min(feet_now[1].y),
-            leg_length: leg_length_shorter(&ch.lib.skeleton, &ch.roles),
+            feet: Feet::new(
+                &ch.roles,
+                &world,
+                leg_length_shorter(&ch.lib.skeleton, &ch.roles),
+            ),
             settings,
             rig: Rig::new(width, height),
             mode: Mode::Posing,
@@ -433,7 +415,11 @@ impl Controller {
                     );
                 } else if self.planted.take().is_some() {
                     // The last finger on the body lifted.
-                    self.settle_stance();
+                    self.feet.settle_stance(
+                        &self.ch.lib.skeleton,
+                        &self.ch.roles,
+                        &mut self.target,
+                    );
                 }
             }
             Mode::Action(player) => {
@@ -484,12 +470,31 @@ impl Controller {
                 self.shove = DVec3::ZERO;
             }
         }
-        self.fix_feet(dt);
-        self.clear_swept_feet(dt);
+        let held = self.held();
+        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
+        let step = FeetStep {
+            skeleton: sk,
+            roles,
+            target: &self.target,
+            shown_last: &self.world,
+            held: &held,
+            switched: std::mem::take(&mut self.switched),
+            settle_s: self.settings.settle_s,
+            // While walking, the clip's own foot contacts say which foot
+            // stands.
+            contacts: match &self.mode {
+                Mode::Walk(w) => Some(w.contacts(&self.ch.gait)),
+                _ => None,
+            },
+            dt,
+        };
+        self.feet.step(&step, &mut self.output, &mut self.tracker);
         if self.settings.settle_s > 0.0 {
             // Part of tracking: off, the synthesised postures are shown.
-            self.bound_jerks(dt);
-            self.keep_feet_clear();
+            let standing = [self.feet.standing(0), self.feet.standing(1)];
+            self.jerk
+                .bound(sk, roles, &mut self.output, &held, standing, dt);
+            self.feet.keep_clear(sk, roles, &mut self.output);
         }
         self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
         let idle = self.idle_s() > self.settings.home_after_s;

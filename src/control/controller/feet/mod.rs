@@ -6,15 +6,25 @@
 //! comes down where it was shown last and keeps pointing where it did
 //! while it stands. A body pulled farther than a
 //! planted foot's leg reaches is held back over it. Feet held by a finger
-//! are the finger's. No sole goes below the floor.
+//! are the finger's. No sole goes below the floor. A foot that sweeps the
+//! floor is lifted clear of it ([`sweep`]), and the stance the fingers
+//! leave is put down on both feet ([`stance`]).
+//!
+//! [`Feet`] owns all of it: the controller hands it, each step, what it
+//! needs ([`FeetStep`]) and the posture to correct.
+
+mod stance;
+mod sweep;
+#[cfg(test)]
+mod tests;
 
 use glam::{DQuat, DVec3};
 
-use super::{Controller, GROUND_CONTACT_M};
+use super::GROUND_CONTACT_M;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics, sole};
 use crate::control::posing::ik::{ccd, chain, plant_feet};
-use crate::control::tracking::accel::Gains;
+use crate::control::tracking::accel::{AccelTracker, Gains};
 
 /// A planted foot steps when the posture wants it this far away (m, on
 /// the floor).
@@ -39,9 +49,9 @@ const LANDING_SPEED_M_S: f64 = 0.3;
 
 /// Where a foot stands, or the step it is taking.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(super) struct FootHold {
+struct FootHold {
     /// Where the foot stands while it carries the body.
-    pub(super) anchor: Option<DVec3>,
+    anchor: Option<DVec3>,
     /// A step under way: where it left from, how far along it is (0..1),
     /// how long it takes (s) and the least it lifts the foot (a share of
     /// a full step's height).
@@ -75,24 +85,103 @@ fn step_duration(dist: f64) -> f64 {
     (0.12 + dist * 0.8).min(0.3)
 }
 
-impl Controller {
-    /// Plant, hold and step the feet of the tracked posture (see the
-    /// module), then keep every sole above the floor.
-    pub(super) fn fix_feet(&mut self, dt: f64) {
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
-        let target = forward_kinematics(sk, &self.target);
-        let shown = forward_kinematics(sk, &self.output);
-        let held = self.held();
+/// The feet of one character: each foot's hold or step, how fast the
+/// target's feet moved, how far each is lifted for sweeping the floor, and
+/// the body's measures they go by.
+#[derive(Clone, Debug)]
+pub(super) struct Feet {
+    /// Left and right.
+    holds: [FootHold; 2],
+    /// The target's foot positions last step, for their speed.
+    last_target: [DVec3; 2],
+    /// How far each foot is lifted for sweeping the floor (0..1).
+    swept: [f64; 2],
+    /// How high each foot that swings, steps or sweeps the floor stands
+    /// off it before the bound on joint accelerations (m), kept after it.
+    clear: [Option<f64>; 2],
+    /// Ankle height standing at rest (m): a foot lower than this plus a
+    /// little is on the floor.
+    ankle_rest: f64,
+    /// Hip to ankle along the bones (m): a planted foot farther than
+    /// this from its hip steps.
+    leg_length: f64,
+}
+
+/// What the feet are told each step.
+pub(super) struct FeetStep<'a> {
+    pub(super) skeleton: &'a Skeleton,
+    pub(super) roles: &'a RoleMap,
+    /// The posture asked for.
+    pub(super) target: &'a Pose,
+    /// The posture shown last step.
+    pub(super) shown_last: &'a WorldPose,
+    /// The parts fingers hold.
+    pub(super) held: &'a [Role],
+    /// The target switched controllers this step (its feet jumped).
+    pub(super) switched: bool,
+    /// Tracking's settling time (s; 0: tracking off).
+    pub(super) settle_s: f64,
+    /// While walking, which foot the clip has on the floor.
+    pub(super) contacts: Option<[bool; 2]>,
+    pub(super) dt: f64,
+}
+
+impl Feet {
+    /// The feet of a body standing in `world` (its rest posture), with
+    /// legs `leg_length` long from hip to ankle.
+    pub(super) fn new(roles: &RoleMap, world: &WorldPose, leg_length: f64) -> Self {
+        let now = [
+            world.positions[roles.get(Role::LeftFoot)],
+            world.positions[roles.get(Role::RightFoot)],
+        ];
+        Self {
+            holds: [FootHold::default(); 2],
+            last_target: now,
+            swept: [0.0; 2],
+            clear: [None; 2],
+            ankle_rest: now[0].y.min(now[1].y),
+            leg_length,
+        }
+    }
+
+    /// Ankle height standing at rest (m).
+    pub(super) fn ankle_rest(&self) -> f64 {
+        self.ankle_rest
+    }
+
+    /// Whether foot `k` (0 left, 1 right) is planted, carrying the body.
+    pub(super) fn planted(&self, k: usize) -> bool {
+        self.holds[k].anchor.is_some()
+    }
+
+    /// Whether foot `k` stands where it was planted and no sweep lifts
+    /// it: where it stands is to be kept.
+    pub(super) fn standing(&self, k: usize) -> bool {
+        self.planted(k) && self.swept[k] <= 0.0
+    }
+
+    /// Correct the tracked posture `output` (and the tracker's, where a
+    /// planted foot holds the body back): plant, hold and step the feet
+    /// (see the module), keep every sole above the floor, then lift the
+    /// feet that sweep it.
+    pub(super) fn step(&mut self, s: &FeetStep, output: &mut Pose, tracker: &mut AccelTracker) {
+        self.plant(s, output, tracker);
+        self.clear_swept(s, output);
+    }
+
+    /// Plant, hold and step the feet of the tracked posture, then keep
+    /// every sole above the floor.
+    fn plant(&mut self, s: &FeetStep, output: &mut Pose, tracker: &mut AccelTracker) {
+        let (sk, roles, dt) = (s.skeleton, s.roles, s.dt);
+        let target = forward_kinematics(sk, s.target);
+        let shown = forward_kinematics(sk, output);
+        let held = s.held;
         let settle = 1.0 - (-dt / 0.06).exp();
-        let switched = std::mem::take(&mut self.switched);
-        let gains = Gains::critical(self.settings.settle_s);
+        let switched = s.switched;
+        let gains = Gains::critical(s.settle_s);
         // While walking, the clip's own foot contacts say which foot
         // stands.
-        let contacts = match &self.mode {
-            super::Mode::Walk(w) => Some(w.contacts(&self.ch.gait)),
-            _ => None,
-        };
+        let contacts = s.contacts;
         let feet = [Role::LeftFoot, Role::RightFoot];
         let hips = [Role::LeftHip, Role::RightHip];
         let mut goals = [None; 2];
@@ -102,21 +191,21 @@ impl Controller {
             // Across a switch of controller the target's feet jump: that
             // is not the foot moving.
             let speed = if dt > 0.0 && !switched {
-                (p - self.last_feet[k]).length() / dt
+                (p - self.last_target[k]).length() / dt
             } else {
                 0.0
             };
-            self.last_feet[k] = p;
-            let other_planted = self.feet[1 - k].anchor.is_some();
-            let last = self.world.positions[foot_j];
-            let foot = &mut self.feet[k];
+            self.last_target[k] = p;
+            let other_planted = self.holds[1 - k].anchor.is_some();
+            let last = s.shown_last.positions[foot_j];
+            let foot = &mut self.holds[k];
             if held.contains(&role) {
                 *foot = FootHold::default();
                 continue;
             }
             let tracked = match foot.track {
                 // Tracking off: the target's foot.
-                _ if self.settings.settle_s <= 0.0 => (p, DVec3::ZERO),
+                _ if s.settle_s <= 0.0 => (p, DVec3::ZERO),
                 Some((at, v)) => {
                     let acc = ((p - at) * gains.k - v * gains.d).clamp_length_max(MAX_FOOT_ACCEL);
                     let v = v + acc * dt;
@@ -180,13 +269,12 @@ impl Controller {
                 foot.track = Some((a, DVec3::ZERO));
             }
         }
-        self.tether(&shown);
-        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
+        self.tether(roles, &shown, output, tracker);
         if goals.iter().any(Option::is_some) {
-            plant_feet(sk, roles, &mut self.output, goals);
+            plant_feet(sk, roles, output, goals);
         }
-        self.hold_turn(contacts.is_some(), dt);
-        self.onto_floor(goals);
+        self.hold_turn(sk, roles, output, contacts.is_some(), dt);
+        onto_floor(sk, roles, self.ankle_rest, held, output, goals);
     }
 
     /// A planted foot holds the body within its leg's reach (one that
@@ -195,14 +283,20 @@ impl Controller {
     /// by a finger or by tracking, is taken back, from the tracked posture
     /// too with its speed that way, so the body waits over the foot
     /// instead of dragging it along the floor.
-    fn tether(&mut self, shown: &WorldPose) {
+    fn tether(
+        &self,
+        roles: &RoleMap,
+        shown: &WorldPose,
+        output: &mut Pose,
+        tracker: &mut AccelTracker,
+    ) {
         let reach = self.leg_length;
         let mut shift = DVec3::ZERO;
         for (k, hip) in [Role::LeftHip, Role::RightHip].into_iter().enumerate() {
-            let Some(a) = self.feet[k].anchor else {
+            let Some(a) = self.holds[k].anchor else {
                 continue;
             };
-            let d = shown.positions[self.ch.roles.get(hip)] + shift - a;
+            let d = shown.positions[roles.get(hip)] + shift - a;
             let (flat, up) = (d.with_y(0.0), d.y);
             let h = flat.length();
             let within = (reach * reach - up * up).max(0.0).sqrt();
@@ -213,12 +307,12 @@ impl Controller {
         if shift == DVec3::ZERO {
             return;
         }
-        self.output.translations[0] += shift;
-        self.tracker.pose.translations[0] += shift;
+        output.translations[0] += shift;
+        tracker.pose.translations[0] += shift;
         let back = shift.normalize();
-        let away = -self.tracker.root_velocity.dot(back);
+        let away = -tracker.root_velocity.dot(back);
         if away > 0.0 {
-            self.tracker.root_velocity += back * away;
+            tracker.root_velocity += back * away;
         }
     }
 
@@ -227,22 +321,28 @@ impl Controller {
     /// sweep the floor round its ankle); a lifted foot takes the
     /// posture's turn again, smoothly, in the air. Once a walk is over, a
     /// foot it left turned far against the body steps into line.
-    fn hold_turn(&mut self, walking: bool, dt: f64) {
+    fn hold_turn(
+        &mut self,
+        sk: &Skeleton,
+        roles: &RoleMap,
+        output: &mut Pose,
+        walking: bool,
+        dt: f64,
+    ) {
         if !walking
             && self
-                .feet
+                .holds
                 .iter()
                 .all(|f| f.twist == 0.0 && f.held_yaw.is_none() && f.anchor.is_none())
         {
             // Posing with nothing planted, held or let go: nothing to turn.
             return;
         }
-        let sk = &self.ch.lib.skeleton;
-        let w = forward_kinematics(sk, &self.output);
+        let w = forward_kinematics(sk, output);
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
-            let j = self.ch.roles.get(role);
-            let other = self.feet[1 - k];
-            let foot = &mut self.feet[k];
+            let j = roles.get(role);
+            let other = self.holds[1 - k];
+            let foot = &mut self.holds[k];
             let yaw = foot_yaw(sk, &w, j);
             let turned = !walking
                 && foot.walked
@@ -299,69 +399,74 @@ impl Controller {
                 .parent
                 .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
             let turned = DQuat::from_rotation_y(foot.twist) * w.rotations[j];
-            self.output.rotations[j] = (parent.inverse() * turned).normalize();
+            output.rotations[j] = (parent.inverse() * turned).normalize();
         }
     }
+}
 
-    /// The floor: a sole below it (tracking straightens a leg before the
-    /// pelvis rises, toes tip down) is lifted onto it: the leg bends to
-    /// raise the foot by as much as its lowest point went under (the foot
-    /// keeps its turn: turning it instead snaps the ankle round each time a
-    /// fast foot meets the floor), then any toes still under turn up at
-    /// the ankle, as toes flatten on the ground.
-    pub(super) fn onto_floor(&mut self, mut goals: [Option<DVec3>; 2]) {
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
-        let feet = [Role::LeftFoot, Role::RightFoot];
-        let mut lifted = false;
-        let ankle_min = self.ankle_rest * 0.5;
-        let w = forward_kinematics(sk, &self.output);
-        for (k, role) in feet.into_iter().enumerate() {
-            let j = roles.get(role);
-            let ankle = w.positions[j];
-            // As deep as the lowest point of the foot went, or the ankle
-            // under half its standing height.
-            let below = (-sole(sk, &w, j).y).max(ankle_min - ankle.y);
-            goals[k] = if below > 0.0 {
-                lifted = true;
-                Some(ankle + DVec3::Y * below)
-            } else {
-                goals[k].map(|_| ankle)
-            };
+/// The floor: a sole below it (tracking straightens a leg before the
+/// pelvis rises, toes tip down) is lifted onto it: the leg bends to
+/// raise the foot by as much as its lowest point went under (the foot
+/// keeps its turn: turning it instead snaps the ankle round each time a
+/// fast foot meets the floor), then any toes still under turn up at
+/// the ankle, as toes flatten on the ground. A hand no finger holds
+/// (`held`) goes no deeper than the floor either.
+fn onto_floor(
+    sk: &Skeleton,
+    roles: &RoleMap,
+    ankle_rest: f64,
+    held: &[Role],
+    output: &mut Pose,
+    mut goals: [Option<DVec3>; 2],
+) {
+    let feet = [Role::LeftFoot, Role::RightFoot];
+    let mut lifted = false;
+    let ankle_min = ankle_rest * 0.5;
+    let w = forward_kinematics(sk, output);
+    for (k, role) in feet.into_iter().enumerate() {
+        let j = roles.get(role);
+        let ankle = w.positions[j];
+        // As deep as the lowest point of the foot went, or the ankle
+        // under half its standing height.
+        let below = (-sole(sk, &w, j).y).max(ankle_min - ankle.y);
+        goals[k] = if below > 0.0 {
+            lifted = true;
+            Some(ankle + DVec3::Y * below)
+        } else {
+            goals[k].map(|_| ankle)
+        };
+    }
+    if lifted {
+        plant_feet(sk, roles, output, goals);
+        // A leg that cannot bend the foot up far enough (pulled
+        // straight, or its knee the bound holds back): the body rises.
+        rise_over_floor(sk, roles, output, &feet);
+    }
+    let w = forward_kinematics(sk, output);
+    for role in feet {
+        let j = roles.get(role);
+        let turn = toes_onto_floor(sk, &w, j);
+        if turn != DQuat::IDENTITY {
+            let parent = sk.joints[j]
+                .parent
+                .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
+            output.rotations[j] = (parent.inverse() * turn * w.rotations[j]).normalize();
         }
-        if lifted {
-            plant_feet(sk, roles, &mut self.output, goals);
-            // A leg that cannot bend the foot up far enough (pulled
-            // straight, or its knee the bound holds back): the body rises.
-            rise_over_floor(sk, roles, &mut self.output, &feet);
-        }
-        let w = forward_kinematics(sk, &self.output);
-        for role in feet {
-            let j = roles.get(role);
-            let turn = toes_onto_floor(sk, &w, j);
-            if turn != DQuat::IDENTITY {
-                let parent = sk.joints[j]
-                    .parent
-                    .map_or(DQuat::IDENTITY, |p| w.rotations[p]);
-                self.output.rotations[j] = (parent.inverse() * turn * w.rotations[j]).normalize();
-            }
-        }
-        // A hand no finger holds goes no deeper than the floor: the arm
-        // lifts it by as much as its lowest point went under.
-        let held = self.held();
-        let w = forward_kinematics(sk, &self.output);
-        let hands: Vec<(usize, Vec<usize>, DVec3)> = [Role::LeftHand, Role::RightHand]
-            .into_iter()
-            .filter(|r| !held.contains(r))
-            .filter_map(|r| {
-                let j = roles.get(r);
-                let under = -sole(sk, &w, j).y;
-                (under > 0.0).then(|| (j, chain(sk, roles, r), w.positions[j] + DVec3::Y * under))
-            })
-            .collect();
-        if !hands.is_empty() {
-            ccd(sk, &mut self.output, &hands, 12);
-        }
+    }
+    // A hand no finger holds goes no deeper than the floor: the arm
+    // lifts it by as much as its lowest point went under.
+    let w = forward_kinematics(sk, output);
+    let hands: Vec<(usize, Vec<usize>, DVec3)> = [Role::LeftHand, Role::RightHand]
+        .into_iter()
+        .filter(|r| !held.contains(r))
+        .filter_map(|r| {
+            let j = roles.get(r);
+            let under = -sole(sk, &w, j).y;
+            (under > 0.0).then(|| (j, chain(sk, roles, r), w.positions[j] + DVec3::Y * under))
+        })
+        .collect();
+    if !hands.is_empty() {
+        ccd(sk, output, &hands, 12);
     }
 }
 

@@ -5,9 +5,9 @@
 
 use glam::DVec3;
 
-use super::Controller;
-use crate::character::roles::Role;
-use crate::character::skeleton::forward_kinematics;
+use super::Feet;
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 use crate::control::posing::ik::plant_feet;
 
 /// A foot whose ankle is this much higher than standing (m) is off the
@@ -19,14 +19,17 @@ const RAISED_M: f64 = 0.06;
 /// it, in the same direction.
 const WIDEST_STANCE_M: f64 = 0.5;
 
-impl Controller {
-    /// Put the target posture's raised feet down (the fingers have
-    /// lifted).
-    pub(super) fn settle_stance(&mut self) {
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
+impl Feet {
+    /// Put the raised feet of the target posture `target` down (the
+    /// fingers have lifted).
+    pub(in crate::control::controller) fn settle_stance(
+        &self,
+        sk: &Skeleton,
+        roles: &RoleMap,
+        target: &mut Pose,
+    ) {
         let feet = [Role::LeftFoot, Role::RightFoot];
-        let w = forward_kinematics(sk, &self.target);
+        let w = forward_kinematics(sk, target);
         let ankles = feet.map(|r| w.positions[roles.get(r)]);
         let up = ankles.map(|a| a.y > self.ankle_rest + RAISED_M);
         if !up[0] && !up[1] {
@@ -35,9 +38,9 @@ impl Controller {
         // Off both feet: the body comes down until the lower one stands.
         if up[0] && up[1] {
             let drop = ankles[0].y.min(ankles[1].y) - self.ankle_rest;
-            self.target.translations[0].y -= drop;
+            target.translations[0].y -= drop;
         }
-        let w = forward_kinematics(sk, &self.target);
+        let w = forward_kinematics(sk, target);
         let ankles = feet.map(|r| w.positions[roles.get(r)]);
         let floor = |p: DVec3| p.with_y(self.ankle_rest);
         let hips = [Role::LeftHip, Role::RightHip].map(|r| w.positions[roles.get(r)]);
@@ -58,15 +61,15 @@ impl Controller {
         // A leg that cannot reach the floor (the hip hitched up as the
         // foot was raised) brings the body down by what it lacks.
         for _ in 0..3 {
-            plant_feet(sk, roles, &mut self.target, goals);
-            let w = forward_kinematics(sk, &self.target);
+            plant_feet(sk, roles, target, goals);
+            let w = forward_kinematics(sk, target);
             let short = (0..2)
                 .filter_map(|k| goals[k].map(|g| w.positions[roles.get(feet[k])].y - g.y))
                 .fold(0.0f64, f64::max);
             if short < 0.002 {
                 break;
             }
-            self.target.translations[0].y -= short;
+            target.translations[0].y -= short;
         }
         tracing::debug!(
             left = up[0],

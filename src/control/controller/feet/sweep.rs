@@ -12,9 +12,11 @@
 
 use glam::DVec3;
 
-use super::Controller;
-use crate::character::roles::Role;
-use crate::character::skeleton::{WorldPose, foot_points, forward_kinematics, sole};
+use super::{Feet, FeetStep};
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{
+    Pose, Skeleton, WorldPose, foot_points, forward_kinematics, sole,
+};
 use crate::control::posing::ik::plant_feet;
 
 /// Up to this speed over the floor (m/s) a foot stays on it (a planted
@@ -23,23 +25,21 @@ const SLOW_M_S: f64 = 0.15;
 /// ...from this speed on it is clear of it.
 const SWING_M_S: f64 = 0.27;
 /// How far above the floor a swinging foot's lowest point goes (m).
-const CLEARANCE_M: f64 = 0.022;
+pub(super) const CLEARANCE_M: f64 = 0.022;
 /// Only points this near the floor count for the speed (m).
 const NEAR_M: f64 = 0.06;
 /// How long a foot that slowed takes to come down (s).
 const SET_DOWN_S: f64 = 0.1;
 
-impl Controller {
-    /// Lift the feet that sweep the floor (see the module), against the
-    /// posture shown last frame.
-    pub(super) fn clear_swept_feet(&mut self, dt: f64) {
+impl Feet {
+    /// Lift the feet of `output` that sweep the floor (see the module),
+    /// against the posture shown last frame.
+    pub(super) fn clear_swept(&mut self, s: &FeetStep, output: &mut Pose) {
+        let (sk, roles, dt, held) = (s.skeleton, s.roles, s.dt, s.held);
         if dt <= 0.0 {
             return;
         }
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
-        let now = forward_kinematics(sk, &self.output);
-        let held = self.held();
+        let now = forward_kinematics(sk, output);
         let mut lifts = [0.0; 2];
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             if held.contains(&role) {
@@ -47,7 +47,7 @@ impl Controller {
                 continue;
             }
             let j = roles.get(role);
-            let speed = foot_points(sk, &self.world, j)
+            let speed = foot_points(sk, s.shown_last, j)
                 .zip(foot_points(sk, &now, j))
                 .filter(|(a, b)| a.y.min(b.y) < NEAR_M)
                 .map(|(a, b)| (b - a).with_y(0.0).length() / dt)
@@ -56,15 +56,14 @@ impl Controller {
             self.swept[k] = want.max(self.swept[k] - dt / SET_DOWN_S);
             lifts[k] = CLEARANCE_M * self.swept[k];
         }
-        self.lift_feet(lifts, now);
+        self.lift_feet(sk, roles, output, lifts, now);
         // What the bound on joint accelerations must not take back: a
         // foot off the floor that carries nothing, or that sweeps it, stays
         // clear of it.
-        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
-        let w = forward_kinematics(sk, &self.output);
+        let w = forward_kinematics(sk, output);
         for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let y = sole(sk, &w, roles.get(role)).y;
-            let lifted = self.feet[k].anchor.is_none() || self.swept[k] > 0.0;
+            let lifted = self.holds[k].anchor.is_none() || self.swept[k] > 0.0;
             // As high as the sweep asks (a planted leg may not have lifted
             // it that far), or as the foot swings or steps.
             let want = y.max(CLEARANCE_M * self.swept[k]).min(CLEARANCE_M);
@@ -74,30 +73,39 @@ impl Controller {
 
     /// A swinging or stepping foot that the bound on joint accelerations
     /// brought back down towards the floor (its leg may not bend that fast)
-    /// is held clear of it as [`Self::clear_swept_feet`] left it: the body
+    /// is held clear of it as [`Self::clear_swept`] left it: the body
     /// rises by what the foot lacks, its joints untouched.
-    pub(super) fn keep_feet_clear(&mut self) {
-        let sk = &self.ch.lib.skeleton;
-        let w = forward_kinematics(sk, &self.output);
+    pub(in crate::control::controller) fn keep_clear(
+        &self,
+        sk: &Skeleton,
+        roles: &RoleMap,
+        output: &mut Pose,
+    ) {
+        let w = forward_kinematics(sk, output);
         let short = [Role::LeftFoot, Role::RightFoot]
             .into_iter()
             .enumerate()
             .filter_map(|(k, role)| {
                 let want = self.clear[k]?;
-                Some(want - sole(sk, &w, self.ch.roles.get(role)).y)
+                Some(want - sole(sk, &w, roles.get(role)).y)
             })
             .fold(0.0, f64::max);
         if short > 1e-4 {
-            self.output.translations[0].y += short;
+            output.translations[0].y += short;
         }
     }
 
     /// Lift each foot until its lowest point is `lifts[k]` above the
     /// floor (no lower than it is), keeping its turn; `w` is the shown
     /// posture's world pose.
-    fn lift_feet(&mut self, lifts: [f64; 2], mut w: WorldPose) {
-        let sk = &self.ch.lib.skeleton;
-        let roles = &self.ch.roles;
+    fn lift_feet(
+        &self,
+        sk: &Skeleton,
+        roles: &RoleMap,
+        output: &mut Pose,
+        lifts: [f64; 2],
+        mut w: WorldPose,
+    ) {
         // The leg's IK turns the foot with the leg: a few passes lift its
         // lowest point as far as asked.
         for _ in 0..3 {
@@ -112,31 +120,31 @@ impl Controller {
             if goals.iter().all(Option::is_none) {
                 break;
             }
-            plant_feet(sk, roles, &mut self.output, goals);
+            plant_feet(sk, roles, output, goals);
             // The foot keeps its turn: lifted, not tipped by the leg.
-            let lifted = forward_kinematics(sk, &self.output);
+            let lifted = forward_kinematics(sk, output);
             for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
                 let j = roles.get(role);
                 if let (Some(_), Some(p)) = (goals[k], sk.joints[j].parent) {
-                    self.output.rotations[j] =
+                    output.rotations[j] =
                         (lifted.rotations[p].inverse() * w.rotations[j]).normalize();
                 }
             }
-            w = forward_kinematics(sk, &self.output);
+            w = forward_kinematics(sk, output);
         }
         // A straight leg cannot lift its swinging foot clear: the body rises
         // by what it lacks (as a runner's does), the feet that stand
         // planted again.
         let short = (0..2)
-            .filter(|&k| lifts[k] > 0.0 && self.feet[k].anchor.is_none())
+            .filter(|&k| lifts[k] > 0.0 && self.holds[k].anchor.is_none())
             .map(|k| lifts[k] - sole(sk, &w, roles.get([Role::LeftFoot, Role::RightFoot][k])).y)
             .fold(0.0, f64::max);
         if short > 1e-3 {
             let stand: [Option<DVec3>; 2] =
-                std::array::from_fn(|k| self.feet[k].anchor.filter(|_| lifts[k] == 0.0));
-            self.output.translations[0].y += short;
+                std::array::from_fn(|k| self.holds[k].anchor.filter(|_| lifts[k] == 0.0));
+            output.translations[0].y += short;
             if stand.iter().any(Option::is_some) {
-                plant_feet(sk, roles, &mut self.output, stand);
+                plant_feet(sk, roles, output, stand);
             }
         }
     }
