@@ -10,15 +10,10 @@ impl Controller {
     /// with the name of the joint each carries.
     #[must_use]
     pub fn capsules(&self) -> Vec<(crate::physics::ragdoll::Capsule, &str)> {
-        self.ragdoll
-            .segments()
-            .iter()
-            .map(|s| {
-                (
-                    s.capsule_in(&self.world),
-                    self.ch.lib.skeleton.joints[s.joint()].name.as_str(),
-                )
-            })
+        self.physical
+            .capsules(&self.world)
+            .into_iter()
+            .map(|(c, j)| (c, self.ch.lib.skeleton.joints[j].name.as_str()))
             .collect()
     }
 
@@ -26,17 +21,13 @@ impl Controller {
     /// neck, head), in [`Self::capsules`]' order.
     #[must_use]
     pub fn trunk_segments(&self) -> Vec<bool> {
-        self.ragdoll
-            .segments()
-            .iter()
-            .map(|s| s.region() == crate::physics::body::Region::Torso)
-            .collect()
+        self.physical.trunk_segments()
     }
 
     /// Mass of each ragdoll segment (kg), in [`Self::capsules`]' order.
     #[must_use]
     pub fn segment_masses(&self) -> Vec<f64> {
-        self.ragdoll.segments().iter().map(|s| s.mass()).collect()
+        self.physical.segment_masses()
     }
 
     /// A blow from outside: `impulse` (N·s) on segment `k` of the ragdoll,
@@ -45,10 +36,7 @@ impl Controller {
     /// at once, fading back as it recovers; feet that carry the body stay
     /// where they stand.
     pub fn hit(&mut self, k: usize, impulse: DVec3, shove: DVec3) {
-        self.ragdoll.push(k, impulse);
-        let shove = shove.with_y(0.0);
-        if shove.is_finite() && shove != DVec3::ZERO {
-            self.shove += shove;
+        if let Some(shove) = self.physical.hit(k, impulse, shove) {
             self.output.translations[0] += shove;
             for p in &mut self.world.positions {
                 *p += shove;

@@ -43,8 +43,7 @@ use crate::control::posing::synth::synthesize;
 use crate::control::tracking::accel::{AccelTracker, Gains};
 use crate::input::touch::ContactId;
 use crate::input::touch::ScreenFrame;
-use crate::physics::effects::{Attenuation, Effects};
-use crate::physics::ragdoll::{Ragdoll, RagdollSettings};
+use crate::physics::effects::Attenuation;
 use crate::screen::ScreenPoint;
 
 /// How the controller behaves; the recognition thresholds come from the
@@ -153,9 +152,9 @@ pub struct Controller {
     /// The feet that carry the body: planted, stepping, sweeping.
     feet: Feet,
     world: WorldPose,
-    /// Physics-based tracking: the ragdoll and the effects taken from it.
-    ragdoll: Ragdoll,
-    effects: Effects,
+    /// Physics-based tracking: the ragdoll, the effects taken from it,
+    /// and a push from another body fading.
+    physical: effects::Physical,
     /// The target switched controllers this step (its feet jumped).
     switched: bool,
     /// A glTF figure shown over the body: a touch on its surface grabs.
@@ -165,9 +164,6 @@ pub struct Controller {
     events: Vec<ActionEvent>,
     /// Each held part's drag matched against the templates so far.
     matching: BTreeMap<ContactId, Matching>,
-    /// How far another character's body pushed this one (m, on the
-    /// floor): added to the pelvis, fading as the body recovers.
-    shove: DVec3,
     /// Where a finger on the pelvis leads, for walking, and what the walk
     /// under way is told as.
     lead: walk::Lead,
@@ -188,10 +184,6 @@ const GROUND_CONTACT_M: f64 = 0.03;
 
 /// Longest tracking sub-step (s): explicit integration stays stable.
 pub const MAX_SUBSTEP: f64 = 0.004;
-
-/// A push from another character fades with this time constant (s): the
-/// body is back where it stood within about a second.
-const SHOVE_RECOVERY_S: f64 = 0.3;
 
 impl Controller {
     /// A character at rest at the origin facing +Z, seen in a picture of
@@ -221,16 +213,13 @@ impl Controller {
         let pose = ch.rest_pose(&at);
         let world = forward_kinematics(&ch.lib.skeleton, &pose);
         let pelvis_h = world.positions[ch.roles.get(Role::Pelvis)].y;
-        let ragdoll = Ragdoll::new(
-            &ch.lib.skeleton,
-            &ch.roles,
-            &world,
-            &world,
-            RagdollSettings::default(),
-        );
         Self {
-            ragdoll,
-            effects: Effects::new(settings.attenuation),
+            physical: effects::Physical::new(
+                &ch.lib.skeleton,
+                &ch.roles,
+                &world,
+                settings.attenuation,
+            ),
             output: pose.clone(),
             feet: Feet::new(
                 &ch.roles,
@@ -252,7 +241,6 @@ impl Controller {
             last_touch: t,
             events: Vec::new(),
             matching: BTreeMap::new(),
-            shove: DVec3::ZERO,
             lead: walk::Lead {
                 height: pelvis_h,
                 beyond_since: None,
@@ -460,18 +448,21 @@ impl Controller {
             self.tracker = AccelTracker::new(self.target.clone());
         }
         self.output = self.tracker.pose.clone();
-        if self.settings.physics && self.settings.settle_s > 0.0 {
-            self.physical_effects(dt);
-        }
-        if self.shove != DVec3::ZERO {
-            self.output.translations[0] += self.shove;
-            self.shove *= (-dt / SHOVE_RECOVERY_S).exp();
-            if self.shove.length() < 1e-4 {
-                self.shove = DVec3::ZERO;
-            }
-        }
         let held = self.held();
         let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
+        if self.settings.physics && self.settings.settle_s > 0.0 {
+            let planted = [self.feet.planted(0), self.feet.planted(1)];
+            self.physical.effects(
+                sk,
+                roles,
+                &self.target,
+                &mut self.output,
+                &held,
+                planted,
+                dt,
+            );
+        }
+        self.physical.recover(&mut self.output, dt);
         let step = FeetStep {
             skeleton: sk,
             roles,
