@@ -101,9 +101,13 @@ pub fn load_models(dir: &Path, force_bake: bool) -> Result<(Library, LearnedMode
 /// The character of the library in `dir`, ready for controllers.
 pub fn load(dir: &Path) -> Result<Arc<Character>, LoadError> {
     let (lib, model) = load_models(dir, false)?;
-    Ok(Arc::new(Character::assemble(lib, model, |lib, actions| {
-        recogniser(lib, actions)
-    })))
+    // The recogniser's thresholds are read (or calibrated and stored)
+    // before the character is put together from its parts.
+    let actions = Character::action_models(&lib);
+    let recogniser = recogniser(&lib, &actions);
+    Ok(Arc::new(Character::assemble(
+        lib, model, actions, recogniser,
+    )))
 }
 
 /// The library's recogniser: its thresholds from the cache, else

@@ -54,24 +54,31 @@ impl Character {
     /// The recogniser is calibrated here, in memory.
     #[must_use]
     pub fn new(lib: Library, posing: LearnedModel) -> Self {
-        Self::assemble(lib, posing, Self::calibrated)
+        let actions = Self::action_models(&lib);
+        let recogniser = Self::calibrated(&lib, &actions);
+        Self::assemble(lib, posing, actions, recogniser)
     }
 
-    /// Build the action models of `lib`, with its posing model and the
-    /// recogniser `recogniser` gives for the models (the application reads
-    /// it from the model cache).
+    /// The action models of `lib`, one per action, in its order.
+    #[must_use]
+    pub fn action_models(lib: &Library) -> Vec<ActionModel> {
+        lib.actions
+            .iter()
+            .map(|def| ActionModel::build(lib, def))
+            .collect()
+    }
+
+    /// The character of `lib`, with its posing model, its action models
+    /// ([`Self::action_models`]) and the recogniser for them (calibrated
+    /// by [`Self::calibrated`], or the thresholds the application keeps in
+    /// its cache).
     #[must_use]
     pub fn assemble(
         lib: Library,
         posing: LearnedModel,
-        recogniser: impl FnOnce(&Library, &[ActionModel]) -> Recogniser,
+        actions: Vec<ActionModel>,
+        recogniser: Recogniser,
     ) -> Self {
-        let actions: Vec<ActionModel> = lib
-            .actions
-            .iter()
-            .map(|def| ActionModel::build(&lib, def))
-            .collect();
-        let recogniser = recogniser(&lib, &actions);
         let roles = lib
             .posing
             .first()
