@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use super::GROUND_CONTACT_M;
+use super::feet::GROUND_CONTACT_M;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
 use crate::physics::body::Region;

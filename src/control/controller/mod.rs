@@ -179,8 +179,6 @@ pub struct Controller {
 /// The longest drag kept for recognition (s): longer than any action.
 const MAX_TRAIL_S: f64 = 4.0;
 
-/// A part this close to the floor touches it (m).
-const GROUND_CONTACT_M: f64 = 0.03;
 
 /// Longest tracking sub-step (s): explicit integration stays stable.
 pub const MAX_SUBSTEP: f64 = 0.004;

@@ -20,11 +20,13 @@ mod tests;
 
 use glam::{DQuat, DVec3};
 
-use super::GROUND_CONTACT_M;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics, sole};
 use crate::control::posing::ik::{ccd, chain, plant_feet};
 use crate::control::tracking::accel::{AccelTracker, Gains};
+
+/// A part this close to the floor touches it (m).
+pub(super) const GROUND_CONTACT_M: f64 = 0.03;
 
 /// A planted foot steps when the posture wants it this far away (m, on
 /// the floor).
