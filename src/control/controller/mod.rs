@@ -20,12 +20,13 @@ mod feet;
 mod fingers;
 mod jerk;
 mod layer;
+mod step;
 mod surface;
 #[cfg(test)]
 mod testbody;
 mod walk;
 
-use self::feet::{Feet, FeetStep};
+use self::feet::Feet;
 pub use self::layer::Layered;
 pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
@@ -35,12 +36,9 @@ use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
 use crate::control::action::player::ActionPlayer;
 use crate::control::action::recogniser::DragMatch;
-use crate::control::action::timeline::{ActionEvent, Status};
+use crate::control::action::timeline::ActionEvent;
 use crate::control::action::trail::{StartRule, TrailPoint};
-use crate::control::character::upper;
-use crate::control::posing::constraint::{Constraint, SynthOptions};
-use crate::control::posing::synth::synthesize;
-use crate::control::tracking::accel::{AccelTracker, Gains};
+use crate::control::tracking::accel::AccelTracker;
 use crate::input::touch::ContactId;
 use crate::input::touch::ScreenFrame;
 use crate::physics::effects::Attenuation;
@@ -178,7 +176,6 @@ pub struct Controller {
 
 /// The longest drag kept for recognition (s): longer than any action.
 const MAX_TRAIL_S: f64 = 4.0;
-
 
 /// Longest tracking sub-step (s): explicit integration stays stable.
 pub const MAX_SUBSTEP: f64 = 0.004;
@@ -359,137 +356,6 @@ impl Controller {
             self.at = at;
             self.planted = None;
         }
-    }
-
-    /// Advance to time `t` (seconds): synthesise the target posture and
-    /// track it.
-    pub fn advance(&mut self, t: f64) {
-        let dt = (t - self.time).clamp(0.0, 0.25);
-        self.time = t;
-        let camera = self.rig.camera();
-        let constraints = self.constraints(&camera);
-        // Under a layered action the arms and head are its own.
-        let base: Vec<Constraint> = constraints
-            .iter()
-            .copied()
-            .filter(|c| self.layer.is_none() || !upper(c.role))
-            .collect();
-        let moved = self
-            .grabs
-            .values()
-            .any(|g| matches!(g, Grab::Part { moved: true, .. }));
-        match &mut self.mode {
-            Mode::Walk(_) => self.walk_step(&camera, t, dt),
-            Mode::Posing => {
-                // An action laid over a walk that ended plays out first.
-                let found = self.layer.is_none().then(|| self.recognise(&camera, t));
-                if let Some(player) = found.flatten() {
-                    self.mode = Mode::Action(Box::new(player));
-                    self.switched = true;
-                } else if matches!(self.mode, Mode::Walk(_)) || self.try_walk(&camera, t) {
-                    // A walk's drag started a walk, or the finger left reach.
-                    self.walk_step(&camera, t, dt);
-                } else if !base.is_empty() {
-                    self.target = synthesize(
-                        &self.ch.lib.skeleton,
-                        &self.ch.roles,
-                        &self.ch.posing,
-                        &base,
-                        &self.at,
-                        self.planted,
-                        &SynthOptions::default(),
-                    );
-                } else if self.planted.take().is_some() {
-                    // The last finger on the body lifted.
-                    self.feet.settle_stance(
-                        &self.ch.lib.skeleton,
-                        &self.ch.roles,
-                        &mut self.target,
-                    );
-                }
-            }
-            Mode::Action(player) => {
-                self.target = player.step(
-                    &self.ch.lib,
-                    &self.ch.actions,
-                    &base,
-                    !moved,
-                    dt,
-                    &mut self.events,
-                );
-                if player.status() != Status::Playing {
-                    let placed = self.placement_now();
-                    self.at = placed;
-                    self.mode = Mode::Posing;
-                    self.switched = true;
-                    if !self.held().is_empty() {
-                        self.begin_posing();
-                    }
-                    self.reset_trails(t);
-                }
-            }
-        }
-        self.layer_step(&camera, &constraints, t, dt);
-        for g in self.grabs.values_mut() {
-            if let Grab::Part { moved, .. } = g {
-                *moved = false;
-            }
-        }
-        if self.settings.settle_s > 0.0 {
-            let gains = Gains::critical(self.settings.settle_s);
-            let steps = (dt / MAX_SUBSTEP).ceil().max(1.0) as usize;
-            for _ in 0..steps {
-                self.tracker.step(&self.target, gains, dt / steps as f64);
-            }
-        } else {
-            // Tracking off: the output is the target.
-            self.tracker = AccelTracker::new(self.target.clone());
-        }
-        self.output = self.tracker.pose.clone();
-        let held = self.held();
-        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
-        if self.settings.physics && self.settings.settle_s > 0.0 {
-            let planted = [self.feet.planted(0), self.feet.planted(1)];
-            self.physical.effects(
-                sk,
-                roles,
-                &self.target,
-                &mut self.output,
-                &held,
-                planted,
-                dt,
-            );
-        }
-        self.physical.recover(&mut self.output, dt);
-        let step = FeetStep {
-            skeleton: sk,
-            roles,
-            target: &self.target,
-            shown_last: &self.world,
-            held: &held,
-            switched: std::mem::take(&mut self.switched),
-            settle_s: self.settings.settle_s,
-            // While walking, the clip's own foot contacts say which foot
-            // stands.
-            contacts: match &self.mode {
-                Mode::Walk(w) => Some(w.contacts(&self.ch.gait)),
-                _ => None,
-            },
-            dt,
-        };
-        self.feet.step(&step, &mut self.output, &mut self.tracker);
-        if self.settings.settle_s > 0.0 {
-            // Part of tracking: off, the synthesised postures are shown.
-            let standing = [self.feet.standing(0), self.feet.standing(1)];
-            self.jerk
-                .bound(sk, roles, &mut self.output, &held, standing, dt);
-            self.feet.keep_clear(sk, roles, &mut self.output);
-        }
-        self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
-        let idle = self.idle_s() > self.settings.home_after_s;
-        let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
-        self.rig.settle(floor, idle, dt);
-        self.follow_drift(&self.rig.camera());
     }
 
     /// Touches up to `t`, then advance to `t`.

@@ -1,0 +1,173 @@
+//! One step of the controller, as a short list of stages, each a call on
+//! a part: the target posture (posing, an action or a walk), an action
+//! laid over it, tracking, the corrections of the shown posture (the
+//! physical effects, a push fading, the feet, the bound on joint
+//! accelerations), and what is shown (the world pose, the camera).
+
+use super::feet::FeetStep;
+use super::{Controller, Grab, MAX_SUBSTEP, Mode};
+use crate::character::camera::Camera;
+use crate::character::roles::Role;
+use crate::character::skeleton::forward_kinematics;
+use crate::control::action::timeline::Status;
+use crate::control::character::upper;
+use crate::control::posing::constraint::{Constraint, SynthOptions};
+use crate::control::posing::synth::synthesize;
+use crate::control::tracking::accel::{AccelTracker, Gains};
+
+impl Controller {
+    /// Advance to time `t` (seconds): synthesise the target posture and
+    /// track it.
+    pub fn advance(&mut self, t: f64) {
+        let dt = (t - self.time).clamp(0.0, 0.25);
+        self.time = t;
+        let camera = self.rig.camera();
+        let constraints = self.constraints(&camera);
+        self.aim(&camera, &constraints, t, dt);
+        self.layer_step(&camera, &constraints, t, dt);
+        for g in self.grabs.values_mut() {
+            if let Grab::Part { moved, .. } = g {
+                *moved = false;
+            }
+        }
+        self.track(dt);
+        self.correct(dt);
+        self.show(dt);
+    }
+
+    /// The target posture: posing to the fingers' constraints, an action
+    /// a drag started (or the one playing), or a walk.
+    fn aim(&mut self, camera: &Camera, constraints: &[Constraint], t: f64, dt: f64) {
+        // Under a layered action the arms and head are its own.
+        let base: Vec<Constraint> = constraints
+            .iter()
+            .copied()
+            .filter(|c| self.layer.is_none() || !upper(c.role))
+            .collect();
+        let moved = self
+            .grabs
+            .values()
+            .any(|g| matches!(g, Grab::Part { moved: true, .. }));
+        match &mut self.mode {
+            Mode::Walk(_) => self.walk_step(camera, t, dt),
+            Mode::Posing => {
+                // An action laid over a walk that ended plays out first.
+                let found = self.layer.is_none().then(|| self.recognise(camera, t));
+                if let Some(player) = found.flatten() {
+                    self.mode = Mode::Action(Box::new(player));
+                    self.switched = true;
+                } else if matches!(self.mode, Mode::Walk(_)) || self.try_walk(camera, t) {
+                    // A walk's drag started a walk, or the finger left reach.
+                    self.walk_step(camera, t, dt);
+                } else if !base.is_empty() {
+                    self.target = synthesize(
+                        &self.ch.lib.skeleton,
+                        &self.ch.roles,
+                        &self.ch.posing,
+                        &base,
+                        &self.at,
+                        self.planted,
+                        &SynthOptions::default(),
+                    );
+                } else if self.planted.take().is_some() {
+                    // The last finger on the body lifted.
+                    self.feet.settle_stance(
+                        &self.ch.lib.skeleton,
+                        &self.ch.roles,
+                        &mut self.target,
+                    );
+                }
+            }
+            Mode::Action(player) => {
+                self.target = player.step(
+                    &self.ch.lib,
+                    &self.ch.actions,
+                    &base,
+                    !moved,
+                    dt,
+                    &mut self.events,
+                );
+                if player.status() != Status::Playing {
+                    let placed = self.placement_now();
+                    self.at = placed;
+                    self.mode = Mode::Posing;
+                    self.switched = true;
+                    if !self.held().is_empty() {
+                        self.begin_posing();
+                    }
+                    self.reset_trails(t);
+                }
+            }
+        }
+    }
+
+    /// Tracking control (section 6): the shown posture follows the target
+    /// by bounded accelerations, in sub-steps short enough to stay stable.
+    fn track(&mut self, dt: f64) {
+        if self.settings.settle_s > 0.0 {
+            let gains = Gains::critical(self.settings.settle_s);
+            let steps = (dt / MAX_SUBSTEP).ceil().max(1.0) as usize;
+            for _ in 0..steps {
+                self.tracker.step(&self.target, gains, dt / steps as f64);
+            }
+        } else {
+            // Tracking off: the output is the target.
+            self.tracker = AccelTracker::new(self.target.clone());
+        }
+        self.output = self.tracker.pose.clone();
+    }
+
+    /// The tracked posture corrected: the physical effects (eq. 5-7), a
+    /// push fading, the feet, then the bound on joint accelerations.
+    fn correct(&mut self, dt: f64) {
+        let held = self.held();
+        let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
+        if self.settings.physics && self.settings.settle_s > 0.0 {
+            let planted = [self.feet.planted(0), self.feet.planted(1)];
+            self.physical.effects(
+                sk,
+                roles,
+                &self.target,
+                &mut self.output,
+                &held,
+                planted,
+                dt,
+            );
+        }
+        self.physical.recover(&mut self.output, dt);
+        let step = FeetStep {
+            skeleton: sk,
+            roles,
+            target: &self.target,
+            shown_last: &self.world,
+            held: &held,
+            switched: std::mem::take(&mut self.switched),
+            settle_s: self.settings.settle_s,
+            // While walking, the clip's own foot contacts say which foot
+            // stands.
+            contacts: match &self.mode {
+                Mode::Walk(w) => Some(w.contacts(&self.ch.gait)),
+                _ => None,
+            },
+            dt,
+        };
+        self.feet.step(&step, &mut self.output, &mut self.tracker);
+        if self.settings.settle_s > 0.0 {
+            // Part of tracking: off, the synthesised postures are shown.
+            let standing = [self.feet.standing(0), self.feet.standing(1)];
+            self.jerk
+                .bound(sk, roles, &mut self.output, &held, standing, dt);
+            self.feet.keep_clear(sk, roles, &mut self.output);
+        }
+    }
+
+    /// What is shown: the posture's world pose, and the camera settling
+    /// on the body (home after a while without a touch).
+    fn show(&mut self, dt: f64) {
+        self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
+        let idle = self.idle_s() > self.settings.home_after_s;
+        let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
+        self.rig.settle(floor, idle, dt);
+        self.follow_drift(&self.rig.camera());
+    }
+}
