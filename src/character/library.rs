@@ -224,40 +224,7 @@ impl Library {
             .settings
             .max_file_mb
             .map_or(bvh::MAX_FILE_BYTES, |mb| mb.saturating_mul(1 << 20));
-        let lead_in = file.settings.action_lead_in.unwrap_or(0.3);
-        if !(0.0..=1.0).contains(&lead_in) {
-            problems.push(format!(
-                "settings.action_lead_in must be between 0 and 1, found {lead_in}"
-            ));
-        }
-        if let Some(s) = file.settings.scale_to_m {
-            if !(s.is_finite() && s > 0.0) {
-                problems.push(format!(
-                    "settings.scale_to_m must be a positive number, found {s}"
-                ));
-            }
-        }
-        for key in file.roles.keys() {
-            if Role::from_name(key).is_none() {
-                problems.push(format!(
-                    "[roles] `{key}` is not a role; roles are {}",
-                    Role::ALL.map(Role::name).join(", ")
-                ));
-            }
-        }
-        let settings = ImportSettings {
-            scale_to_m: file
-                .settings
-                .scale_to_m
-                .filter(|s| s.is_finite() && *s > 0.0),
-            roles: file
-                .roles
-                .iter()
-                .filter(|(k, _)| Role::from_name(k).is_some())
-                .map(|(k, v)| (k.clone(), v.clone()))
-                .collect(),
-        };
-
+        let (lead_in, settings) = settings_of(&file, &mut problems);
         let clips_dir = file
             .settings
             .clips_dir
@@ -269,113 +236,13 @@ impl Library {
                 clips_dir.display()
             ));
         }
-        // Every clip named anywhere, once.
-        let mut names: Vec<&String> = file
-            .posing
-            .clips
-            .iter()
-            .chain(&file.locomotion.clips)
-            .collect();
-        for a in &file.action {
-            names.extend(a.clips.iter());
-        }
-        names.sort();
-        names.dedup();
+        let names = clip_names(&file);
         if names.is_empty() {
             problems.push("no clips: list posing clips in [posing] clips and action clips in [[action]] tables".to_owned());
         }
-        let mut clips = BTreeMap::new();
-        let mut skeleton: Option<(String, Skeleton)> = None;
-        // Each file is read once, however many clips it gives.
-        // Each file's digest feeds the library's content key.
-        let mut files: BTreeMap<&str, Option<(bvh::BvhFile, u64)>> = BTreeMap::new();
-        for name in names {
-            let clip_ref = match ClipRef::parse(name) {
-                Ok(r) => r,
-                Err(why) => {
-                    problems.push(format!("clip `{name}`: {why}"));
-                    continue;
-                }
-            };
-            let file = files.entry(clip_ref.file).or_insert_with(|| {
-                let path = clips_dir.join(clip_ref.file);
-                let read = std::fs::metadata(&path)
-                    .and_then(|m| {
-                        if m.len() > max_bytes {
-                            Err(std::io::Error::other(format!(
-                                "{} MB, over settings.max_file_mb ({} MB)",
-                                m.len().div_ceil(1 << 20),
-                                max_bytes >> 20
-                            )))
-                        } else {
-                            std::fs::read(&path)
-                        }
-                    })
-                    .map_err(|source| bvh::BvhError::Io {
-                        path: path.clone(),
-                        source,
-                    })
-                    .and_then(|bytes| {
-                        let parsed = bvh::parse(&String::from_utf8_lossy(&bytes), &path)?;
-                        Ok((parsed, Fnv::digest(&bytes)))
-                    });
-                match read {
-                    Ok(p) => Some(p),
-                    Err(e) => {
-                        problems.push(e.to_string());
-                        None
-                    }
-                }
-            });
-            let Some((file, _)) = file.as_ref() else {
-                continue;
-            };
-            let parsed = match clip_ref.frames {
-                None => file.clone(),
-                Some((a, b)) if b < file.frames.len() => bvh::BvhFile {
-                    skeleton: file.skeleton.clone(),
-                    channels: file.channels.clone(),
-                    frame_time: file.frame_time,
-                    frames: file.frames[a..=b].to_vec(),
-                },
-                Some((_, b)) => {
-                    problems.push(format!(
-                        "clip `{name}`: frame {b} is past the end of {} ({} frames, numbered from 0)",
-                        clip_ref.file,
-                        file.frames.len()
-                    ));
-                    continue;
-                }
-            };
-            let mut clip = match Clip::from_bvh(parsed, &settings) {
-                Ok(c) => c,
-                Err(e) => {
-                    problems.push(format!("{name}: {e}"));
-                    continue;
-                }
-            };
-            // Hierarchies are compared once top bones are folded away: a
-            // file with an extra `RL_BoneRoot` joins the others. Other
-            // proportions (another performer) are carried onto the first
-            // clip's skeleton.
-            match &skeleton {
-                None => skeleton = Some((name.clone(), clip.skeleton.clone())),
-                Some((first, s)) => {
-                    if let Some(why) = hierarchy_difference(s, &clip.skeleton) {
-                        problems.push(format!("{name}: its hierarchy differs from {first}'s ({why}); a library's clips share one skeleton"));
-                        continue;
-                    }
-                    let ratio = clip.retarget(s);
-                    if ratio != 1.0 {
-                        tracing::debug!(clip = %name, onto = %first, leg_ratio = ratio, "clip retargeted onto the library's skeleton");
-                    }
-                }
-            }
-            clips.insert(name.clone(), clip);
-        }
+        let (mut clips, skeleton, files) =
+            read_clips(names, &clips_dir, max_bytes, &settings, &mut problems);
         let floor_shift_m = floor::settle(&mut clips);
-        let mut actions = Vec::new();
-        let mut seen = BTreeMap::new();
         let mirrors = file.action.iter().filter(|a| a.mirror).count();
         if file.action.len() + mirrors > MAX_ACTIONS {
             return Err(fail(vec![format!(
@@ -384,114 +251,20 @@ impl Library {
                 file.action.len()
             )]));
         }
-        for (i, a) in file.action.iter().enumerate() {
-            let label = if a.name.is_empty() {
-                format!("action #{}", i + 1)
-            } else {
-                format!("action `{}`", a.name)
-            };
-            if a.name.is_empty() {
-                problems.push(format!("{label}: needs a name"));
-            }
-            if seen.insert(a.name.clone(), i).is_some() {
-                problems.push(format!("{label}: the name is used twice"));
-            }
-            if a.clips.is_empty() {
-                problems.push(format!("{label}: needs at least one clip"));
-            }
-            let primary = Role::from_name(&a.primary);
-            if primary.is_none() {
-                problems.push(format!(
-                    "{label}: primary `{}` is not a role; roles are {}",
-                    a.primary,
-                    Role::ALL.map(Role::name).join(", ")
-                ));
-            }
-            problems.extend(
-                check_segments(&a.segments)
-                    .into_iter()
-                    .map(|p| format!("{label}: {p}")),
-            );
-            if let Some(t) = a.threshold_m.filter(|t| !(*t > 0.0 && *t <= 1.0)) {
-                problems.push(format!("{label}: threshold_m = {t} is not a cost in metres: give one above 0 and at most 1 (0.05 to 0.2 is usual), or leave it out to use the calibrated one"));
-            }
-            if let Some(primary) = primary {
-                actions.push(ActionDef {
-                    name: a.name.clone(),
-                    clips: a.clips.clone(),
-                    primary,
-                    segments: a.segments.clone(),
-                    threshold_m: a.threshold_m,
-                });
-            }
-        }
-        // Mirrored copies: the same action with the other side's part.
-        let mut mirrored = Vec::new();
-        for (a, file_a) in actions.iter().zip(
-            file.action
-                .iter()
-                .filter(|f| Role::from_name(&f.primary).is_some()),
-        ) {
-            if !file_a.mirror {
-                continue;
-            }
-            let label = format!("action `{}`", a.name);
-            let primary = a.primary.mirrored();
-            if primary == a.primary {
-                problems.push(format!("{label}: mirror = true, but its primary `{}` is on the middle line: its mirror image is the same action", a.primary.name()));
-                continue;
-            }
-            let name = mirrored_name(&a.name);
-            if file.action.iter().any(|f| f.name == name) {
-                problems.push(format!("{label}: mirror = true would add `{name}`, which the library has already; drop one"));
-                continue;
-            }
-            let mut names = Vec::new();
-            for c in &a.clips {
-                let Some(clip) = clips.get(c) else { continue };
-                match clip.mirrored() {
-                    Ok(m) => {
-                        let n = format!("{c}~mirror");
-                        clips.insert(n.clone(), m);
-                        names.push(n);
-                    }
-                    Err(e) => problems.push(format!(
-                        "{label}: mirror = true, but {c} has no mirror image: {e}"
-                    )),
-                }
-            }
-            mirrored.push(ActionDef {
-                name,
-                clips: names,
-                primary,
-                segments: a.segments.clone(),
-                threshold_m: a.threshold_m,
-            });
-        }
+        let mut actions = action_defs(&file, &mut problems);
+        let mirrored = mirror_actions(&actions, &file, &mut clips, &mut problems);
         actions.extend(mirrored);
         if !problems.is_empty() {
             return Err(fail(problems));
         }
         let skeleton = skeleton.map(|(_, s)| s).unwrap_or_default();
-        // The content key: library.toml, then every clip's name and its
-        // file's digest, in name order.
-        let mut key = Fnv::new();
-        key.write(text.as_bytes());
-        for name in clips.keys() {
-            key.write(name.as_bytes());
-            let digest = ClipRef::parse(name)
-                .ok()
-                .and_then(|r| files.get(r.file))
-                .and_then(|f| f.as_ref().map(|(_, d)| *d))
-                .unwrap_or(0);
-            key.write(&digest.to_le_bytes());
-        }
+        let content_key = content_key(&text, &clips, &files);
         Ok(Self {
             dir: dir.to_owned(),
             clips_dir,
             skeleton,
             clips,
-            content_key: key.finish(),
+            content_key,
             posing: file.posing.clips,
             locomotion: file.locomotion.clips,
             actions,
@@ -499,6 +272,300 @@ impl Library {
             floor_shift_m,
         })
     }
+}
+
+/// Each file a library's clips are cut from, read once: its BVH and the
+/// digest of its bytes (`None` where it did not read).
+type Files<'a> = BTreeMap<&'a str, Option<(bvh::BvhFile, u64)>>;
+
+/// The `[settings]` and `[roles]` of a library file checked (what is
+/// wrong goes to `problems`): the actions' lead-in and how clips import.
+fn settings_of(file: &LibraryFile, problems: &mut Vec<String>) -> (f64, ImportSettings) {
+    let lead_in = file.settings.action_lead_in.unwrap_or(0.3);
+    if !(0.0..=1.0).contains(&lead_in) {
+        problems.push(format!(
+            "settings.action_lead_in must be between 0 and 1, found {lead_in}"
+        ));
+    }
+    if let Some(s) = file.settings.scale_to_m {
+        if !(s.is_finite() && s > 0.0) {
+            problems.push(format!(
+                "settings.scale_to_m must be a positive number, found {s}"
+            ));
+        }
+    }
+    for key in file.roles.keys() {
+        if Role::from_name(key).is_none() {
+            problems.push(format!(
+                "[roles] `{key}` is not a role; roles are {}",
+                Role::ALL.map(Role::name).join(", ")
+            ));
+        }
+    }
+    let settings = ImportSettings {
+        scale_to_m: file
+            .settings
+            .scale_to_m
+            .filter(|s| s.is_finite() && *s > 0.0),
+        roles: file
+            .roles
+            .iter()
+            .filter(|(k, _)| Role::from_name(k).is_some())
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect(),
+    };
+    (lead_in, settings)
+}
+
+/// Every clip named anywhere in a library file, once, in name order.
+fn clip_names(file: &LibraryFile) -> Vec<&String> {
+    let mut names: Vec<&String> = file
+        .posing
+        .clips
+        .iter()
+        .chain(&file.locomotion.clips)
+        .collect();
+    for a in &file.action {
+        names.extend(a.clips.iter());
+    }
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// A BVH file of at most `max_bytes`, parsed, with the digest of its
+/// bytes.
+fn read_bvh(path: &Path, max_bytes: u64) -> Result<(bvh::BvhFile, u64), bvh::BvhError> {
+    std::fs::metadata(path)
+        .and_then(|m| {
+            if m.len() > max_bytes {
+                Err(std::io::Error::other(format!(
+                    "{} MB, over settings.max_file_mb ({} MB)",
+                    m.len().div_ceil(1 << 20),
+                    max_bytes >> 20
+                )))
+            } else {
+                std::fs::read(path)
+            }
+        })
+        .map_err(|source| bvh::BvhError::Io {
+            path: path.to_owned(),
+            source,
+        })
+        .and_then(|bytes| {
+            let parsed = bvh::parse(&String::from_utf8_lossy(&bytes), path)?;
+            Ok((parsed, Fnv::digest(&bytes)))
+        })
+}
+
+/// The clips `names`, read from `clips_dir` (each file once) and imported
+/// with `settings`, each on the first clip's skeleton; what is wrong goes
+/// to `problems`. The clips, the first clip's name and skeleton, and the
+/// files read.
+fn read_clips<'a>(
+    names: Vec<&'a String>,
+    clips_dir: &Path,
+    max_bytes: u64,
+    settings: &ImportSettings,
+    problems: &mut Vec<String>,
+) -> (
+    BTreeMap<String, Clip>,
+    Option<(String, Skeleton)>,
+    Files<'a>,
+) {
+    let mut clips = BTreeMap::new();
+    let mut skeleton: Option<(String, Skeleton)> = None;
+    // Each file is read once, however many clips it gives.
+    // Each file's digest feeds the library's content key.
+    let mut files: Files<'a> = BTreeMap::new();
+    for name in names {
+        let clip_ref = match ClipRef::parse(name) {
+            Ok(r) => r,
+            Err(why) => {
+                problems.push(format!("clip `{name}`: {why}"));
+                continue;
+            }
+        };
+        let file = files.entry(clip_ref.file).or_insert_with(|| {
+            let path = clips_dir.join(clip_ref.file);
+            let read = read_bvh(&path, max_bytes);
+            match read {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    problems.push(e.to_string());
+                    None
+                }
+            }
+        });
+        let Some((file, _)) = file.as_ref() else {
+            continue;
+        };
+        let parsed = match clip_ref.frames {
+            None => file.clone(),
+            Some((a, b)) if b < file.frames.len() => bvh::BvhFile {
+                skeleton: file.skeleton.clone(),
+                channels: file.channels.clone(),
+                frame_time: file.frame_time,
+                frames: file.frames[a..=b].to_vec(),
+            },
+            Some((_, b)) => {
+                problems.push(format!(
+                    "clip `{name}`: frame {b} is past the end of {} ({} frames, numbered from 0)",
+                    clip_ref.file,
+                    file.frames.len()
+                ));
+                continue;
+            }
+        };
+        let mut clip = match Clip::from_bvh(parsed, settings) {
+            Ok(c) => c,
+            Err(e) => {
+                problems.push(format!("{name}: {e}"));
+                continue;
+            }
+        };
+        // Hierarchies are compared once top bones are folded away: a
+        // file with an extra `RL_BoneRoot` joins the others. Other
+        // proportions (another performer) are carried onto the first
+        // clip's skeleton.
+        match &skeleton {
+            None => skeleton = Some((name.clone(), clip.skeleton.clone())),
+            Some((first, s)) => {
+                if let Some(why) = hierarchy_difference(s, &clip.skeleton) {
+                    problems.push(format!("{name}: its hierarchy differs from {first}'s ({why}); a library's clips share one skeleton"));
+                    continue;
+                }
+                let ratio = clip.retarget(s);
+                if ratio != 1.0 {
+                    tracing::debug!(clip = %name, onto = %first, leg_ratio = ratio, "clip retargeted onto the library's skeleton");
+                }
+            }
+        }
+        clips.insert(name.clone(), clip);
+    }
+    (clips, skeleton, files)
+}
+
+/// The actions of a library file, each checked (what is wrong goes to
+/// `problems`); those whose primary part is a role.
+fn action_defs(file: &LibraryFile, problems: &mut Vec<String>) -> Vec<ActionDef> {
+    let mut actions = Vec::new();
+    let mut seen = BTreeMap::new();
+    for (i, a) in file.action.iter().enumerate() {
+        let label = if a.name.is_empty() {
+            format!("action #{}", i + 1)
+        } else {
+            format!("action `{}`", a.name)
+        };
+        if a.name.is_empty() {
+            problems.push(format!("{label}: needs a name"));
+        }
+        if seen.insert(a.name.clone(), i).is_some() {
+            problems.push(format!("{label}: the name is used twice"));
+        }
+        if a.clips.is_empty() {
+            problems.push(format!("{label}: needs at least one clip"));
+        }
+        let primary = Role::from_name(&a.primary);
+        if primary.is_none() {
+            problems.push(format!(
+                "{label}: primary `{}` is not a role; roles are {}",
+                a.primary,
+                Role::ALL.map(Role::name).join(", ")
+            ));
+        }
+        problems.extend(
+            check_segments(&a.segments)
+                .into_iter()
+                .map(|p| format!("{label}: {p}")),
+        );
+        if let Some(t) = a.threshold_m.filter(|t| !(*t > 0.0 && *t <= 1.0)) {
+            problems.push(format!("{label}: threshold_m = {t} is not a cost in metres: give one above 0 and at most 1 (0.05 to 0.2 is usual), or leave it out to use the calibrated one"));
+        }
+        if let Some(primary) = primary {
+            actions.push(ActionDef {
+                name: a.name.clone(),
+                clips: a.clips.clone(),
+                primary,
+                segments: a.segments.clone(),
+                threshold_m: a.threshold_m,
+            });
+        }
+    }
+    actions
+}
+
+/// The mirror images of the `actions` whose entry in `file` asks for
+/// one: the same action with the other side's part, its clips mirrored
+/// into `clips`.
+fn mirror_actions(
+    actions: &[ActionDef],
+    file: &LibraryFile,
+    clips: &mut BTreeMap<String, Clip>,
+    problems: &mut Vec<String>,
+) -> Vec<ActionDef> {
+    let mut mirrored = Vec::new();
+    for (a, file_a) in actions.iter().zip(
+        file.action
+            .iter()
+            .filter(|f| Role::from_name(&f.primary).is_some()),
+    ) {
+        if !file_a.mirror {
+            continue;
+        }
+        let label = format!("action `{}`", a.name);
+        let primary = a.primary.mirrored();
+        if primary == a.primary {
+            problems.push(format!("{label}: mirror = true, but its primary `{}` is on the middle line: its mirror image is the same action", a.primary.name()));
+            continue;
+        }
+        let name = mirrored_name(&a.name);
+        if file.action.iter().any(|f| f.name == name) {
+            problems.push(format!(
+                "{label}: mirror = true would add `{name}`, which the library has already; drop one"
+            ));
+            continue;
+        }
+        let mut names = Vec::new();
+        for c in &a.clips {
+            let Some(clip) = clips.get(c) else { continue };
+            match clip.mirrored() {
+                Ok(m) => {
+                    let n = format!("{c}~mirror");
+                    clips.insert(n.clone(), m);
+                    names.push(n);
+                }
+                Err(e) => problems.push(format!(
+                    "{label}: mirror = true, but {c} has no mirror image: {e}"
+                )),
+            }
+        }
+        mirrored.push(ActionDef {
+            name,
+            clips: names,
+            primary,
+            segments: a.segments.clone(),
+            threshold_m: a.threshold_m,
+        });
+    }
+    mirrored
+}
+
+/// The content key: library.toml's `text`, then every clip's name and
+/// its file's digest, in name order.
+fn content_key(text: &str, clips: &BTreeMap<String, Clip>, files: &Files<'_>) -> u64 {
+    let mut key = Fnv::new();
+    key.write(text.as_bytes());
+    for name in clips.keys() {
+        key.write(name.as_bytes());
+        let digest = ClipRef::parse(name)
+            .ok()
+            .and_then(|r| files.get(r.file))
+            .and_then(|f| f.as_ref().map(|(_, d)| *d))
+            .unwrap_or(0);
+        key.write(&digest.to_le_bytes());
+    }
+    key.finish()
 }
 
 /// The name of an action's mirror image: left and right swapped in its
