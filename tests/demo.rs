@@ -62,6 +62,22 @@ fn demo_renders_frames_a_contact_sheet_and_a_summary() {
             .unwrap();
     assert!(sheet.width > 1000 && sheet.height > 500);
     assert!(stdout.contains("actions started by drags"), "{stdout}");
+    // The summary the README prints, line for line (its `...` aside).
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let block = &readme[readme
+        .find("a summary is printed:")
+        .expect("the README shows the demo's summary")..];
+    let block = &block[block.find("```\n").expect("a block") + 4..];
+    let block = &block[..block.find("```").unwrap()];
+    let lines: Vec<&str> = block.lines().filter(|l| l.trim() != "...").collect();
+    assert!(lines.len() >= 8, "{block}");
+    for line in lines {
+        assert!(
+            stdout.lines().any(|l| l == line),
+            "the README's line {line:?} is not what the demo prints:\n{stdout}"
+        );
+    }
 }
 
 #[test]
