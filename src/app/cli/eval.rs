@@ -21,11 +21,7 @@ pub(super) fn eval_actions(
     use crate::control::action::model::ActionModel;
     use crate::tools::eval::actions as eval;
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
-    let actions: Vec<ActionModel> = lib
-        .actions
-        .iter()
-        .map(|a| ActionModel::build(&lib, a))
-        .collect();
+    let actions = crate::control::character::Character::action_models(&lib);
     let files = crate::character::bvh::files_in(test_dir).map_err(|e| {
         Failure::new(
             exit::NOINPUT,

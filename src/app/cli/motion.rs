@@ -91,11 +91,7 @@ pub(super) fn convert_bvh(file: &Path, out: &Path, scale_to_m: Option<f64>) -> R
 pub(super) fn bake(library: &Path, force: bool) -> Result<(), Failure> {
     let started = std::time::Instant::now();
     let (lib, model) = crate::app::character::load_models(library, force)?;
-    let actions: Vec<crate::control::action::model::ActionModel> = lib
-        .actions
-        .iter()
-        .map(|a| crate::control::action::model::ActionModel::build(&lib, a))
-        .collect();
+    let actions = crate::control::character::Character::action_models(&lib);
     let r = crate::app::character::recogniser(&lib, &actions);
     writeln!(
         std::io::stdout(),
@@ -345,13 +341,8 @@ fn copy_takes(
 
 pub(super) fn library_check(dir: &Path, json: bool) -> Result<(), Failure> {
     use crate::character::library::Library;
-    use crate::control::action::model::ActionModel;
     let lib = Library::load(dir).map_err(|e| Failure::new(exit::DATAERR, e))?;
-    let actions: Vec<ActionModel> = lib
-        .actions
-        .iter()
-        .map(|a| ActionModel::build(&lib, a))
-        .collect();
+    let actions = crate::control::character::Character::action_models(&lib);
     let mut stdout = std::io::stdout();
     if actions.is_empty() {
         return writeln!(
