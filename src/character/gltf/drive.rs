@@ -5,9 +5,11 @@
 //! pose on their parents; the pelvis goes where the library's goes, its
 //! height over the ankles and its travel scaled by leg length; the
 //! figure's own legs then reach where the library puts the feet (two-bone
-//! IK; a one-bone leg pointed along the library's), its arms keep the
-//! library's turns and are bent to reach only where a hand must be lifted
-//! off the floor; a joint the rig hangs elsewhere (feet from the root) is
+//! IK; a one-bone leg pointed along the library's, the pelvis as high as
+//! such a leg needs to reach), its arms keep the library's turns and are
+//! bent to reach only where a hand must be lifted off the floor (a
+//! one-bone arm pointed along the library's and swung up by the least
+//! turn that keeps its hand off it); a joint the rig hangs elsewhere (feet from the root) is
 //! hung on its limb; nothing it carries low (a cape, a tail, a shin) goes
 //! under the floor.
 
@@ -314,7 +316,14 @@ impl Drive {
 
     /// The figure's joint transforms for a library posture (world), with
     /// `fixed[j]` overriding a joint's world rotation.
-    fn place(&self, fig: &Figure, lib: &WorldPose, fixed: &[Option<DQuat>]) -> Vec<DMat4> {
+    /// The pelvis stands `raise` off the library's, scaled.
+    fn place(
+        &self,
+        fig: &Figure,
+        lib: &WorldPose,
+        fixed: &[Option<DQuat>],
+        raise: DVec3,
+    ) -> Vec<DMat4> {
         let n = fig.rest.len();
         let mut w = vec![DMat4::IDENTITY; n];
         for &j in &self.order {
@@ -346,7 +355,8 @@ impl Drive {
             lp.x * self.scale,
             self.ankles.1 + (lp.y - self.ankles.0) * self.scale,
             lp.z * self.scale,
-        ) + DVec3::Y * self.hip_drop;
+        ) + DVec3::Y * self.hip_drop
+            + raise;
         let shift = want - w[pelvis].w_axis.truncate();
         for m in &mut w {
             m.w_axis += shift.extend(0.0);
@@ -360,11 +370,17 @@ impl Drive {
     #[must_use]
     pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
         let free = vec![None; fig.rest.len()];
-        let w = self.place(fig, lib, &free);
+        let w = self.place(fig, lib, &free, DVec3::ZERO);
+        let raise = self.one_bone_stand(lib, &w);
+        let w = if raise == DVec3::ZERO {
+            w
+        } else {
+            self.place(fig, lib, &free, raise)
+        };
         let mut lift = [0.0f64; 4];
-        let mut turn = [DQuat::IDENTITY; 2];
+        let mut turn = [DQuat::IDENTITY; 4];
         let mut fixed = self.reach(fig, lib, &w, lift, turn);
-        let mut posed = self.place(fig, lib, &fixed);
+        let mut posed = self.place(fig, lib, &fixed, raise);
         // No sole under the floor: a foot whose lowest point went under is
         // first turned flatter about its ankle (a longer foot than the
         // library's, pointed as steeply, reaches lower), by at most
@@ -388,7 +404,14 @@ impl Drive {
                 under = true;
                 let ankle = posed[j].w_axis.truncate();
                 let axis = (low - ankle).cross(DVec3::Y);
-                if k < 2 && pass == 0 && axis.length() > 1e-9 {
+                if k >= 2 && self.one_bone[k] {
+                    // A one-bone arm too long to hang where the library's
+                    // does (a chibi's): swung up about its shoulder by
+                    // the least turn that brings its hand onto the floor.
+                    let shoulder = posed[self.fig_roles.get(LIMBS[k].0)].w_axis.truncate();
+                    let chest = posed[self.fig_roles.get(Role::Chest)].w_axis.truncate();
+                    turn[k] = swing_clear(&points, shoulder, ankle, chest) * turn[k];
+                } else if k < 2 && pass == 0 && axis.length() > 1e-9 {
                     // Turned towards raising the lowest point: the least
                     // turn that brings every point onto the floor, else
                     // the one that leaves the lowest highest (raising the
@@ -419,7 +442,7 @@ impl Drive {
                 break;
             }
             fixed = self.reach(fig, lib, &w, lift, turn);
-            posed = self.place(fig, lib, &fixed);
+            posed = self.place(fig, lib, &fixed, raise);
         }
         // A limb too short to reach where it is lifted to (a stride longer
         // than the legs, scaled): the whole figure rises by what is left.
@@ -464,7 +487,7 @@ impl Drive {
         lib: &WorldPose,
         w: &[DMat4],
         lift: [f64; 4],
-        turn: [DQuat; 2],
+        turn: [DQuat; 4],
     ) -> Vec<Option<DQuat>> {
         let mut fixed = vec![None; fig.rest.len()];
         for (k, (a, b, c)) in LIMBS.into_iter().enumerate() {
@@ -479,14 +502,7 @@ impl Drive {
             // height as the library's.
             let root = w[fa].w_axis.truncate();
             let goal = if k < 2 {
-                // Feet where the library's stand, scaled as the pelvis
-                // is: a planted foot stays planted whatever the hips do.
-                let l = lib.positions[lc];
-                DVec3::new(
-                    l.x * self.scale,
-                    self.ankles.1 + (l.y - self.ankles.0) * self.scale + lift[k],
-                    l.z * self.scale,
-                ) + self.heading(lib, k) * self.hip_wide[k]
+                self.foot_goal(lib, k) + DVec3::Y * lift[k]
             } else {
                 root + (lib.positions[lc] - lib.positions[la]) * self.limb_scale[k]
                     + DVec3::Y * lift[k]
@@ -495,7 +511,7 @@ impl Drive {
             // An arm keeps the library's turns (its upper arm and forearm
             // point as the library's, whatever their proportions) unless
             // its hand must be lifted off the floor.
-            if k >= 2 && lift[k] <= 0.0 {
+            if k >= 2 && lift[k] <= 0.0 && !self.one_bone[k] {
                 continue;
             }
             if self.one_bone[k] {
@@ -503,9 +519,10 @@ impl Drive {
                 // where the library's limb points.
                 let (from, to) = (pc - pa, goal - pa);
                 if from.length() > 1e-9 && to.length() > 1e-9 {
-                    let turn = DQuat::from_rotation_arc(from.normalize(), to.normalize());
+                    // Then swung off the floor (`turn`, an arm's).
+                    let arc = DQuat::from_rotation_arc(from.normalize(), to.normalize());
                     let rot = |m: &DMat4| m.to_scale_rotation_translation().1;
-                    fixed[fa] = Some((turn * rot(&w[fa])).normalize());
+                    fixed[fa] = Some((turn[k] * arc * rot(&w[fa])).normalize());
                 }
                 continue;
             }
@@ -527,6 +544,39 @@ impl Drive {
             }
         }
         fixed
+    }
+
+    /// Where the library puts foot `k`'s ankle for the figure, scaled as
+    /// the pelvis is: a planted foot stays planted whatever the hips do.
+    fn foot_goal(&self, lib: &WorldPose, k: usize) -> DVec3 {
+        let l = lib.positions[self.lib_roles.get(LIMBS[k].2)];
+        DVec3::new(
+            l.x * self.scale,
+            self.ankles.1 + (l.y - self.ankles.0) * self.scale,
+            l.z * self.scale,
+        ) + self.heading(lib, k) * self.hip_wide[k]
+    }
+
+    /// How much higher than the library's (scaled) the pelvis stands so
+    /// that a one-bone leg, which cannot bend, reaches where the library
+    /// puts its foot and no further: the most either such leg needs, so
+    /// that the standing foot reaches the floor and a lifted one stays
+    /// above its place (`w`, the posture turned as the library's). Zero
+    /// for a figure whose legs bend.
+    fn one_bone_stand(&self, lib: &WorldPose, w: &[DMat4]) -> DVec3 {
+        let mut raise: Option<f64> = None;
+        for (k, &(a, _, c)) in LIMBS.iter().enumerate().take(2) {
+            if !self.one_bone[k] {
+                continue;
+            }
+            let hip = w[self.fig_roles.get(a)].w_axis.truncate();
+            let length = (w[self.fig_roles.get(c)].w_axis.truncate() - hip).length();
+            let v = self.foot_goal(lib, k) - hip;
+            let across = v.with_y(0.0).length().min(length);
+            let need = v.y + (length * length - across * across).sqrt();
+            raise = Some(raise.map_or(need, |r: f64| r.max(need)));
+        }
+        DVec3::Y * raise.unwrap_or(0.0)
     }
 
     /// The turn about the vertical that carries foot `k`'s offset from the
@@ -581,5 +631,75 @@ impl Drive {
                     .collect()
             })
             .collect()
+    }
+}
+
+/// The least turn about `shoulder` that brings every point of `points`
+/// (a one-bone arm's hand, posed) onto the floor: the arm swung up
+/// towards where it reaches along the floor, or out from the chest where
+/// it hangs straight down; at most to the horizontal.
+fn swing_clear(points: &[DVec3], shoulder: DVec3, hand: DVec3, chest: DVec3) -> DQuat {
+    let arm = hand - shoulder;
+    let along = arm.with_y(0.0);
+    let out = if along.length() > 0.2 * arm.length() {
+        along
+    } else {
+        (shoulder - chest).with_y(0.0)
+    };
+    let axis = arm.cross(out);
+    if arm.length() < 1e-9 || axis.length() < 1e-9 {
+        return DQuat::IDENTITY;
+    }
+    let axis = axis.normalize();
+    let lowest = |angle: f64| {
+        let q = DQuat::from_axis_angle(axis, angle);
+        points
+            .iter()
+            .map(|p| (shoulder + q * (*p - shoulder)).y)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let most = arm.angle_between(out);
+    if lowest(most) < 0.0 {
+        return DQuat::from_axis_angle(axis, most);
+    }
+    let (mut lo, mut hi) = (0.0, most);
+    for _ in 0..24 {
+        let mid = (lo + hi) / 2.0;
+        if lowest(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    DQuat::from_axis_angle(axis, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_arm_is_swung_out_by_the_least_turn_that_clears_the_floor() {
+        // A shoulder 0.6 m up, an arm hanging 0.9 m straight down: its
+        // hand 0.3 m under the floor, the chest to its right.
+        let shoulder = DVec3::new(0.2, 0.6, 0.0);
+        let hand = DVec3::new(0.2, -0.3, 0.0);
+        let points = [hand, hand + DVec3::new(0.0, -0.05, 0.0)];
+        let q = swing_clear(&points, shoulder, hand, DVec3::new(0.0, 0.6, 0.0));
+        let moved: Vec<DVec3> = points
+            .iter()
+            .map(|p| shoulder + q * (*p - shoulder))
+            .collect();
+        let low = moved.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+        assert!(low.abs() < 1e-6, "{moved:?}");
+        // Out to the side, away from the chest; the least turn: the
+        // arm's 0.95 m reach meets the floor at acos(0.6 / 0.95).
+        assert!(moved[0].x > 0.2, "{moved:?}");
+        let angle = q.to_axis_angle().1;
+        assert!((angle - (0.6f64 / 0.95).acos()).abs() < 1e-4, "{angle}");
+        // An arm already clear is not turned.
+        let up = [DVec3::new(0.2, 0.1, 0.0)];
+        let q = swing_clear(&up, shoulder, up[0], DVec3::new(0.0, 0.6, 0.0));
+        assert!(q.to_axis_angle().1.abs() < 1e-6);
     }
 }
