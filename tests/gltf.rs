@@ -437,96 +437,96 @@ fn shared_characters() -> Vec<PathBuf> {
 /// max shares of its height, mm into the floor, segment directions' mean
 /// and 95th percentile (deg), a planted foot's float (mm).
 const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
-    ("CesiumMan.glb", 1.302, 5.848, 0.1, 1.056, 3.268, 0.0),
-    ("RiggedFigure.glb", 1.19, 5.985, 0.1, 0.748, 3.107, 0.0),
+    ("CesiumMan.glb", 1.288, 5.848, 0.1, 1.015, 3.183, 0.0),
+    ("RiggedFigure.glb", 1.189, 5.985, 0.1, 0.746, 3.103, 0.0),
     (
         "RobotExpressive.glb",
-        5.762,
+        5.778,
         27.282,
-        0.099,
-        5.479,
-        18.954,
-        17.425,
+        0.098,
+        5.172,
+        18.751,
+        0.0,
     ),
     (
         "gdquest_mannequiny.glb",
-        0.775,
+        0.774,
         3.762,
         0.077,
-        0.76,
-        2.807,
+        0.759,
+        2.808,
         0.053,
     ),
     (
         "godot_platformer_robot.glb",
-        3.217,
+        3.212,
         14.547,
         0.097,
-        3.089,
-        11.932,
+        3.092,
+        12.045,
         3.695,
     ),
     (
         "kaykit_knight.glb",
-        1.52,
+        1.519,
         32.079,
         7.766,
-        6.39,
+        6.37,
         29.036,
-        1.553,
+        1.306,
     ),
     (
         "kenney_mini_female_a.glb",
-        14.552,
+        14.533,
         71.028,
         0.099,
-        14.559,
-        49.139,
-        18.364,
+        14.492,
+        49.138,
+        18.448,
     ),
     (
         "kenney_retro_characterMedium.glb",
-        1.099,
+        1.098,
         5.408,
         0.088,
-        0.915,
-        3.345,
+        0.914,
+        3.341,
         0.0,
     ),
     (
         "quaternius_modular_men_suit.glb",
-        2.701,
-        12.083,
+        2.695,
+        12.422,
         0.1,
-        0.743,
-        3.229,
-        0.555,
+        0.741,
+        3.257,
+        0.549,
     ),
     (
         "quaternius_ual1_rigify_def.glb",
-        1.529,
-        7.954,
-        0.099,
-        1.554,
-        5.522,
+        1.506,
+        6.193,
+        0.09,
+        1.505,
+        5.437,
         0.52,
     ),
     (
         "quaternius_ual2_mannequin_f.glb",
-        2.059,
-        8.047,
-        0.091,
-        1.554,
-        5.522,
+        2.035,
+        6.265,
+        0.0,
+        1.505,
+        5.437,
         2.081,
     ),
     (
         "vrm0_cryptovoxels.vrm",
-        0.358,
+        0.355,
         3.378,
-        0.094,
-        0.445,
-        1.607,
+        0.062,
+        0.437,
+        1.577,
         2.137,
     ),
 ];
@@ -534,7 +534,7 @@ const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
 /// The characters whose planted feet slide more than the target (mm a
 /// frame, docs/measurements.md): the Kenney mini's legs are one bone
 /// each, foot and all, so a leg that leans rolls its sole along the floor.
-const SKATE_MISSED: [(&str, f64); 1] = [("kenney_mini_female_a.glb", 2.091)];
+const SKATE_MISSED: [(&str, f64); 1] = [("kenney_mini_female_a.glb", 2.086)];
 
 #[test]
 fn every_shared_character_loads_with_each_role_and_its_evidence() {
@@ -619,7 +619,7 @@ fn every_shared_character_plays_the_default_library() {
         // its parts (the robot's and the chibis' proportions are their
         // own: judged by directions and feet).
         if e.human_proportions {
-            assert!(e.mean_pct <= 3.0 && e.max_pct <= 8.05, "{file}: {e:?}");
+            assert!(e.mean_pct <= 3.0 && e.max_pct <= 8.0, "{file}: {e:?}");
         }
         // Planted feet slide no more than the library's own and half a
         // millimetre a frame; where that is missed, as measured.

@@ -74,6 +74,15 @@ const FLATTEN_STEPS: u8 = 8;
 /// before it is lifted (rad, about 23 degrees).
 const FLATTEN_MAX: f64 = 0.4;
 
+/// How high a foot rises over its standing height (library metres)
+/// before it goes where the library's goes from the hip rather than
+/// where it stands (see `Drive::foot_goal`).
+const RAISED_BLEND_M: f64 = 0.3;
+
+/// How near its standing height (library metres) the library's ankle is
+/// for the figure's foot on that side to stand (see `Drive::stand`).
+const STANDING_M: f64 = 0.02;
+
 /// How one figure follows one library's skeleton.
 #[derive(Clone, Debug)]
 pub struct Drive {
@@ -371,7 +380,7 @@ impl Drive {
     pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
         let free = vec![None; fig.rest.len()];
         let w = self.place(fig, lib, &free, DVec3::ZERO);
-        let raise = self.one_bone_stand(lib, &w);
+        let raise = self.stand(lib, &w);
         let w = if raise == DVec3::ZERO {
             w
         } else {
@@ -502,7 +511,7 @@ impl Drive {
             // height as the library's.
             let root = w[fa].w_axis.truncate();
             let goal = if k < 2 {
-                self.foot_goal(lib, k) + DVec3::Y * lift[k]
+                self.foot_goal(lib, k, root) + DVec3::Y * lift[k]
             } else {
                 root + (lib.positions[lc] - lib.positions[la]) * self.limb_scale[k]
                     + DVec3::Y * lift[k]
@@ -546,37 +555,55 @@ impl Drive {
         fixed
     }
 
-    /// Where the library puts foot `k`'s ankle for the figure, scaled as
-    /// the pelvis is: a planted foot stays planted whatever the hips do.
-    fn foot_goal(&self, lib: &WorldPose, k: usize) -> DVec3 {
-        let l = lib.positions[self.lib_roles.get(LIMBS[k].2)];
-        DVec3::new(
+    /// Where the library puts foot `k`'s ankle for the figure (its hip at
+    /// `hip`): one on the floor scaled as the pelvis is, so that a planted
+    /// foot stays planted whatever the hips do.
+    fn foot_goal(&self, lib: &WorldPose, k: usize, hip: DVec3) -> DVec3 {
+        let (a, _, c) = LIMBS[k];
+        let l = lib.positions[self.lib_roles.get(c)];
+        let planted = DVec3::new(
             l.x * self.scale,
             self.ankles.1 + (l.y - self.ankles.0) * self.scale,
             l.z * self.scale,
-        ) + self.heading(lib, k) * self.hip_wide[k]
+        ) + self.heading(lib, k) * self.hip_wide[k];
+        // A foot raised `RAISED_BLEND_M` or more goes where the library's
+        // is from its hip, the leg's length scaled (a kick points as the
+        // library's does).
+        let raised = hip + (l - lib.positions[self.lib_roles.get(a)]) * self.limb_scale[k];
+        let up = ((l.y - self.ankles.0) / RAISED_BLEND_M).clamp(0.0, 1.0);
+        planted.lerp(raised, up)
     }
 
     /// How much higher than the library's (scaled) the pelvis stands so
-    /// that a one-bone leg, which cannot bend, reaches where the library
-    /// puts its foot and no further: the most either such leg needs, so
-    /// that the standing foot reaches the floor and a lifted one stays
-    /// above its place (`w`, the posture turned as the library's). Zero
-    /// for a figure whose legs bend.
-    fn one_bone_stand(&self, lib: &WorldPose, w: &[DMat4]) -> DVec3 {
-        let mut raise: Option<f64> = None;
-        for (k, &(a, _, c)) in LIMBS.iter().enumerate().take(2) {
-            if !self.one_bone[k] {
-                continue;
-            }
-            let hip = w[self.fig_roles.get(a)].w_axis.truncate();
-            let length = (w[self.fig_roles.get(c)].w_axis.truncate() - hip).length();
-            let v = self.foot_goal(lib, k) - hip;
+    /// that the legs reach where the library puts the feet (`w`, the
+    /// posture turned as the library's). A one-bone leg, which cannot
+    /// bend, reaches no further: the pelvis as high as the one that needs
+    /// it most, so that the standing foot reaches the floor and a lifted
+    /// one stays above its place. Legs that bend: lowered as much as a
+    /// standing foot needs to reach its place (a figure whose hips stand
+    /// wider or lower for its legs than the library's, on straight legs),
+    /// else where it is.
+    fn stand(&self, lib: &WorldPose, w: &[DMat4]) -> DVec3 {
+        let mut one_bone: Option<f64> = None;
+        let mut lower = 0.0f64;
+        for (k, &(a, b, c)) in LIMBS.iter().enumerate().take(2) {
+            let at = |r: Role| w[self.fig_roles.get(r)].w_axis.truncate();
+            let hip = at(a);
+            let length = if self.one_bone[k] {
+                (at(c) - hip).length()
+            } else {
+                (at(b) - hip).length() + (at(c) - at(b)).length()
+            };
+            let v = self.foot_goal(lib, k, hip) - hip;
             let across = v.with_y(0.0).length().min(length);
             let need = v.y + (length * length - across * across).sqrt();
-            raise = Some(raise.map_or(need, |r: f64| r.max(need)));
+            if self.one_bone[k] {
+                one_bone = Some(one_bone.map_or(need, |r: f64| r.max(need)));
+            } else if lib.positions[self.lib_roles.get(c)].y < self.ankles.0 + STANDING_M {
+                lower = lower.min(need);
+            }
         }
-        DVec3::Y * raise.unwrap_or(0.0)
+        DVec3::Y * one_bone.unwrap_or(lower)
     }
 
     /// The turn about the vertical that carries foot `k`'s offset from the
