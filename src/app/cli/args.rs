@@ -45,7 +45,7 @@ pub(super) enum Command {
         mesh: Option<PathBuf>,
     },
     Inspect {
-        /// An evemu recording, or a .bvh file
+        /// An evemu recording, a BVH file or a character (glTF, GLB, VRM): told by its content, whatever its name
         file: PathBuf,
     },
     /// Replay a recording through the input stack
