@@ -7,26 +7,10 @@ use crate::control::action::model::recognize;
 use crate::control::action::player::ActionPlayer;
 use crate::control::action::recogniser::{Decision, DragMatch};
 use crate::control::action::trail::{TrailPoint, view_angle_deg};
-use crate::control::marks::{FingerMark, FingerUse, Marks, TrajectoryMark};
+use crate::control::marks::{Marks, TrajectoryMark};
 use crate::screen::ScreenPoint;
 
 impl Controller {
-    pub(super) fn reset_trails(&mut self, t: f64) {
-        for g in self.grabs.values_mut() {
-            if let Grab::Part {
-                at,
-                trail,
-                trail_start,
-                ..
-            } = g
-            {
-                trail.clear();
-                trail.push(TrailPoint { at: *at, t: 0.0 });
-                *trail_start = t;
-            }
-        }
-    }
-
     /// A drag that starts an action, if any.
     pub(super) fn recognise(
         &mut self,
@@ -55,8 +39,8 @@ impl Controller {
         let at = self.placement_now();
         let player =
             ActionPlayer::start(&self.ch.actions, action, start_at, at, t, &mut self.events);
-        self.reset_trails(t);
-        self.matching.clear();
+        self.fingers.restart_drags(t);
+        self.fingers.forget_matches();
         Some(player)
     }
 
@@ -66,7 +50,7 @@ impl Controller {
         camera: &crate::character::camera::Camera,
     ) -> Option<crate::control::action::model::Recognition> {
         let at = self.placement_now();
-        let found = self.grabs.values().find_map(|g| match g {
+        let found = self.fingers.grabs().find_map(|(_, g)| match g {
             Grab::Part {
                 role,
                 trail,
@@ -102,10 +86,11 @@ impl Controller {
         only: fn(Role) -> bool,
     ) -> Option<Decision> {
         let at = self.placement_now();
-        let (grabs, actions) = (&self.grabs, &self.ch.actions);
+        let actions = &self.ch.actions;
         let thresholds = self.ch.recogniser.thresholds;
         let drift = self.drift.px;
-        self.matching.retain(|id, m| {
+        let (grabs, matching) = self.fingers.grabs_and_matches();
+        matching.retain(|id, m| {
             let held = grabs.contains_key(id);
             if let (false, Some(c)) = (held, m.drag.closest()) {
                 // A drag that started nothing: what it came nearest to, and
@@ -124,7 +109,7 @@ impl Controller {
             held
         });
         let mut found = None;
-        for (id, g) in &self.grabs {
+        for (id, g) in grabs {
             let Grab::Part {
                 role,
                 trail,
@@ -152,7 +137,7 @@ impl Controller {
                     None,
                 ),
             };
-            let m = self.matching.entry(*id).or_insert_with(fresh);
+            let m = matching.entry(*id).or_insert_with(fresh);
             if m.start != *trail_start || m.fed > trail.len() {
                 // The trail began anew (a rest, an action's end, or its
                 // oldest points dropped): so does the match.
@@ -192,21 +177,10 @@ impl Controller {
     /// of the actions that part can start (executable ones marked).
     #[must_use]
     pub fn marks(&self, trajectories: bool) -> Marks {
-        let mut marks = Marks::default();
-        for g in self.grabs.values() {
-            marks.fingers.push(match g {
-                Grab::Part { role, at, .. } => FingerMark {
-                    at: *at,
-                    usage: FingerUse::Part(*role),
-                    tint: None,
-                },
-                Grab::Camera { at } => FingerMark {
-                    at: *at,
-                    usage: FingerUse::Camera,
-                    tint: None,
-                },
-            });
-        }
+        let mut marks = Marks {
+            fingers: self.fingers.marks(),
+            ..Marks::default()
+        };
         if let Some(ahead) = self.walk_ahead() {
             // The path the walk will take, on the floor.
             let camera = self.rig.camera();

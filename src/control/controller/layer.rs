@@ -13,7 +13,7 @@
 
 use glam::DVec2;
 
-use super::{Controller, Grab, Mode};
+use super::{Controller, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::character::skeleton::Pose;
@@ -120,13 +120,10 @@ impl Controller {
                 weight: 0.0,
                 alone: self.target.clone(),
             }));
-            self.reset_trails(t);
-            self.matching.clear();
+            self.fingers.restart_drags(t);
+            self.fingers.forget_matches();
         }
-        let moved = self
-            .grabs
-            .values()
-            .any(|g| matches!(g, Grab::Part { role, moved: true, .. } if upper(*role)));
+        let moved = self.fingers.moved(upper);
         let at = self.placement_now();
         let (Some(layer), Some(regions)) = (self.layer.as_mut(), self.ch.regions.as_ref()) else {
             return;
@@ -162,7 +159,7 @@ impl Controller {
         if weight <= 0.0 {
             tracing::debug!("the layered action is over");
             self.layer = None;
-            self.reset_trails(t);
+            self.fingers.restart_drags(t);
             if matches!(self.mode, Mode::Posing) && !self.held().is_empty() {
                 // The fingers still down pose the body again.
                 self.begin_posing();

@@ -8,7 +8,6 @@
 //! the camera. Time comes only from the frames and the caller's clock, so
 //! a replay gives the same postures every run.
 
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -27,22 +26,23 @@ mod testbody;
 mod walk;
 
 use self::feet::Feet;
+use self::fingers::{Fingers, Grab, Matching};
 pub use self::layer::Layered;
 pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
 use super::rig::Rig;
 use crate::character::body::{Anchor, Placement, leg_length_shorter};
+use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, WorldPose, forward_kinematics};
 use crate::control::action::player::ActionPlayer;
-use crate::control::action::recogniser::DragMatch;
 use crate::control::action::timeline::ActionEvent;
-use crate::control::action::trail::{StartRule, TrailPoint};
+use crate::control::action::trail::StartRule;
+use crate::control::posing::constraint::Constraint;
+use crate::control::posing::pick::pick_with;
 use crate::control::tracking::accel::AccelTracker;
-use crate::input::touch::ContactId;
 use crate::input::touch::ScreenFrame;
 use crate::physics::effects::Attenuation;
-use crate::screen::ScreenPoint;
 
 /// How the controller behaves; the recognition thresholds come from the
 /// configuration.
@@ -95,32 +95,6 @@ pub enum RecogniserKind {
     Paper,
 }
 
-/// A drag's match against the templates, kept between steps: the trail it
-/// was fed (from `start`, `fed` points).
-#[derive(Clone, Debug)]
-struct Matching {
-    start: f64,
-    fed: usize,
-    drag: DragMatch,
-}
-
-/// What a finger holds.
-#[derive(Clone, Debug, PartialEq)]
-enum Grab {
-    Part {
-        role: Role,
-        at: ScreenPoint,
-        /// The drag since the finger last rested, for recognition.
-        trail: Vec<TrailPoint>,
-        trail_start: f64,
-        moved_at: f64,
-        moved: bool,
-    },
-    Camera {
-        at: ScreenPoint,
-    },
-}
-
 /// Posing, or playing an action.
 #[derive(Clone, Debug)]
 pub enum Mode {
@@ -137,7 +111,8 @@ pub struct Controller {
     pub settings: Settings,
     pub rig: Rig,
     mode: Mode,
-    grabs: BTreeMap<ContactId, Grab>,
+    /// The fingers on the table and what they hold.
+    fingers: Fingers,
     /// Where posing places its samples; moves when an action moved the
     /// character.
     at: Placement,
@@ -155,13 +130,8 @@ pub struct Controller {
     physical: effects::Physical,
     /// The target switched controllers this step (its feet jumped).
     switched: bool,
-    /// A glTF figure shown over the body: a touch on its surface grabs.
-    surface: Option<Arc<crate::character::gltf::Skin>>,
     time: f64,
-    last_touch: f64,
     events: Vec<ActionEvent>,
-    /// Each held part's drag matched against the templates so far.
-    matching: BTreeMap<ContactId, Matching>,
     /// Where a finger on the pelvis leads, for walking, and what the walk
     /// under way is told as.
     lead: walk::Lead,
@@ -224,18 +194,15 @@ impl Controller {
             settings,
             rig: Rig::new(width, height),
             mode: Mode::Posing,
-            grabs: BTreeMap::new(),
+            fingers: Fingers::new(t),
             at,
             planted: None,
             tracker: AccelTracker::new(pose.clone()),
             target: pose,
             world,
             switched: false,
-            surface: None,
             time: t,
-            last_touch: t,
             events: Vec::new(),
-            matching: BTreeMap::new(),
             lead: walk::Lead {
                 height: pelvis_h,
                 beyond_since: None,
@@ -298,43 +265,25 @@ impl Controller {
     /// Body parts held by fingers.
     #[must_use]
     pub fn held(&self) -> Vec<Role> {
-        self.grabs
-            .values()
-            .filter_map(|g| match g {
-                Grab::Part { role, .. } => Some(*role),
-                Grab::Camera { .. } => None,
-            })
-            .collect()
+        self.fingers.held()
     }
 
     /// Whether a finger on empty space is moving the camera.
     #[must_use]
     pub fn touching_camera(&self) -> bool {
-        self.grabs
-            .values()
-            .any(|g| matches!(g, Grab::Camera { .. }))
+        self.fingers.touching_camera()
     }
 
     /// Trail points kept for recognition, over all fingers (bounded).
     #[must_use]
     pub fn trail_points(&self) -> usize {
-        self.grabs
-            .values()
-            .map(|g| match g {
-                Grab::Part { trail, .. } => trail.len(),
-                Grab::Camera { .. } => 0,
-            })
-            .sum()
+        self.fingers.trail_points()
     }
 
     /// Seconds since the last touch.
     #[must_use]
     pub fn idle_s(&self) -> f64 {
-        if self.grabs.is_empty() {
-            self.time - self.last_touch
-        } else {
-            0.0
-        }
+        self.fingers.idle_s(self.time)
     }
 
     /// Where the character stands now (clip-start anchoring, for actions).
@@ -350,12 +299,57 @@ impl Controller {
     /// makes it a smooth motion); an action playing is left to finish.
     /// For a kiosk nobody has touched for a while.
     pub fn go_to_rest(&mut self) {
-        if matches!(self.mode, Mode::Posing) && self.grabs.is_empty() {
+        if matches!(self.mode, Mode::Posing) && self.fingers.none_down() {
             let at = self.placement_now();
             self.target = self.ch.rest_pose(&at);
             self.at = at;
             self.planted = None;
         }
+    }
+
+    /// Apply one frame of touches (its time is `frame.t`): the fingers
+    /// take the parts under them, or the camera; a part taken while none
+    /// was held begins posing anew where the feet stand.
+    pub fn touch(&mut self, frame: &ScreenFrame) {
+        let camera = self.rig.camera();
+        let touched = self
+            .fingers
+            .touch(frame, self.settings.rest_s, |surface, p| {
+                pick_with(
+                    &camera,
+                    &self.ch.lib.skeleton,
+                    &self.ch.roles,
+                    &self.world,
+                    surface,
+                    p,
+                    self.settings.pick_radius_px,
+                )
+            });
+        if touched.first_part && matches!(self.mode, Mode::Posing) {
+            self.begin_posing();
+        }
+        self.rig.gesture(&touched.camera_moves);
+    }
+
+    /// Posing begins anew: the feet kept where they stand.
+    fn begin_posing(&mut self) {
+        let w = forward_kinematics(&self.ch.lib.skeleton, &self.target);
+        let r = &self.ch.roles;
+        self.planted = Some([
+            w.positions[r.get(Role::LeftFoot)],
+            w.positions[r.get(Role::RightFoot)],
+        ]);
+    }
+
+    /// The posing constraints of the parts the fingers hold, seen through
+    /// `camera`.
+    fn constraints(&self, camera: &Camera) -> Vec<Constraint> {
+        let r = &self.ch.roles;
+        self.fingers.constraints(
+            camera,
+            |role| self.world.positions[r.get(role)],
+            self.feet.ankle_rest(),
+        )
     }
 
     /// Touches up to `t`, then advance to `t`.

@@ -5,7 +5,7 @@
 //! accelerations), and what is shown (the world pose, the camera).
 
 use super::feet::FeetStep;
-use super::{Controller, Grab, MAX_SUBSTEP, Mode};
+use super::{Controller, MAX_SUBSTEP, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
@@ -25,11 +25,7 @@ impl Controller {
         let constraints = self.constraints(&camera);
         self.aim(&camera, &constraints, t, dt);
         self.layer_step(&camera, &constraints, t, dt);
-        for g in self.grabs.values_mut() {
-            if let Grab::Part { moved, .. } = g {
-                *moved = false;
-            }
-        }
+        self.fingers.settle();
         self.track(dt);
         self.correct(dt);
         self.show(dt);
@@ -44,10 +40,7 @@ impl Controller {
             .copied()
             .filter(|c| self.layer.is_none() || !upper(c.role))
             .collect();
-        let moved = self
-            .grabs
-            .values()
-            .any(|g| matches!(g, Grab::Part { moved: true, .. }));
+        let moved = self.fingers.moved(|_| true);
         match &mut self.mode {
             Mode::Walk(_) => self.walk_step(camera, t, dt),
             Mode::Posing => {
@@ -95,7 +88,7 @@ impl Controller {
                     if !self.held().is_empty() {
                         self.begin_posing();
                     }
-                    self.reset_trails(t);
+                    self.fingers.restart_drags(t);
                 }
             }
         }

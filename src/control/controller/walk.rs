@@ -8,7 +8,8 @@
 
 use glam::DVec3;
 
-use super::{Controller, Grab, Mode};
+use super::fingers::Holding;
+use super::{Controller, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::control::action::timeline::ActionEvent;
@@ -50,13 +51,6 @@ pub(super) struct Lead {
     pub(super) finger: Option<ContactId>,
 }
 
-/// The finger holding the pelvis (see [`Controller::pelvis_finger`]).
-struct PelvisFinger {
-    id: ContactId,
-    at: ScreenPoint,
-    from: ScreenPoint,
-}
-
 /// The floor point below where the ray through `at` meets the level
 /// plane at `height`.
 #[must_use]
@@ -88,27 +82,14 @@ impl Controller {
     /// finger's drag costs least against now, at any coverage: the walk is
     /// told as that action.
     fn nearest_travelling(&self) -> Option<String> {
-        let m = self.matching.get(&self.pelvis_finger()?.id)?;
+        let m = self.fingers.matching.get(&self.pelvis_finger()?.id)?;
         let action = m.drag.cheapest(0, |_| true)?;
         self.ch.travels[action].then(|| self.ch.actions[action].def.name.clone())
     }
 
-    /// The finger holding the pelvis: its contact, where it is on the
-    /// screen and where its drag began.
-    fn pelvis_finger(&self) -> Option<PelvisFinger> {
-        self.grabs.iter().find_map(|(id, g)| match g {
-            Grab::Part {
-                role: Role::Pelvis,
-                at,
-                trail,
-                ..
-            } => Some(PelvisFinger {
-                id: *id,
-                at: *at,
-                from: trail.first().map_or(*at, |p| p.at),
-            }),
-            _ => None,
-        })
+    /// The finger holding the pelvis.
+    fn pelvis_finger(&self) -> Option<Holding> {
+        self.fingers.holding(Role::Pelvis)
     }
 
     /// Start a walk if the pelvis finger has been out of posing's reach
@@ -128,7 +109,7 @@ impl Controller {
         }
         let across = self
             .pelvis_finger()
-            .is_some_and(|PelvisFinger { at, from, .. }| {
+            .is_some_and(|Holding { at, from, .. }| {
                 (at.x - from.x).abs() >= (at.y - from.y).abs()
                     && (floor_point(camera, ScreenPoint::new(at.x, at.y + 1.0), self.lead.height)
                         - goal)
@@ -184,7 +165,7 @@ impl Controller {
         self.mode = Mode::Walk(Box::new(walker));
         self.lead.beyond_since = None;
         self.lead.finger = self.pelvis_finger().map(|f| f.id);
-        self.matching.clear();
+        self.fingers.forget_matches();
     }
 
     /// One step of the walk; posing again once it is over.
@@ -218,7 +199,7 @@ impl Controller {
             if !self.held().is_empty() {
                 self.begin_posing();
             }
-            self.reset_trails(t);
+            self.fingers.restart_drags(t);
         }
     }
 
