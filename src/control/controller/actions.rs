@@ -88,7 +88,7 @@ impl Controller {
         let at = self.placement_now();
         let actions = &self.ch.actions;
         let thresholds = self.ch.recogniser.thresholds;
-        let drift = self.drift.px;
+        let drift = self.layering.drift_px();
         let (grabs, matching) = self.fingers.grabs_and_matches();
         matching.retain(|id, m| {
             let held = grabs.contains_key(id);

@@ -14,12 +14,15 @@
 use glam::DVec2;
 
 use super::{Controller, Mode};
+use crate::character::body::Placement;
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::character::skeleton::Pose;
-use crate::control::action::layer::Mask;
+use crate::control::action::layer::{Mask, Regions};
 use crate::control::action::player::ActionPlayer;
+use crate::control::action::timeline::ActionEvent;
 use crate::control::action::timeline::Status;
+use crate::control::character::Character;
 use crate::control::character::upper;
 use crate::control::posing::constraint::Constraint;
 
@@ -41,9 +44,108 @@ pub(super) struct Layer {
 /// Where the pelvis has gone on the screen while walking: drags are
 /// judged with it taken out.
 #[derive(Clone, Copy, Debug, Default)]
-pub(super) struct Drift {
-    pub(super) px: DVec2,
+struct Drift {
+    px: DVec2,
     last: Option<DVec2>,
+}
+
+/// The layer part: the action laid over the body's motion, if one
+/// plays, and where the pelvis has gone on the screen while walking.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Layering {
+    layer: Option<Box<Layer>>,
+    drift: Drift,
+}
+
+/// How much of the upper body a layered action has after `dt` more
+/// seconds from `weight`: fading in while it plays, out once it is over.
+fn fade(weight: f64, playing: bool, dt: f64) -> f64 {
+    if playing {
+        (weight + dt / LAYER_FADE_S).min(1.0)
+    } else {
+        weight - dt / LAYER_FADE_S
+    }
+}
+
+impl Layering {
+    /// Whether an action is laid over the body's motion now.
+    pub fn playing(&self) -> bool {
+        self.layer.is_some()
+    }
+
+    /// Lay the action `player` starts over the body, on the regions of
+    /// `mask`, fading in from the body's posture `now`.
+    pub fn begin(&mut self, player: ActionPlayer, mask: Mask, now: &Pose) {
+        self.layer = Some(Box::new(Layer {
+            player,
+            mask,
+            weight: 0.0,
+            alone: now.clone(),
+        }));
+    }
+
+    /// One step of the layered action (its own player driven by the
+    /// upper body's constraints `mine`, `held` while its fingers rest),
+    /// laid over the posture `under` by `regions`; `None` once it has
+    /// faded out (and is dropped).
+    #[allow(clippy::too_many_arguments)]
+    pub fn step(
+        &mut self,
+        ch: &Character,
+        regions: &Regions,
+        at: Placement,
+        mine: &[Constraint],
+        held: bool,
+        under: &Pose,
+        dt: f64,
+        events: &mut Vec<ActionEvent>,
+    ) -> Option<Pose> {
+        let layer = self.layer.as_mut()?;
+        let playing = layer.player.status() == Status::Playing;
+        if playing {
+            layer.player.follow(&ch.actions, at);
+            layer.alone = layer
+                .player
+                .step(&ch.lib, &ch.actions, mine, held, dt, events);
+        }
+        layer.weight = fade(layer.weight, playing, dt);
+        let posture = regions.lay(
+            &ch.lib.skeleton,
+            &ch.roles,
+            under,
+            &layer.alone,
+            layer.mask,
+            layer.weight,
+        );
+        if layer.weight <= 0.0 {
+            self.layer = None;
+        }
+        Some(posture)
+    }
+
+    /// How far the pelvis has gone on the screen while walking (px).
+    pub fn drift_px(&self) -> DVec2 {
+        self.drift.px
+    }
+
+    /// The pelvis seen at `now` on the screen (none: off it); its way is
+    /// added up while the body `walking`.
+    pub fn follow_drift(&mut self, now: Option<DVec2>, walking: bool) {
+        if let (Some(now), Some(last), true) = (now, self.drift.last, walking) {
+            self.drift.px += now - last;
+        }
+        self.drift.last = now;
+    }
+
+    /// The layered action as [`Controller::layered`] tells it.
+    fn told<'a>(&'a self, ch: &'a Character) -> Option<Layered<'a>> {
+        self.layer.as_ref().map(|l| Layered {
+            action: ch.actions[l.player.action()].def.name.as_str(),
+            weight: l.weight,
+            time: l.player.time(),
+            alone: &l.alone,
+        })
+    }
 }
 
 /// An action laid over the body's motion, as [`Controller::layered`]
@@ -65,12 +167,7 @@ impl Controller {
     /// legs), if one plays.
     #[must_use]
     pub fn layered(&self) -> Option<Layered<'_>> {
-        self.layer.as_ref().map(|l| Layered {
-            action: self.ch.actions[l.player.action()].def.name.as_str(),
-            weight: l.weight,
-            time: l.player.time(),
-            alone: &l.alone,
-        })
+        self.layering.told(&self.ch)
     }
 
     /// Whether an action can be laid over what the body does now.
@@ -91,7 +188,7 @@ impl Controller {
         t: f64,
         dt: f64,
     ) {
-        if self.layer.is_none() {
+        if !self.layering.playing() {
             if !self.layerable() || self.ch.regions.is_none() {
                 return;
             }
@@ -114,51 +211,35 @@ impl Controller {
                 t,
                 &mut self.events,
             );
-            self.layer = Some(Box::new(Layer {
-                player,
-                mask,
-                weight: 0.0,
-                alone: self.target.clone(),
-            }));
+            self.layering.begin(player, mask, &self.target);
             self.fingers.restart_drags(t);
             self.fingers.forget_matches();
         }
         let moved = self.fingers.moved(upper);
         let at = self.placement_now();
-        let (Some(layer), Some(regions)) = (self.layer.as_mut(), self.ch.regions.as_ref()) else {
+        let Some(regions) = self.ch.regions.as_ref() else {
             return;
         };
-        if layer.player.status() == Status::Playing {
-            let mine: Vec<Constraint> = constraints
-                .iter()
-                .copied()
-                .filter(|c| upper(c.role))
-                .collect();
-            layer.player.follow(&self.ch.actions, at);
-            layer.alone = layer.player.step(
-                &self.ch.lib,
-                &self.ch.actions,
-                &mine,
-                !moved,
-                dt,
-                &mut self.events,
-            );
-            layer.weight = (layer.weight + dt / LAYER_FADE_S).min(1.0);
-        } else {
-            layer.weight -= dt / LAYER_FADE_S;
-        }
-        let (weight, mask) = (layer.weight, layer.mask);
-        self.target = regions.lay(
-            &self.ch.lib.skeleton,
-            &self.ch.roles,
+        let mine: Vec<Constraint> = constraints
+            .iter()
+            .copied()
+            .filter(|c| upper(c.role))
+            .collect();
+        let Some(posture) = self.layering.step(
+            &self.ch,
+            regions,
+            at,
+            &mine,
+            !moved,
             &self.target,
-            &layer.alone,
-            mask,
-            weight,
-        );
-        if weight <= 0.0 {
+            dt,
+            &mut self.events,
+        ) else {
+            return;
+        };
+        self.target = posture;
+        if !self.layering.playing() {
             tracing::debug!("the layered action is over");
-            self.layer = None;
             self.fingers.restart_drags(t);
             if matches!(self.mode, Mode::Posing) && !self.held().is_empty() {
                 // The fingers still down pose the body again.
@@ -172,9 +253,43 @@ impl Controller {
     pub(super) fn follow_drift(&mut self, camera: &Camera) {
         let pelvis = self.world.positions[self.ch.roles.get(Role::Pelvis)];
         let now = camera.project(pelvis).map(|p| DVec2::new(p.x, p.y));
-        if let (Some(now), Some(last), Mode::Walk(_)) = (now, self.drift.last, &self.mode) {
-            self.drift.px += now - last;
+        let walking = matches!(self.mode, Mode::Walk(_));
+        self.layering.follow_drift(now, walking);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_layered_action_fades_in_while_it_plays_and_out_after() {
+        let mut w = 0.0;
+        for _ in 0..5 {
+            w = fade(w, true, 0.02);
         }
-        self.drift.last = now;
+        assert!((w - 0.5).abs() < 1e-12, "{w}");
+        for _ in 0..10 {
+            w = fade(w, true, 0.02);
+        }
+        assert_eq!(w, 1.0, "never more than the whole upper body");
+        for _ in 0..10 {
+            w = fade(w, false, 0.02);
+        }
+        assert!(w <= 1e-12, "{w}");
+    }
+
+    #[test]
+    fn the_pelvis_way_on_the_screen_adds_up_only_while_walking() {
+        let mut l = Layering::default();
+        l.follow_drift(Some(DVec2::new(100.0, 50.0)), true);
+        l.follow_drift(Some(DVec2::new(110.0, 50.0)), true);
+        l.follow_drift(Some(DVec2::new(130.0, 45.0)), false);
+        l.follow_drift(Some(DVec2::new(135.0, 45.0)), true);
+        // Off the screen: nothing to add, and the next step starts anew.
+        l.follow_drift(None, true);
+        l.follow_drift(Some(DVec2::new(500.0, 45.0)), true);
+        assert_eq!(l.drift_px(), DVec2::new(15.0, 0.0));
+        assert!(!l.playing());
     }
 }

@@ -135,11 +135,9 @@ pub struct Controller {
     /// Where a finger on the pelvis leads, for walking, and what the walk
     /// under way is told as.
     lead: walk::Lead,
-    walking: String,
     /// An arm or head action laid over the walk (or an action led by the
     /// legs), and where the pelvis went on the screen while walking.
-    layer: Option<Box<layer::Layer>>,
-    drift: layer::Drift,
+    layering: layer::Layering,
     /// The shown posture's last joint velocities, bounding their change.
     jerk: jerk::Jerk,
 }
@@ -203,14 +201,8 @@ impl Controller {
             switched: false,
             time: t,
             events: Vec::new(),
-            lead: walk::Lead {
-                height: pelvis_h,
-                beyond_since: None,
-                finger: None,
-            },
-            walking: String::new(),
-            layer: None,
-            drift: layer::Drift::default(),
+            lead: walk::Lead::new(pelvis_h),
+            layering: layer::Layering::default(),
             jerk: jerk::Jerk::default(),
             ch,
         }
@@ -252,7 +244,7 @@ impl Controller {
     pub fn action(&self) -> Option<(&str, f64)> {
         match &self.mode {
             Mode::Action(p) => Some((self.ch.actions[p.action()].def.name.as_str(), p.time())),
-            Mode::Walk(w) => Some((self.walking.as_str(), w.progress())),
+            Mode::Walk(w) => Some((self.lead.told(), w.progress())),
             Mode::Posing => None,
         }
     }

@@ -38,14 +38,14 @@ impl Controller {
         let base: Vec<Constraint> = constraints
             .iter()
             .copied()
-            .filter(|c| self.layer.is_none() || !upper(c.role))
+            .filter(|c| !self.layering.playing() || !upper(c.role))
             .collect();
         let moved = self.fingers.moved(|_| true);
         match &mut self.mode {
             Mode::Walk(_) => self.walk_step(camera, t, dt),
             Mode::Posing => {
                 // An action laid over a walk that ended plays out first.
-                let found = self.layer.is_none().then(|| self.recognise(camera, t));
+                let found = (!self.layering.playing()).then(|| self.recognise(camera, t));
                 if let Some(player) = found.flatten() {
                     self.mode = Mode::Action(Box::new(player));
                     self.switched = true;

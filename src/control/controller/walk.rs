@@ -39,18 +39,6 @@ pub const WALKING: &str = "walking";
 /// camera's foot): a finger above the horizon points there.
 const FAR_M: f64 = 8.0;
 
-/// Where a pelvis finger leads: the floor point under it, and since when
-/// it has been out of reach.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct Lead {
-    /// The pelvis's standing height (m): the finger moves the pelvis in
-    /// the level plane at this height.
-    pub(super) height: f64,
-    pub(super) beyond_since: Option<f64>,
-    /// The finger the walk under way follows.
-    pub(super) finger: Option<ContactId>,
-}
-
 /// The floor point below where the ray through `at` meets the level
 /// plane at `height`.
 #[must_use]
@@ -71,13 +59,104 @@ pub fn floor_point(camera: &Camera, at: ScreenPoint, height: f64) -> DVec3 {
     }
 }
 
-impl Controller {
-    /// The floor point the finger holding the pelvis leads to, if one does.
-    fn pelvis_lead(&self, camera: &Camera) -> Option<DVec3> {
-        self.pelvis_finger()
-            .map(|f| floor_point(camera, f.at, self.lead.height))
+/// The walk part: where a finger holding the pelvis leads (the floor
+/// point under it), since when it has been out of posing's reach, the
+/// finger a walk under way follows, and what that walk is told as.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Lead {
+    /// The pelvis's standing height (m): the finger moves the pelvis in
+    /// the level plane at this height.
+    height: f64,
+    beyond_since: Option<f64>,
+    /// The finger the walk under way follows.
+    finger: Option<ContactId>,
+    /// What the walk under way is told as.
+    told: String,
+}
+
+impl Lead {
+    /// No finger leading; the pelvis stands `height` over the floor.
+    pub fn new(height: f64) -> Self {
+        Self {
+            height,
+            ..Self::default()
+        }
     }
 
+    /// The floor point a finger on the pelvis at `at` leads to.
+    pub fn goal(&self, camera: &Camera, at: ScreenPoint) -> DVec3 {
+        floor_point(camera, at, self.height)
+    }
+
+    /// Where to walk to, if the pelvis finger `finger` has led out of
+    /// posing's reach (from the pelvis over `pelvis` on the floor), across
+    /// the screen and over a floor seen steeply enough, for long enough
+    /// at `t`.
+    pub fn out_of_reach(
+        &mut self,
+        camera: &Camera,
+        finger: Option<Holding>,
+        pelvis: DVec3,
+        t: f64,
+    ) -> Option<DVec3> {
+        let Some(f) = finger else {
+            self.beyond_since = None;
+            return None;
+        };
+        let goal = self.goal(camera, f.at);
+        if (goal - pelvis).length() <= WALK_REACH_M {
+            self.beyond_since = None;
+            return None;
+        }
+        let (at, from) = (f.at, f.from);
+        let across = (at.x - from.x).abs() >= (at.y - from.y).abs()
+            && (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - goal).length()
+                <= MAX_M_PER_PX;
+        if !across {
+            self.beyond_since = None;
+            return None;
+        }
+        let since = *self.beyond_since.get_or_insert(t);
+        (t - since >= WALK_CONFIRM_S).then_some(goal)
+    }
+
+    /// A walk began, told as `label`, following the finger `finger`.
+    pub fn began(&mut self, label: &str, finger: Option<ContactId>) {
+        label.clone_into(&mut self.told);
+        self.beyond_since = None;
+        self.finger = finger;
+    }
+
+    /// Steer the walk under way after the pelvis finger (`finger`, none
+    /// once it lifted: the walk stops where it can) at `t`.
+    pub fn steer(&mut self, walker: &mut Walker, camera: &Camera, finger: Option<Holding>, t: f64) {
+        let goal = finger.map(|f| self.goal(camera, f.at));
+        let id = finger.map(|f| f.id);
+        match goal {
+            // Another finger holds the pelvis now: the walk follows it
+            // from where the character is, not along the first one's path.
+            Some(p) if id != self.finger => {
+                tracing::debug!("another finger leads the walk");
+                walker.lead_anew(p, t);
+                self.finger = id;
+            }
+            Some(p) => walker.lead(p, t),
+            None => walker.release(),
+        }
+    }
+
+    /// What the walk under way is told as.
+    pub fn told(&self) -> &str {
+        &self.told
+    }
+
+    /// The walk is over: what it was told as.
+    pub fn finished(&mut self) -> String {
+        std::mem::take(&mut self.told)
+    }
+}
+
+impl Controller {
     /// The travelling action (a walk, a run) whose templates the pelvis
     /// finger's drag costs least against now, at any coverage: the walk is
     /// told as that action.
@@ -98,32 +177,11 @@ impl Controller {
         if self.ch.gait.is_empty() {
             return false;
         }
-        let Some(goal) = self.pelvis_lead(camera) else {
-            self.lead.beyond_since = None;
+        let pelvis = self.world.positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        let finger = self.pelvis_finger();
+        let Some(goal) = self.lead.out_of_reach(camera, finger, pelvis, t) else {
             return false;
         };
-        let pelvis = self.world.positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
-        if (goal - pelvis).length() <= WALK_REACH_M {
-            self.lead.beyond_since = None;
-            return false;
-        }
-        let across = self
-            .pelvis_finger()
-            .is_some_and(|Holding { at, from, .. }| {
-                (at.x - from.x).abs() >= (at.y - from.y).abs()
-                    && (floor_point(camera, ScreenPoint::new(at.x, at.y + 1.0), self.lead.height)
-                        - goal)
-                        .length()
-                        <= MAX_M_PER_PX
-            });
-        if !across {
-            self.lead.beyond_since = None;
-            return false;
-        }
-        let since = *self.lead.beyond_since.get_or_insert(t);
-        if t - since < WALK_CONFIRM_S {
-            return false;
-        }
         tracing::debug!("the pelvis finger left posing's reach");
         let label = self
             .nearest_travelling()
@@ -135,7 +193,7 @@ impl Controller {
     /// Walk to where the pelvis finger leads, if one does (and the
     /// library can walk).
     pub(super) fn start_walk(&mut self, camera: &Camera, t: f64, label: &str) -> bool {
-        match self.pelvis_lead(camera) {
+        match self.pelvis_finger().map(|f| self.lead.goal(camera, f.at)) {
             Some(goal) if !self.ch.gait.is_empty() => {
                 self.walk_to(goal, t, label, false);
                 true
@@ -161,36 +219,23 @@ impl Controller {
             time_s: t,
             by_reach,
         });
-        self.walking = label.to_owned();
         self.mode = Mode::Walk(Box::new(walker));
-        self.lead.beyond_since = None;
-        self.lead.finger = self.pelvis_finger().map(|f| f.id);
+        self.lead.began(label, self.pelvis_finger().map(|f| f.id));
         self.fingers.forget_matches();
     }
 
     /// One step of the walk; posing again once it is over.
     pub(super) fn walk_step(&mut self, camera: &Camera, t: f64, dt: f64) {
-        let lead = self.pelvis_lead(camera);
-        let finger = self.pelvis_finger().map(|f| f.id);
+        let finger = self.pelvis_finger();
         let Mode::Walk(walker) = &mut self.mode else {
             return;
         };
-        match lead {
-            // Another finger holds the pelvis now: the walk follows it
-            // from where the character is, not along the first one's path.
-            Some(p) if finger != self.lead.finger => {
-                tracing::debug!("another finger leads the walk");
-                walker.lead_anew(p, t);
-                self.lead.finger = finger;
-            }
-            Some(p) => walker.lead(p, t),
-            None => walker.release(),
-        }
+        self.lead.steer(walker, camera, finger, t);
         self.target = walker.step(&self.ch.gait, &self.ch.lib.skeleton, dt);
         if walker.done() {
             tracing::debug!("the walk is over: posing");
             self.events.push(ActionEvent::Finished {
-                action: std::mem::take(&mut self.walking),
+                action: self.lead.finished(),
                 time_s: t,
             });
             self.mode = Mode::Posing;
@@ -210,5 +255,83 @@ impl Controller {
             Mode::Walk(w) => Some(w.ahead()),
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A camera 3.6 m in front of the body, looking down at it.
+    fn camera() -> Camera {
+        Camera {
+            eye: DVec3::new(0.0, 1.6, 3.6),
+            target: DVec3::new(0.0, 0.8, 0.0),
+            fov_y_deg: 40.0,
+            width: 1280.0,
+            height: 720.0,
+        }
+    }
+
+    fn finger(from: ScreenPoint, at: ScreenPoint) -> Option<Holding> {
+        Some(Holding { id: 7, at, from })
+    }
+
+    #[test]
+    fn a_finger_across_the_screen_out_of_reach_walks_once_it_stayed_there() {
+        let cam = camera();
+        let mut lead = Lead::new(0.95);
+        let pelvis = DVec3::ZERO;
+        let from = cam.project(DVec3::new(0.0, 0.95, 0.0)).unwrap();
+        // Within reach: no walk.
+        let near = ScreenPoint::new(from.x + 20.0, from.y);
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, near), pelvis, 0.0),
+            None
+        );
+        // Across the screen, a metre away: not before it stayed 0.1 s.
+        let far = cam.project(DVec3::new(1.0, 0.95, 0.0)).unwrap();
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, far), pelvis, 1.0),
+            None
+        );
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, far), pelvis, 1.05),
+            None
+        );
+        let goal = lead
+            .out_of_reach(&cam, finger(from, far), pelvis, 1.1)
+            .expect("out of reach for 0.1 s");
+        assert!((goal - DVec3::new(1.0, 0.0, 0.0)).length() < 1e-6, "{goal}");
+        // Lifted: the wait starts anew.
+        assert_eq!(lead.out_of_reach(&cam, None, pelvis, 1.2), None);
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, far), pelvis, 1.25),
+            None
+        );
+    }
+
+    #[test]
+    fn a_finger_gone_up_the_screen_moves_the_pelvis_and_walks_nowhere() {
+        let cam = camera();
+        let mut lead = Lead::new(0.95);
+        let from = cam.project(DVec3::new(0.0, 0.95, 0.0)).unwrap();
+        let up = ScreenPoint::new(from.x, from.y - 150.0);
+        for k in 0..10 {
+            let t = 0.05 * f64::from(k);
+            assert_eq!(
+                lead.out_of_reach(&cam, finger(from, up), DVec3::ZERO, t),
+                None
+            );
+        }
+    }
+
+    #[test]
+    fn a_walk_is_told_as_it_began_and_follows_its_finger() {
+        let mut lead = Lead::new(0.95);
+        lead.began("walk", Some(3));
+        assert_eq!(lead.told(), "walk");
+        assert_eq!(lead.finished(), "walk");
+        assert_eq!(lead.told(), "");
     }
 }
