@@ -200,3 +200,126 @@ fn per_clip(model: &LearnedModel, weights: &[(usize, f64)], clips: usize) -> Vec
         .map(|c| by.get(&c).copied().unwrap_or(0.0) / total.max(1e-12))
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::character::body::Anchor;
+    use crate::character::roles::Role;
+    use crate::character::skeleton::forward_kinematics;
+    use glam::DVec3;
+
+    fn default_library() -> Library {
+        Library::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/library"
+        )))
+        .unwrap()
+    }
+
+    fn model(lib: &Library, name: &str) -> ActionModel {
+        let def = lib.actions.iter().find(|a| a.name == name).unwrap();
+        ActionModel::build(lib, def)
+    }
+
+    fn pelvis_on_floor(lib: &Library, a: &ActionModel, pose: &Pose) -> DVec3 {
+        let roles = &lib.clips[&a.def.clips[0]].roles;
+        forward_kinematics(&lib.skeleton, pose).positions[roles.get(Role::Pelvis)].with_y(0.0)
+    }
+
+    #[test]
+    fn with_the_fingers_lifted_past_its_wind_up_an_action_plays_to_its_end() {
+        // Lifted in the wind-up an action runs back and is cancelled (the
+        // timeline's own tests); past it, it plays on at its own pace.
+        let lib = default_library();
+        let actions = vec![model(&lib, "bow")];
+        let mut events = Vec::new();
+        let at = Placement {
+            position: DVec3::ZERO,
+            yaw: 0.0,
+            anchor: Anchor::ClipStart,
+        };
+        let mut p = ActionPlayer::start(&actions, 0, 0.7, at, 10.0, &mut events);
+        assert_eq!(p.status(), Status::Playing);
+        let mut last = p.time();
+        let mut frames = 0;
+        while p.status() == Status::Playing && frames < 2000 {
+            p.step(&lib, &actions, &[], true, 1.0 / 60.0, &mut events);
+            assert!(
+                p.time() >= last - 1e-12,
+                "time went back: {last} -> {}",
+                p.time()
+            );
+            last = p.time();
+            frames += 1;
+        }
+        assert_eq!(p.status(), Status::Finished, "after {frames} frames");
+        // At the action's own pace: the rest of its clips' length.
+        let seconds = f64::from(frames) / 60.0;
+        let rest = 0.3 * actions[0].duration;
+        assert!(
+            (seconds - rest).abs() <= 0.1 * rest + 1.0 / 60.0,
+            "{seconds} s against {rest} s"
+        );
+        assert!(
+            matches!(events.first(), Some(ActionEvent::Started { .. })),
+            "{events:?}"
+        );
+        assert!(
+            matches!(events.last(), Some(ActionEvent::Finished { .. })),
+            "{events:?}"
+        );
+    }
+
+    #[test]
+    fn an_action_started_part_way_stands_where_the_character_stands() {
+        // The drag already covered half the action: its clips are placed
+        // so that their posture at that time stands where the character
+        // does, not where their start would put it.
+        let lib = default_library();
+        let actions = vec![model(&lib, "kick_right")];
+        let at = Placement {
+            position: DVec3::new(1.0, 0.0, 2.0),
+            yaw: 0.7,
+            anchor: Anchor::ClipStart,
+        };
+        let mut events = Vec::new();
+        let mut p = ActionPlayer::start(&actions, 0, 0.5, at, 0.0, &mut events);
+        let pose = p.step(&lib, &actions, &[], true, 0.0, &mut events);
+        let from_start = ActionPlayer::start(&actions, 0, 0.0, at, 0.0, &mut events).pose_at(
+            &lib,
+            &actions[0],
+            0.0,
+        );
+        let (now, start) = (
+            pelvis_on_floor(&lib, &actions[0], &pose),
+            pelvis_on_floor(&lib, &actions[0], &from_start),
+        );
+        assert!(
+            (now - at.position).length() < 0.05,
+            "{now} against {}",
+            at.position
+        );
+        assert!((start - at.position).length() < 0.05, "{start}");
+    }
+
+    #[test]
+    fn sample_weights_are_gathered_per_clip() {
+        let lib = default_library();
+        let a = model(&lib, "walk");
+        let clips = a.def.clips.len();
+        assert!(clips >= 2, "{clips}");
+        let first = a.model.samples.iter().position(|s| s.clip == 0).unwrap();
+        let second = a.model.samples.iter().position(|s| s.clip == 1).unwrap();
+        let w = per_clip(
+            &a.model,
+            &[(first, 0.3), (second, 0.1), (first, 0.4)],
+            clips,
+        );
+        assert!(
+            (w[0] - 0.875).abs() < 1e-12 && (w[1] - 0.125).abs() < 1e-12,
+            "{w:?}"
+        );
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+}
