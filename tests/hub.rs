@@ -276,3 +276,37 @@ fn devices_that_fail_to_open_are_retried() {
     hub.rescan(5, &mut out);
     assert_eq!(hub.device_count(), 1);
 }
+
+#[test]
+fn two_panels_number_their_fingers_apart() {
+    // Two panels of one make, each touched by one finger: each numbers it
+    // from its own first slot; the hub hands out ids that differ (the
+    // panel in the high bits), so a stage holding both never mixes them.
+    let opener = Opener::default();
+    for path in ["/dev/input/event3", "/dev/input/event6"] {
+        opener.nodes.borrow_mut().insert(
+            path.into(),
+            node(real("atmel-maxtouch.1-finger-drag-up-down.evemu"), 1000),
+        );
+    }
+    let config = Config::parse(CONFIG, Path::new("test.toml")).unwrap();
+    let mut hub = InputHub::new(opener, config.input.clone(), config.display.picture());
+    let mut out = Vec::new();
+    hub.dispatch(0, &mut out);
+    assert_eq!(hub.device_count(), 2);
+    let mut ids: BTreeMap<u32, std::collections::BTreeSet<u64>> = BTreeMap::new();
+    for e in &out {
+        if let HubEvent::Touch {
+            device, contacts, ..
+        } = e
+        {
+            for c in contacts {
+                assert_eq!(c.id >> 32, u64::from(*device), "{c:?}");
+                ids.entry(*device).or_default().insert(c.id);
+            }
+        }
+    }
+    assert_eq!(ids.len(), 2, "{ids:?}");
+    let sets: Vec<_> = ids.values().collect();
+    assert!(sets[0].is_disjoint(sets[1]), "{ids:?}");
+}

@@ -106,7 +106,9 @@ pub enum HubEvent {
         path: PathBuf,
         name: String,
     },
-    /// A frame of contacts in screen pixels.
+    /// A frame of contacts in screen pixels, each contact's id unique
+    /// across panels (the panel's instance in its high 32 bits, given by
+    /// its tracker).
     Touch {
         device: u32,
         time_us: i64,

@@ -3,6 +3,7 @@
 //! and screen-space frames out.
 
 use serde::Serialize;
+use std::borrow::Cow;
 
 use super::calibration::{Calibration, CalibrationError, Matrix};
 use super::config::InputConfig;
@@ -218,14 +219,17 @@ pub fn to_screen(frame: &TouchFrame, cal: &Calibration, t0_us: i64) -> ScreenFra
 
 /// A recording as the configuration's overrides make it read (`axes`,
 /// `tool` of its `[[input.device]]`): what inspect and every replay read.
-pub fn with_overrides(rec: &Recording, input: &InputConfig) -> Result<Recording, ReplayError> {
+pub fn with_overrides<'a>(
+    rec: &'a Recording,
+    input: &InputConfig,
+) -> Result<Cow<'a, Recording>, ReplayError> {
     match input.remap_for(&rec.device) {
-        Ok(None) => Ok(rec.clone()),
-        Ok(Some(r)) => Ok(Recording {
+        Ok(None) => Ok(Cow::Borrowed(rec)),
+        Ok(Some(r)) => Ok(Cow::Owned(Recording {
             device: r.description(&rec.device),
             events: rec.events.iter().filter_map(|e| r.event(e)).collect(),
             ..rec.clone()
-        }),
+        })),
         Err(source) => Err(ReplayError::Remap {
             device: rec.device.name.clone(),
             source,
@@ -249,7 +253,7 @@ pub fn replay(
     input: &InputConfig,
     picture: Picture,
 ) -> Result<Vec<ScreenFrame>, ReplayError> {
-    check(rec, input, picture)?;
+    // Remapped and calibrated once (what `check` checks, in its order).
     let rec = &with_overrides(rec, input)?;
     let cal = calibration_for(input, picture, &rec.device)?;
     let (frames, _) = track_events(&rec.device, &rec.events)?;

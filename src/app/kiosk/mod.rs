@@ -290,9 +290,7 @@ impl Backend for Kiosk<'_> {
         for e in self.events.drain(..) {
             match e {
                 HubEvent::Touch {
-                    device,
-                    time_us,
-                    mut contacts,
+                    time_us, contacts, ..
                 } => {
                     if let Some(mut a) = self.attract.take() {
                         tracing::info!("touched: attract loop ends");
@@ -301,9 +299,6 @@ impl Backend for Kiosk<'_> {
                         }
                     }
                     self.stats.touch_frames += 1;
-                    for c in &mut contacts {
-                        c.id += u64::from(device) << 32;
-                    }
                     let event_t = self.start.seconds(time_us);
                     let downs = contacts
                         .iter()
