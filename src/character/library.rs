@@ -638,3 +638,14 @@ pub fn hierarchy_difference(a: &Skeleton, b: &Skeleton) -> Option<String> {
     }
     None
 }
+
+/// The default library under `assets/` (the project's own), for unit
+/// tests.
+#[cfg(test)]
+pub(crate) fn default_library() -> Library {
+    Library::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/library"
+    )))
+    .unwrap()
+}

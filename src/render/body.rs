@@ -279,13 +279,7 @@ mod tests {
         (sum / n.max(1) as f64, worst)
     }
 
-    fn default_library() -> Library {
-        Library::load(std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/assets/library"
-        )))
-        .expect("the default library")
-    }
+    use crate::character::library::default_library;
 
     #[test]
     fn the_skinned_body_follows_the_capsule_figure_of_every_clip() {

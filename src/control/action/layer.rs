@@ -210,13 +210,7 @@ mod tests {
     use crate::character::body::Placement;
     use crate::character::library::Library;
 
-    fn default_library() -> Library {
-        Library::load(std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/assets/library"
-        )))
-        .unwrap()
-    }
+    use crate::character::library::default_library;
 
     #[test]
     fn the_regions_of_the_default_skeleton_split_arms_head_spine_and_legs() {

@@ -209,13 +209,7 @@ mod tests {
     use crate::character::skeleton::forward_kinematics;
     use glam::DVec3;
 
-    fn default_library() -> Library {
-        Library::load(std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/assets/library"
-        )))
-        .unwrap()
-    }
+    use crate::character::library::default_library;
 
     fn model(lib: &Library, name: &str) -> ActionModel {
         let def = lib.actions.iter().find(|a| a.name == name).unwrap();
