@@ -208,7 +208,6 @@ impl Regions {
 mod tests {
     use super::*;
     use crate::character::body::Placement;
-    use crate::character::library::Library;
 
     use crate::character::library::default_library;
 
