@@ -19,6 +19,7 @@ mod feet;
 mod fingers;
 mod jerk;
 mod layer;
+mod posing;
 mod step;
 mod surface;
 #[cfg(test)]
@@ -113,11 +114,8 @@ pub struct Controller {
     mode: Mode,
     /// The fingers on the table and what they hold.
     fingers: Fingers,
-    /// Where posing places its samples; moves when an action moved the
-    /// character.
-    at: Placement,
-    /// Foot positions kept while posing.
-    planted: Option<[DVec3; 2]>,
+    /// Where posing places its samples, and the feet it keeps.
+    posing: posing::Posing,
     target: Pose,
     tracker: AccelTracker,
     /// The tracked posture with supporting feet fixed: what is shown.
@@ -193,8 +191,7 @@ impl Controller {
             rig: Rig::new(width, height),
             mode: Mode::Posing,
             fingers: Fingers::new(t),
-            at,
-            planted: None,
+            posing: posing::Posing::new(at),
             tracker: AccelTracker::new(pose.clone()),
             target: pose,
             world,
@@ -294,8 +291,7 @@ impl Controller {
         if matches!(self.mode, Mode::Posing) && self.fingers.none_down() {
             let at = self.placement_now();
             self.target = self.ch.rest_pose(&at);
-            self.at = at;
-            self.planted = None;
+            self.posing.rest(at);
         }
     }
 
@@ -327,7 +323,7 @@ impl Controller {
     fn begin_posing(&mut self) {
         let w = forward_kinematics(&self.ch.lib.skeleton, &self.target);
         let r = &self.ch.roles;
-        self.planted = Some([
+        self.posing.begin([
             w.positions[r.get(Role::LeftFoot)],
             w.positions[r.get(Role::RightFoot)],
         ]);

@@ -11,8 +11,7 @@ use crate::character::roles::Role;
 use crate::character::skeleton::forward_kinematics;
 use crate::control::action::timeline::Status;
 use crate::control::character::upper;
-use crate::control::posing::constraint::{Constraint, SynthOptions};
-use crate::control::posing::synth::synthesize;
+use crate::control::posing::constraint::Constraint;
 use crate::control::tracking::accel::{AccelTracker, Gains};
 
 impl Controller {
@@ -53,16 +52,8 @@ impl Controller {
                     // A walk's drag started a walk, or the finger left reach.
                     self.walk_step(camera, t, dt);
                 } else if !base.is_empty() {
-                    self.target = synthesize(
-                        &self.ch.lib.skeleton,
-                        &self.ch.roles,
-                        &self.ch.posing,
-                        &base,
-                        &self.at,
-                        self.planted,
-                        &SynthOptions::default(),
-                    );
-                } else if self.planted.take().is_some() {
+                    self.target = self.posing.aim(&self.ch, &base);
+                } else if self.posing.end() {
                     // The last finger on the body lifted.
                     self.feet.settle_stance(
                         &self.ch.lib.skeleton,
@@ -82,7 +73,7 @@ impl Controller {
                 );
                 if player.status() != Status::Playing {
                     let placed = self.placement_now();
-                    self.at = placed;
+                    self.posing.place(placed);
                     self.mode = Mode::Posing;
                     self.switched = true;
                     if !self.held().is_empty() {

@@ -239,8 +239,8 @@ impl Controller {
                 time_s: t,
             });
             self.mode = Mode::Posing;
-            self.at = self.placement_now();
-            self.planted = None;
+            let at = self.placement_now();
+            self.posing.rest(at);
             if !self.held().is_empty() {
                 self.begin_posing();
             }
