@@ -11,7 +11,7 @@ impl Controller {
     #[must_use]
     pub fn capsules(&self) -> Vec<(crate::physics::ragdoll::Capsule, &str)> {
         self.physical
-            .capsules(&self.world)
+            .capsules(self.shown.world())
             .into_iter()
             .map(|(c, j)| (c, self.ch.lib.skeleton.joints[j].name.as_str()))
             .collect()
@@ -37,10 +37,7 @@ impl Controller {
     /// where they stand.
     pub fn hit(&mut self, k: usize, impulse: DVec3, shove: DVec3) {
         if let Some(shove) = self.physical.hit(k, impulse, shove) {
-            self.output.translations[0] += shove;
-            for p in &mut self.world.positions {
-                *p += shove;
-            }
+            self.shown.shove(shove);
         }
     }
 }

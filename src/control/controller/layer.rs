@@ -251,7 +251,7 @@ impl Controller {
     /// Follow the pelvis on the screen while the character walks (after
     /// the frame's posture is known).
     pub(super) fn follow_drift(&mut self, camera: &Camera) {
-        let pelvis = self.world.positions[self.ch.roles.get(Role::Pelvis)];
+        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)];
         let now = camera.project(pelvis).map(|p| DVec2::new(p.x, p.y));
         let walking = matches!(self.mode, Mode::Walk(_));
         self.layering.follow_drift(now, walking);

@@ -20,6 +20,7 @@ mod fingers;
 mod jerk;
 mod layer;
 mod posing;
+mod shown;
 mod step;
 mod surface;
 #[cfg(test)]
@@ -41,7 +42,6 @@ use crate::control::action::timeline::ActionEvent;
 use crate::control::action::trail::StartRule;
 use crate::control::posing::constraint::Constraint;
 use crate::control::posing::pick::pick_with;
-use crate::control::tracking::accel::AccelTracker;
 use crate::input::touch::ScreenFrame;
 use crate::physics::effects::Attenuation;
 
@@ -117,12 +117,10 @@ pub struct Controller {
     /// Where posing places its samples, and the feet it keeps.
     posing: posing::Posing,
     target: Pose,
-    tracker: AccelTracker,
-    /// The tracked posture with supporting feet fixed: what is shown.
-    output: Pose,
+    /// The posture tracking shows, and its world pose.
+    shown: shown::Shown,
     /// The feet that carry the body: planted, stepping, sweeping.
     feet: Feet,
-    world: WorldPose,
     /// Physics-based tracking: the ragdoll, the effects taken from it,
     /// and a push from another body fading.
     physical: effects::Physical,
@@ -181,7 +179,6 @@ impl Controller {
                 &world,
                 settings.attenuation,
             ),
-            output: pose.clone(),
             feet: Feet::new(
                 &ch.roles,
                 &world,
@@ -192,9 +189,8 @@ impl Controller {
             mode: Mode::Posing,
             fingers: Fingers::new(t),
             posing: posing::Posing::new(at),
-            tracker: AccelTracker::new(pose.clone()),
+            shown: shown::Shown::new(pose.clone(), world),
             target: pose,
-            world,
             switched: false,
             time: t,
             events: Vec::new(),
@@ -214,7 +210,7 @@ impl Controller {
     /// The posture shown now.
     #[must_use]
     pub fn pose(&self) -> &Pose {
-        &self.output
+        self.shown.pose()
     }
 
     /// The posture asked for now (before tracking and the physical
@@ -227,7 +223,7 @@ impl Controller {
     /// World transforms of the posture shown now.
     #[must_use]
     pub fn world(&self) -> &WorldPose {
-        &self.world
+        self.shown.world()
     }
 
     #[must_use]
@@ -307,7 +303,7 @@ impl Controller {
                     &camera,
                     &self.ch.lib.skeleton,
                     &self.ch.roles,
-                    &self.world,
+                    self.shown.world(),
                     surface,
                     p,
                     self.settings.pick_radius_px,
@@ -335,7 +331,7 @@ impl Controller {
         let r = &self.ch.roles;
         self.fingers.constraints(
             camera,
-            |role| self.world.positions[r.get(role)],
+            |role| self.shown.world().positions[r.get(role)],
             self.feet.ankle_rest(),
         )
     }

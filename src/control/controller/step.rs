@@ -5,14 +5,12 @@
 //! accelerations), and what is shown (the world pose, the camera).
 
 use super::feet::FeetStep;
-use super::{Controller, MAX_SUBSTEP, Mode};
+use super::{Controller, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
-use crate::character::skeleton::forward_kinematics;
 use crate::control::action::timeline::Status;
 use crate::control::character::upper;
 use crate::control::posing::constraint::Constraint;
-use crate::control::tracking::accel::{AccelTracker, Gains};
 
 impl Controller {
     /// Advance to time `t` (seconds): synthesise the target posture and
@@ -88,17 +86,7 @@ impl Controller {
     /// Tracking control (section 6): the shown posture follows the target
     /// by bounded accelerations, in sub-steps short enough to stay stable.
     fn track(&mut self, dt: f64) {
-        if self.settings.settle_s > 0.0 {
-            let gains = Gains::critical(self.settings.settle_s);
-            let steps = (dt / MAX_SUBSTEP).ceil().max(1.0) as usize;
-            for _ in 0..steps {
-                self.tracker.step(&self.target, gains, dt / steps as f64);
-            }
-        } else {
-            // Tracking off: the output is the target.
-            self.tracker = AccelTracker::new(self.target.clone());
-        }
-        self.output = self.tracker.pose.clone();
+        self.shown.track(&self.target, self.settings.settle_s, dt);
     }
 
     /// The tracked posture corrected: the physical effects (eq. 5-7), a
@@ -112,18 +100,19 @@ impl Controller {
                 sk,
                 roles,
                 &self.target,
-                &mut self.output,
+                self.shown.pose_mut(),
                 &held,
                 planted,
                 dt,
             );
         }
-        self.physical.recover(&mut self.output, dt);
+        self.physical.recover(self.shown.pose_mut(), dt);
+        let (shown_last, output, tracker) = self.shown.for_correction();
         let step = FeetStep {
             skeleton: sk,
             roles,
             target: &self.target,
-            shown_last: &self.world,
+            shown_last,
             held: &held,
             switched: std::mem::take(&mut self.switched),
             settle_s: self.settings.settle_s,
@@ -135,22 +124,21 @@ impl Controller {
             },
             dt,
         };
-        self.feet.step(&step, &mut self.output, &mut self.tracker);
+        self.feet.step(&step, output, tracker);
         if self.settings.settle_s > 0.0 {
             // Part of tracking: off, the synthesised postures are shown.
             let standing = [self.feet.standing(0), self.feet.standing(1)];
-            self.jerk
-                .bound(sk, roles, &mut self.output, &held, standing, dt);
-            self.feet.keep_clear(sk, roles, &mut self.output);
+            self.jerk.bound(sk, roles, output, &held, standing, dt);
+            self.feet.keep_clear(sk, roles, output);
         }
     }
 
     /// What is shown: the posture's world pose, and the camera settling
     /// on the body (home after a while without a touch).
     fn show(&mut self, dt: f64) {
-        self.world = forward_kinematics(&self.ch.lib.skeleton, &self.output);
+        self.shown.show(&self.ch.lib.skeleton);
         let idle = self.idle_s() > self.settings.home_after_s;
-        let floor = self.world.positions[self.ch.roles.get(Role::Pelvis)];
+        let floor = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)];
         self.rig.settle(floor, idle, dt);
         self.follow_drift(&self.rig.camera());
     }

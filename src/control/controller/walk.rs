@@ -177,7 +177,7 @@ impl Controller {
         if self.ch.gait.is_empty() {
             return false;
         }
-        let pelvis = self.world.positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
         let finger = self.pelvis_finger();
         let Some(goal) = self.lead.out_of_reach(camera, finger, pelvis, t) else {
             return false;
