@@ -36,7 +36,7 @@ use marionette::input::event::{
     EV_KEY, EV_SYN, RawEvent, SYN_DROPPED, SYN_REPORT,
 };
 use marionette::input::hub::{DeviceOpener, EventDevice, HubEvent, InputHub, LiveError};
-use marionette::input::touch::{KernelState, ScreenFrame, SlotState};
+use marionette::input::touch::{KernelState, SlotState};
 use marionette::render::gpu::{AdapterChoice, Gpu};
 use marionette::render::headless::Headless;
 use marionette::screen::Rotation;
@@ -390,19 +390,9 @@ fn main() {
         hub.dispatch(now_us, &mut events);
         for e in events.drain(..) {
             match e {
-                HubEvent::Touch {
-                    device,
-                    time_us,
-                    mut contacts,
-                } => {
+                HubEvent::Touch { frame, .. } => {
                     touch_frames += 1;
-                    for c in &mut contacts {
-                        c.id += u64::from(device) << 32;
-                    }
-                    stage.touch(&ScreenFrame {
-                        t: time_us as f64 / 1e6,
-                        contacts,
-                    });
+                    stage.touch(&frame);
                 }
                 HubEvent::Added { .. } => added += 1,
                 HubEvent::Removed { .. } => removed += 1,

@@ -142,7 +142,7 @@ fn touchscreens_are_read_and_other_devices_skipped() {
     let touches: Vec<_> = out
         .iter()
         .filter_map(|e| match e {
-            HubEvent::Touch { contacts, .. } => Some(contacts),
+            HubEvent::Touch { frame, .. } => Some(&frame.contacts),
             _ => None,
         })
         .flatten()
@@ -171,7 +171,7 @@ fn a_pen_on_odd_axes_is_opened_as_a_touchscreen_with_its_overrides() {
         let fingers = out
             .iter()
             .filter_map(|e| match e {
-                HubEvent::Touch { contacts, .. } => Some(contacts),
+                HubEvent::Touch { frame, .. } => Some(&frame.contacts),
                 _ => None,
             })
             .flatten()
@@ -207,7 +207,7 @@ fn unplug_cancels_contacts_and_replug_restores_calibration() {
     hub.dispatch(0, &mut out);
     hub.dispatch(10_000, &mut out);
     let down_before: usize = match out.iter().rev().find_map(|e| match e {
-        HubEvent::Touch { contacts, .. } => Some(contacts),
+        HubEvent::Touch { frame, .. } => Some(&frame.contacts),
         _ => None,
     }) {
         Some(c) => c.iter().filter(|c| c.phase.is_down()).count(),
@@ -223,7 +223,7 @@ fn unplug_cancels_contacts_and_replug_restores_calibration() {
         matches!(out.last(), Some(HubEvent::Removed { .. })),
         "{out:?}"
     );
-    let cancelled = out.iter().any(|e| matches!(e, HubEvent::Touch { contacts, .. } if contacts.iter().any(|c| c.phase == Phase::Cancel)));
+    let cancelled = out.iter().any(|e| matches!(e, HubEvent::Touch { frame, .. } if frame.contacts.iter().any(|c| c.phase == Phase::Cancel)));
     assert!(cancelled, "the finger that was down is cancelled: {out:?}");
     assert_eq!(hub.device_count(), 0);
     hub.dispatch(30_000, &mut out);
@@ -246,7 +246,7 @@ fn unplug_cancels_contacts_and_replug_restores_calibration() {
     let c = out
         .iter()
         .find_map(|e| match e {
-            HubEvent::Touch { contacts, .. } => contacts.first().copied(),
+            HubEvent::Touch { frame, .. } => frame.contacts.first().copied(),
             _ => None,
         })
         .unwrap();
@@ -296,11 +296,8 @@ fn two_panels_number_their_fingers_apart() {
     assert_eq!(hub.device_count(), 2);
     let mut ids: BTreeMap<u32, std::collections::BTreeSet<u64>> = BTreeMap::new();
     for e in &out {
-        if let HubEvent::Touch {
-            device, contacts, ..
-        } = e
-        {
-            for c in contacts {
+        if let HubEvent::Touch { device, frame } = e {
+            for c in &frame.contacts {
                 assert_eq!(c.id >> 32, u64::from(*device), "{c:?}");
                 ids.entry(*device).or_default().insert(c.id);
             }
@@ -309,4 +306,57 @@ fn two_panels_number_their_fingers_apart() {
     assert_eq!(ids.len(), 2, "{ids:?}");
     let sets: Vec<_> = ids.values().collect();
     assert!(sets[0].is_disjoint(sets[1]), "{ids:?}");
+}
+
+#[test]
+fn frames_come_out_in_seconds_since_the_callers_start() {
+    // The hub hands out finished frames: their time is the recording's
+    // event stamps counted from the epoch the caller gives, so the kiosk
+    // feeds them on without converting anything.
+    let rec = real("atmel-maxtouch.1-finger-drag-up-down.evemu");
+    let config = Config::parse(CONFIG, Path::new("test.toml")).unwrap();
+    let times = |epoch_us: i64| -> Vec<f64> {
+        let opener = Opener::default();
+        opener
+            .nodes
+            .borrow_mut()
+            .insert("/dev/input/event3".into(), node(rec.clone(), 1000));
+        let mut hub =
+            InputHub::new(opener, config.input.clone(), config.display.picture()).since(epoch_us);
+        let mut out = Vec::new();
+        hub.dispatch(0, &mut out);
+        out.iter()
+            .filter_map(|e| match e {
+                HubEvent::Touch { frame, .. } => Some(frame.t),
+                _ => None,
+            })
+            .collect()
+    };
+    let first_us = rec.events[0].time_us;
+    let from_first = times(first_us);
+    let later = times(first_us + 2_500_000);
+    assert!(from_first.len() > 10, "{} frames", from_first.len());
+    assert!(
+        from_first[0] >= 0.0 && from_first[0] < 0.1,
+        "{}",
+        from_first[0]
+    );
+    assert!(from_first.windows(2).all(|w| w[0] <= w[1]));
+    assert_eq!(from_first.len(), later.len());
+    for (a, b) in from_first.iter().zip(&later) {
+        assert!((a - b - 2.5).abs() < 1e-9, "{a} {b}");
+    }
+    // `watch` prints the frame flat, as its operators read it.
+    let line = serde_json::to_value(HubEvent::Touch {
+        device: 1,
+        frame: marionette::input::touch::ScreenFrame {
+            t: 0.5,
+            contacts: Vec::new(),
+        },
+    })
+    .unwrap();
+    assert_eq!(
+        line,
+        serde_json::json!({"event": "touch", "device": 1, "t": 0.5, "contacts": []})
+    );
 }

@@ -99,6 +99,12 @@ impl<'a> Since<'a> {
         }
     }
 
+    /// The start, on the clock (µs).
+    #[must_use]
+    pub fn epoch_us(&self) -> i64 {
+        self.start_us
+    }
+
     /// A time on the clock (an event's stamp), in seconds since the start.
     #[must_use]
     pub fn seconds(&self, us: i64) -> f64 {

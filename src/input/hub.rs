@@ -21,11 +21,11 @@ use super::calibration::{Calibration, Matrix};
 use super::config::InputConfig;
 use super::device::{DeviceDescription, DeviceKind};
 use super::event::{ABS_MT_SLOT, RawEvent};
-use super::pipeline::screen_contacts;
+use super::pipeline::to_screen;
 use super::remap::Remap;
 use super::tracker::{ContactTracker, KernelState, ResyncSource, TouchFrame};
 use crate::input::device::device_label;
-use crate::input::touch::ScreenContact;
+use crate::input::touch::ScreenFrame;
 use crate::screen::Picture;
 
 /// Errors of live devices.
@@ -106,13 +106,14 @@ pub enum HubEvent {
         path: PathBuf,
         name: String,
     },
-    /// A frame of contacts in screen pixels, each contact's id unique
-    /// across panels (the panel's instance in its high 32 bits, given by
-    /// its tracker).
+    /// A finished frame of contacts in screen pixels, as the controller
+    /// takes it: each contact's id unique across panels (the panel's
+    /// instance in its high 32 bits, given by its tracker), its time in
+    /// seconds since the hub's epoch ([`InputHub::since`]).
     Touch {
         device: u32,
-        time_us: i64,
-        contacts: Vec<ScreenContact>,
+        #[serde(flatten)]
+        frame: ScreenFrame,
     },
 }
 
@@ -144,6 +145,9 @@ pub struct InputHub<O: DeviceOpener> {
     failed: BTreeMap<PathBuf, String>,
     next_instance: u32,
     last_scan_us: Option<i64>,
+    /// The instant (µs on the devices' clock) touch frames count their
+    /// time from.
+    epoch_us: i64,
     events: Vec<RawEvent>,
     frames: Vec<TouchFrame>,
 }
@@ -160,9 +164,18 @@ impl<O: DeviceOpener> InputHub<O> {
             failed: BTreeMap::new(),
             next_instance: 1,
             last_scan_us: None,
+            epoch_us: 0,
             events: Vec::new(),
             frames: Vec::new(),
         }
+    }
+
+    /// Touch frames' times in seconds since `epoch_us` on the devices'
+    /// clock (the monotonic clock): the caller's time 0.
+    #[must_use]
+    pub fn since(mut self, epoch_us: i64) -> Self {
+        self.epoch_us = epoch_us;
+        self
     }
 
     /// Number of touchscreens being read.
@@ -343,8 +356,7 @@ impl<O: DeviceOpener> InputHub<O> {
             for f in self.frames.drain(..) {
                 out.push(HubEvent::Touch {
                     device: d.instance,
-                    time_us: f.time_us,
-                    contacts: screen_contacts(&f, &d.calibration),
+                    frame: to_screen(&f, &d.calibration, self.epoch_us),
                 });
             }
             match result {
@@ -369,8 +381,7 @@ impl<O: DeviceOpener> InputHub<O> {
         if let Some(f) = d.tracker.cancel_all(now_us) {
             out.push(HubEvent::Touch {
                 device: d.instance,
-                time_us: f.time_us,
-                contacts: screen_contacts(&f, &d.calibration),
+                frame: to_screen(&f, &d.calibration, self.epoch_us),
             });
         }
         out.push(HubEvent::Removed {

@@ -280,7 +280,9 @@ pub fn watch(
     crate::platform::signals::install_stop_handler();
     let started = std::time::Instant::now();
     let deadline = seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
-    let mut hub = InputHub::new(EvdevOpener, input.clone(), picture);
+    // Touches are stamped in seconds since the watch began.
+    let mut hub = InputHub::new(EvdevOpener, input.clone(), picture)
+        .since(crate::platform::clock::monotonic_us());
     let mut events = Vec::new();
     let stdout_err = |source| LiveError::Write {
         path: PathBuf::from("stdout"),

@@ -187,9 +187,9 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         &["looking for touchscreens..."],
         [200, 200, 200, 255],
     ))?;
-    let input = InputThread::start(config.clone())?;
     let clock = Monotonic;
     let start_us = clock.now_us();
+    let input = InputThread::start(config.clone(), start_us)?;
     let now = || (clock.now_us() - start_us) as f64 / 1e6;
     let mut events = Vec::new();
     // The touchscreen: named, or the only one.

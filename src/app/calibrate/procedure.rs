@@ -193,22 +193,17 @@ impl Touches {
     /// Take the hub's events at `t`.
     pub fn step(&mut self, t: f64, events: impl IntoIterator<Item = HubEvent>) -> Collecting {
         for e in events {
-            let HubEvent::Touch {
-                device,
-                time_us,
-                contacts,
-            } = e
-            else {
+            let HubEvent::Touch { device, frame } = e else {
                 continue;
             };
             if device != self.device {
                 continue;
             }
             // The first finger only.
-            let Some(c) = contacts.first() else {
+            let Some(c) = frame.contacts.first() else {
                 continue;
             };
-            let at = time_us as f64 / 1e6;
+            let at = frame.t;
             if c.phase.is_down() {
                 self.samples.push((at, c.raw));
                 continue;
@@ -253,20 +248,22 @@ impl Touches {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::touch::{ScreenContact, Tool};
+    use crate::input::touch::{ScreenContact, ScreenFrame, Tool};
     use crate::screen::ScreenPoint;
 
     fn touch(device: u32, t: f64, phase: Phase, x: i32, y: i32) -> HubEvent {
         HubEvent::Touch {
             device,
-            time_us: (t * 1e6) as i64,
-            contacts: vec![ScreenContact {
-                id: 1,
-                phase,
-                tool: Tool::Finger,
-                raw: RawPoint { x, y },
-                screen: ScreenPoint::new(0.0, 0.0),
-            }],
+            frame: ScreenFrame {
+                t,
+                contacts: vec![ScreenContact {
+                    id: 1,
+                    phase,
+                    tool: Tool::Finger,
+                    raw: RawPoint { x, y },
+                    screen: ScreenPoint::new(0.0, 0.0),
+                }],
+            },
         }
     }
 

@@ -21,7 +21,7 @@ pub(crate) struct InputThread {
 }
 
 impl InputThread {
-    pub(crate) fn start(config: Config) -> Result<Self, LiveError> {
+    pub(crate) fn start(config: Config, epoch_us: i64) -> Result<Self, LiveError> {
         use std::io::Write as _;
         let (tx, rx) = std::sync::mpsc::channel();
         let (wake, mut waker) =
@@ -37,7 +37,8 @@ impl InputThread {
             .name("input".into())
             .spawn(move || {
                 let mut hub =
-                    InputHub::new(EvdevOpener, config.input.clone(), config.display.picture());
+                    InputHub::new(EvdevOpener, config.input.clone(), config.display.picture())
+                        .since(epoch_us);
                 let mut events = Vec::new();
                 let wait = Duration::from_millis(50.min(config.input.rescan_interval_ms));
                 while !stopping.load(std::sync::atomic::Ordering::SeqCst) {

@@ -161,8 +161,8 @@ pub fn run_with_clock(
     if !dev_dir.is_dir() {
         return Err(LiveError::NoDeviceDir(dev_dir.clone()).into());
     }
-    let input = InputThread::start(config.clone())?;
     let mut frames = Since::new(clock);
+    let input = InputThread::start(config.clone(), frames.epoch_us())?;
     let mut ctl = crate::app::headless::table(cast, &config, true, 0.0);
     tracing::info!(characters = ctl.actors().len(), "characters on the table");
     let timers = Timers::new(
@@ -289,9 +289,7 @@ impl Backend for Kiosk<'_> {
         self.input.drain(&mut self.events);
         for e in self.events.drain(..) {
             match e {
-                HubEvent::Touch {
-                    time_us, contacts, ..
-                } => {
+                HubEvent::Touch { mut frame, .. } => {
                     if let Some(mut a) = self.attract.take() {
                         tracing::info!("touched: attract loop ends");
                         if let Some(f) = a.lift(t) {
@@ -299,14 +297,13 @@ impl Backend for Kiosk<'_> {
                         }
                     }
                     self.stats.touch_frames += 1;
-                    let event_t = self.start.seconds(time_us);
-                    let downs = contacts
+                    let downs = frame
+                        .contacts
                         .iter()
                         .filter(|c| c.phase == crate::input::touch::Phase::Down)
                         .count();
-                    self.vitals.touched(event_t, downs);
-                    let ft = self.timers.touch(event_t, t);
-                    let frame = ScreenFrame { t: ft, contacts };
+                    self.vitals.touched(frame.t, downs);
+                    frame.t = self.timers.touch(frame.t, t);
                     self.service.touch(&frame, t);
                     ctl.touch(&frame);
                 }
