@@ -39,10 +39,17 @@ fn bench(c: &mut Criterion) {
             .unwrap();
     let ch = Arc::new(Character::from_library(lib));
     let make = || {
-        let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+        let mut ctl = Stage::single(
+            Controller::new(ch.clone(), Settings::default(), 0.0),
+            1280.0,
+            720.0,
+        );
         ctl.advance(1.0 / 30.0);
-        let cam = ctl.rig.camera();
-        let at = |r: Role| cam.project(ctl.world().positions[ch.roles.get(r)]).unwrap();
+        let cam = ctl.rig().camera();
+        let at = |r: Role| {
+            cam.project(ctl.ctl().world().positions[ch.roles.get(r)])
+                .unwrap()
+        };
         let (l, r) = (at(Role::LeftHand), at(Role::RightHand));
         ctl.touch(&ScreenFrame {
             t: 0.04,
@@ -94,14 +101,7 @@ fn circle(ch: &Arc<Character>, n: usize) -> Stage {
             let at = glam::DVec3::new(0.35 * a.cos(), 0.0, 0.35 * a.sin());
             // Facing the centre: yaw 0 faces +Z.
             let yaw = (-at.x).atan2(-at.z);
-            Actor::standing(
-                ch.clone(),
-                Settings::default(),
-                (1280.0, 720.0),
-                at,
-                yaw,
-                None,
-            )
+            Actor::standing(ch.clone(), Settings::default(), at, yaw, None)
         })
         .collect();
     Stage::new(actors, 1280.0, 720.0, 0.0)
@@ -167,29 +167,33 @@ fn table(c: &mut Criterion, ch: &Arc<Character>) {
     // Walking: the pelvis finger goes round a circle of 1.2 m about where
     // the character stood, at 0.8 m/s, put each step over the circle's
     // point at the pelvis's height as the camera shows it then.
-    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    let mut ctl = Stage::single(
+        Controller::new(ch.clone(), Settings::default(), 0.0),
+        1280.0,
+        720.0,
+    );
     ctl.advance(1.0 / 30.0);
-    let pelvis = ctl.world().positions[ch.roles.get(Role::Pelvis)];
+    let pelvis = ctl.ctl().world().positions[ch.roles.get(Role::Pelvis)];
     let on_circle = |t: f64| {
         let a = t * 0.8 / 1.2;
         pelvis + glam::DVec3::new(1.2 * a.cos() - 1.2, 0.0, 1.2 * a.sin())
     };
-    let down = ctl.rig.camera().project(pelvis).unwrap();
+    let down = ctl.rig().camera().project(pelvis).unwrap();
     ctl.touch(&ScreenFrame {
         t: 0.04,
         contacts: vec![contact(1, Phase::Down, down)],
     });
     let mut k = 2u32;
-    let mut step = |ctl: &mut Controller| {
+    let mut step = |ctl: &mut Stage| {
         k += 1;
         let t = f64::from(k) / 30.0;
-        let at = ctl.rig.camera().project(on_circle(t - 0.07)).unwrap();
+        let at = ctl.rig().camera().project(on_circle(t - 0.07)).unwrap();
         ctl.touch(&ScreenFrame {
             t,
             contacts: vec![contact(1, Phase::Move, at)],
         });
         ctl.advance(t);
-        matches!(ctl.mode(), Mode::Walk(_))
+        matches!(ctl.ctl().mode(), Mode::Walk(_))
     };
     for _ in 0..60 {
         step(&mut ctl);
@@ -211,30 +215,34 @@ fn table(c: &mut Criterion, ch: &Arc<Character>) {
         .iter()
         .position(|a| a.def.name == "wave_left")
         .unwrap();
-    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    let mut ctl = Stage::single(
+        Controller::new(ch.clone(), Settings::default(), 0.0),
+        1280.0,
+        720.0,
+    );
     ctl.advance(1.0 / 30.0);
     ctl.touch(&ScreenFrame {
         t: 0.04,
         contacts: vec![contact(1, Phase::Down, down)],
     });
     let mut second = SecondFinger::new(wave);
-    let frame = |ctl: &Controller, second: &mut SecondFinger, k: u32| {
+    let frame = |ctl: &Stage, second: &mut SecondFinger, k: u32| {
         let t = f64::from(k) / 30.0;
-        let at = ctl.rig.camera().project(on_circle(t - 0.07)).unwrap();
+        let at = ctl.rig().camera().project(on_circle(t - 0.07)).unwrap();
         let mut contacts = vec![contact(1, Phase::Move, at)];
-        if let Some((phase, p)) = second.contact(ch, ctl, t) {
+        if let Some((phase, p)) = second.contact(ch, ctl.ctl(), &ctl.rig().camera(), t) {
             contacts.push(contact(2, phase, p));
         }
         ScreenFrame { t, contacts }
     };
     let mut k = 2u32;
-    while ctl.layered().is_none_or(|l| l.weight < 1.0) {
+    while ctl.ctl().layered().is_none_or(|l| l.weight < 1.0) {
         k += 1;
         assert!(k < 600, "the wave was not laid over the walk");
         let f = frame(&ctl, &mut second, k);
         ctl.step(std::slice::from_ref(&f), f.t);
     }
-    assert!(matches!(ctl.mode(), Mode::Walk(_)), "walking");
+    assert!(matches!(ctl.ctl().mode(), Mode::Walk(_)), "walking");
     let next = frame(&ctl, &mut second, k + 1);
     g.bench_function("1 character walking with a wave laid over it", |b| {
         b.iter_batched_ref(

@@ -13,6 +13,7 @@ mod common;
 use common::contact;
 use marionette::character::roles::Role;
 use marionette::control::controller::{Controller, Settings};
+use marionette::control::stage::Stage;
 use marionette::input::touch::Phase;
 use marionette::input::touch::{ScreenContact, ScreenFrame};
 use marionette::screen::ScreenPoint;
@@ -21,13 +22,17 @@ fn frame(t: f64, contacts: Vec<ScreenContact>) -> ScreenFrame {
     ScreenFrame { t, contacts }
 }
 
-fn controller() -> Controller {
-    Controller::new(common::character(), Settings::default(), 1280.0, 720.0, 0.0)
+fn controller() -> Stage {
+    Stage::single(
+        Controller::new(common::character(), Settings::default(), 0.0),
+        1280.0,
+        720.0,
+    )
 }
 
-fn screen_of(ctl: &Controller, role: Role) -> ScreenPoint {
-    let p = ctl.world().positions[ctl.character().roles.get(role)];
-    ctl.rig.camera().project(p).unwrap()
+fn screen_of(ctl: &Stage, role: Role) -> ScreenPoint {
+    let p = ctl.ctl().world().positions[ctl.ctl().character().roles.get(role)];
+    ctl.rig().camera().project(p).unwrap()
 }
 
 #[test]
@@ -35,7 +40,7 @@ fn a_touch_shows_at_the_next_step() {
     let mut ctl = controller();
     ctl.advance(1.0 / 30.0);
     let hand = screen_of(&ctl, Role::LeftHand);
-    let before = ctl.world().positions[ctl.character().roles.get(Role::LeftHand)];
+    let before = ctl.ctl().world().positions[ctl.ctl().character().roles.get(Role::LeftHand)];
     // The finger goes down between two steps and moves in the next frame.
     ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, hand)]));
     ctl.advance(2.0 / 30.0);
@@ -44,7 +49,7 @@ fn a_touch_shows_at_the_next_step() {
     let up = ScreenPoint::new(hand.x + 40.0, hand.y - 120.0);
     ctl.touch(&frame(0.07, vec![contact(1, Phase::Move, up)]));
     ctl.advance(3.0 / 30.0);
-    let after = ctl.world().positions[ctl.character().roles.get(Role::LeftHand)];
+    let after = ctl.ctl().world().positions[ctl.ctl().character().roles.get(Role::LeftHand)];
     assert!(
         (after - before).length() > 0.01,
         "the hand moved by {:.3} m at the next step",
@@ -100,7 +105,7 @@ fn a_held_part_stays_pinned_while_another_finger_poses() {
 fn fingers_on_empty_space_turn_and_zoom_the_camera_within_limits() {
     let mut ctl = controller();
     ctl.advance(1.0 / 30.0);
-    let home = ctl.rig.orbit;
+    let home = ctl.rig().orbit;
     let a = ScreenPoint::new(100.0, 650.0);
     ctl.touch(&frame(0.1, vec![contact(1, Phase::Down, a)]));
     for k in 1..30 {
@@ -112,10 +117,11 @@ fn fingers_on_empty_space_turn_and_zoom_the_camera_within_limits() {
     }
     ctl.advance(0.7);
     assert!(ctl.held().is_empty());
-    assert!((ctl.rig.orbit.yaw - home.yaw).abs() > 1.0, "turned");
+    assert!((ctl.rig().orbit.yaw - home.yaw).abs() > 1.0, "turned");
     // Dragging up tilts the view down to the horizon, and no further.
     assert_eq!(
-        ctl.rig.orbit.pitch, ctl.rig.limits.min_pitch,
+        ctl.rig().orbit.pitch,
+        ctl.rig().limits.min_pitch,
         "tilt stops at its limit"
     );
     ctl.touch(&frame(0.8, vec![contact(1, Phase::Up, a)]));
@@ -136,7 +142,7 @@ fn fingers_on_empty_space_turn_and_zoom_the_camera_within_limits() {
         ],
     ));
     ctl.advance(1.1);
-    assert_eq!(ctl.rig.orbit.distance, ctl.rig.limits.min_distance);
+    assert_eq!(ctl.rig().orbit.distance, ctl.rig().limits.min_distance);
     // The whole character stays in view.
     for role in [Role::Head, Role::LeftFoot, Role::RightFoot] {
         let p = screen_of(&ctl, role);
@@ -154,12 +160,12 @@ fn fingers_on_empty_space_turn_and_zoom_the_camera_within_limits() {
     ));
     // Idle: the camera eases home.
     let mut t = 1.2;
-    while t < 1.2 + ctl.settings.home_after_s + 4.0 {
+    while t < 1.2 + ctl.ctl().settings.home_after_s + 4.0 {
         t += 1.0 / 30.0;
         ctl.advance(t);
     }
-    assert!((ctl.rig.orbit.distance - home.distance).abs() < 0.05);
-    assert!((ctl.rig.orbit.pitch - home.pitch).abs() < 0.02);
+    assert!((ctl.rig().orbit.distance - home.distance).abs() < 0.05);
+    assert!((ctl.rig().orbit.pitch - home.pitch).abs() < 0.02);
 }
 
 #[test]
@@ -213,12 +219,15 @@ fn many_fingers_on_empty_space_never_put_the_camera_overhead_or_far() {
         }
         ctl.touch(&frame(t, contacts));
         ctl.advance(t);
-        let cam = ctl.rig.camera();
-        let roles = &ctl.character().roles;
-        let at = |r: Role| cam.project(ctl.world().positions[roles.get(r)]).unwrap();
+        let cam = ctl.rig().camera();
+        let roles = &ctl.ctl().character().roles;
+        let at = |r: Role| {
+            cam.project(ctl.ctl().world().positions[roles.get(r)])
+                .unwrap()
+        };
         let feet = at(Role::LeftFoot).y.max(at(Role::RightFoot).y);
         lowest = lowest.min(feet - at(Role::Head).y);
-        steepest = steepest.max(ctl.rig.orbit.pitch);
+        steepest = steepest.max(ctl.rig().orbit.pitch);
     }
     println!(
         "many camera fingers: figure at least {lowest:.0} px tall of 720, tilt at most {:.1}°",
@@ -246,7 +255,11 @@ fn a_cancelled_contact_lets_go() {
 /// the right shoulder's local rotation every step for `after_s` seconds
 /// after the release, and the steps' time.
 fn release_mid_swing(settings: Settings, after_s: f64) -> Vec<glam::DQuat> {
-    let mut ctl = Controller::new(common::character(), settings, 1280.0, 720.0, 0.0);
+    let mut ctl = Stage::single(
+        Controller::new(common::character(), settings, 0.0),
+        1280.0,
+        720.0,
+    );
     ctl.advance(1.0 / 30.0);
     let hand = screen_of(&ctl, Role::RightHand);
     ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, hand)]));
@@ -264,7 +277,7 @@ fn release_mid_swing(settings: Settings, after_s: f64) -> Vec<glam::DQuat> {
     assert!(ctl.action().is_none(), "the drag poses: {:?}", ctl.action());
     let t_up = f64::from(3 + steps) / 30.0;
     ctl.touch(&frame(t_up, vec![contact(1, Phase::Up, hand)]));
-    let shoulder = ctl.character().roles.get(Role::RightShoulder);
+    let shoulder = ctl.ctl().character().roles.get(Role::RightShoulder);
     let mut out = Vec::new();
     let mut k = 0;
     while f64::from(k) / 30.0 < after_s {
@@ -413,11 +426,11 @@ fn a_pelvis_dragged_far_leans_the_body_and_the_legs_stay_under_it() {
     // character lay in the air, legs stretched out behind it. Standing
     // feet now bound the search.
     let ch = bandai_library();
-    let mut ctl = Controller::new(ch, Settings::default(), 1280.0, 720.0, 0.0);
+    let mut ctl = Stage::single(Controller::new(ch, Settings::default(), 0.0), 1280.0, 720.0);
     ctl.advance(1.0 / 30.0);
     let start = screen_of(&ctl, Role::Pelvis);
     ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, start)]));
-    let roles = ctl.character().roles.clone();
+    let roles = ctl.ctl().character().roles.clone();
     let mut worst: f64 = 0.0;
     for k in 2..120 {
         let t = f64::from(k) / 30.0;
@@ -425,7 +438,7 @@ fn a_pelvis_dragged_far_leans_the_body_and_the_legs_stay_under_it() {
         let p = ScreenPoint::new(start.x + 560.0 * s, start.y + 40.0 * s);
         ctl.touch(&frame(t, vec![contact(1, Phase::Move, p)]));
         ctl.advance(t);
-        let w = ctl.world();
+        let w = ctl.ctl().world();
         let pelvis = w.positions[roles.get(Role::Pelvis)];
         for foot in [Role::LeftFoot, Role::RightFoot] {
             // How far up the legs reach towards the pelvis.
@@ -443,8 +456,8 @@ fn a_pelvis_dragged_far_leans_the_body_and_the_legs_stay_under_it() {
 fn a_foot_lifted_by_a_finger_comes_down_when_it_lets_go() {
     let mut ctl = controller();
     ctl.advance(1.0 / 30.0);
-    let roles = ctl.character().roles.clone();
-    let rest = ctl.world().positions[roles.get(Role::LeftFoot)].y;
+    let roles = ctl.ctl().character().roles.clone();
+    let rest = ctl.ctl().world().positions[roles.get(Role::LeftFoot)].y;
     let foot = screen_of(&ctl, Role::LeftFoot);
     ctl.touch(&frame(0.04, vec![contact(1, Phase::Down, foot)]));
     for k in 2..60 {
@@ -454,16 +467,16 @@ fn a_foot_lifted_by_a_finger_comes_down_when_it_lets_go() {
         ctl.touch(&frame(t, vec![contact(1, Phase::Move, p)]));
         ctl.advance(t);
     }
-    let raised = ctl.world().positions[roles.get(Role::LeftFoot)].y;
+    let raised = ctl.ctl().world().positions[roles.get(Role::LeftFoot)].y;
     assert!(raised > rest + 0.15, "raised {:.3} m", raised - rest);
     ctl.touch(&frame(2.0, vec![contact(1, Phase::Up, foot)]));
     for k in 61..120 {
         ctl.advance(f64::from(k) / 30.0);
     }
-    let down = ctl.world().positions[roles.get(Role::LeftFoot)].y;
+    let down = ctl.ctl().world().positions[roles.get(Role::LeftFoot)].y;
     let sole = marionette::character::skeleton::sole(
-        &ctl.character().lib.skeleton,
-        ctl.world(),
+        &ctl.ctl().character().lib.skeleton,
+        ctl.ctl().world(),
         roles.get(Role::LeftFoot),
     )
     .y;

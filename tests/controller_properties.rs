@@ -35,13 +35,11 @@ const MAX_SINK_M: f64 = 0.2;
 
 fn table(characters: usize) -> Stage {
     if characters == 1 {
-        return Stage::single(Controller::new(
-            common::character(),
-            Settings::default(),
+        return Stage::single(
+            Controller::new(common::character(), Settings::default(), 0.0),
             1280.0,
             720.0,
-            0.0,
-        ));
+        );
     }
     let actors = (0..characters)
         .map(|k| {
@@ -50,7 +48,6 @@ fn table(characters: usize) -> Stage {
             Actor::standing(
                 common::character(),
                 Settings::default(),
-                (1280.0, 720.0),
                 glam::DVec3::new(x, 0.0, 0.0),
                 yaw,
                 None,

@@ -21,7 +21,6 @@ fn duel(spacing: f64) -> Stage {
             Actor::standing(
                 common::character(),
                 Settings::default(),
-                (1280.0, 720.0),
                 DVec3::new(side * spacing / 2.0, 0.0, 0.0),
                 -side * std::f64::consts::FRAC_PI_2,
                 None,
@@ -227,4 +226,57 @@ fn the_duel_recording_lands_hits_and_replays_identically() {
     let landed: usize = a.characters.iter().map(|c| c.hits_landed).sum();
     assert!(landed >= 1, "a punch or kick lands");
     assert!(a.most_held_at_once >= 2, "both characters grabbed at once");
+}
+
+#[test]
+fn a_floor_finger_turns_the_camera_until_a_character_is_held_unless_it_is_alone() {
+    // A finger on the floor, then one on a hand, then the floor finger
+    // drags: how far the camera turned.
+    let turned = |mut stage: Stage| {
+        let mut t = 0.0;
+        idle(&mut stage, &mut t, 0.1);
+        let hand = screen_of(&stage, 0, Role::RightHand);
+        let floor = |k: u32| ScreenPoint::new(100.0 + 10.0 * f64::from(k), 650.0);
+        let mut step = |stage: &mut Stage, contacts| {
+            t += DT;
+            stage.step(&[ScreenFrame { t, contacts }], t);
+        };
+        step(&mut stage, vec![common::contact(1, Phase::Down, floor(0))]);
+        assert!(stage.touching_camera(), "the floor finger has the camera");
+        step(
+            &mut stage,
+            vec![
+                common::contact(1, Phase::Hold, floor(0)),
+                common::contact(2, Phase::Down, hand),
+            ],
+        );
+        assert_eq!(stage.held(), vec![Role::RightHand]);
+        let yaw = stage.rig().orbit.yaw;
+        for k in 1..=20 {
+            step(
+                &mut stage,
+                vec![
+                    common::contact(1, Phase::Move, floor(k)),
+                    common::contact(2, Phase::Hold, hand),
+                ],
+            );
+        }
+        (stage.rig().orbit.yaw - yaw).abs()
+    };
+    let two = turned(duel(3.0));
+    let one = turned(Stage::single(
+        marionette::control::controller::Controller::new(
+            common::character(),
+            Settings::default(),
+            0.0,
+        ),
+        1280.0,
+        720.0,
+    ));
+    eprintln!("turned {two:.3} rad with two characters, {one:.3} with one");
+    assert_eq!(two, 0.0, "another visitor's drag never swings the view");
+    assert!(
+        one > 0.2,
+        "a lone character's visitor turns the view ({one:.3} rad)"
+    );
 }

@@ -13,6 +13,7 @@ mod common;
 use common::marionette;
 use marionette::control::action::timeline::ActionEvent;
 use marionette::control::controller::{Controller, Mode, Settings, WALKING};
+use marionette::control::stage::Stage;
 use marionette::tools::eval::walk::{WalkPath, eval_walk, random_paths};
 
 #[test]
@@ -54,12 +55,17 @@ fn a_walk_is_told_as_it_starts_and_ends_and_the_character_stands_where_the_finge
     let r = eval_walk(&ch, std::slice::from_ref(&path), None);
     assert!(r.rows[0].followed, "{r:?}");
     // The same drag, by hand, for the events.
-    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    let mut ctl = Stage::single(
+        Controller::new(ch.clone(), Settings::default(), 0.0),
+        1280.0,
+        720.0,
+    );
     for k in 1..=10 {
         ctl.advance(f64::from(k) / 30.0);
     }
-    let pelvis = ctl.world().positions[ch.roles.get(marionette::character::roles::Role::Pelvis)];
-    let cam = ctl.rig.camera();
+    let pelvis =
+        ctl.ctl().world().positions[ch.roles.get(marionette::character::roles::Role::Pelvis)];
+    let cam = ctl.rig().camera();
     let start = cam.project(pelvis).unwrap();
     let end = cam
         .project(pelvis + glam::DVec3::new(-1.5, 0.0, 0.2))
@@ -77,7 +83,7 @@ fn a_walk_is_told_as_it_starts_and_ends_and_the_character_stands_where_the_finge
             71 => marionette::input::touch::Phase::Up,
             _ if k > 71 => {
                 ctl.advance(t);
-                walked |= matches!(ctl.mode(), Mode::Walk(_));
+                walked |= matches!(ctl.ctl().mode(), Mode::Walk(_));
                 continue;
             }
             _ => marionette::input::touch::Phase::Move,
@@ -87,11 +93,11 @@ fn a_walk_is_told_as_it_starts_and_ends_and_the_character_stands_where_the_finge
             contacts: vec![common::contact(1, phase, at)],
         });
         ctl.advance(t);
-        walked |= matches!(ctl.mode(), Mode::Walk(_));
+        walked |= matches!(ctl.ctl().mode(), Mode::Walk(_));
     }
     assert!(walked, "the drag walked");
-    assert!(matches!(ctl.mode(), Mode::Posing), "posing again");
-    let events = ctl.take_events();
+    assert!(matches!(ctl.ctl().mode(), Mode::Posing), "posing again");
+    let events: Vec<ActionEvent> = ctl.take_events().into_iter().map(|(_, e)| e).collect();
     let told: Vec<String> = events.iter().map(|e| format!("{e:?}")).collect();
     assert_eq!(events.len(), 2, "{told:?}");
     // Told as the travelling action the drag came nearest (the default
@@ -196,9 +202,13 @@ fn a_new_finger_on_the_pelvis_leads_the_walk_from_where_the_character_is() {
     use marionette::input::touch::{Phase, ScreenFrame};
     use marionette::screen::ScreenPoint;
     let ch = common::character();
-    let mut ctl = Controller::new(ch.clone(), Settings::default(), 1280.0, 720.0, 0.0);
+    let mut ctl = Stage::single(
+        Controller::new(ch.clone(), Settings::default(), 0.0),
+        1280.0,
+        720.0,
+    );
     let mut k = 0u32;
-    let mut step = |ctl: &mut Controller, contacts| {
+    let mut step = |ctl: &mut Stage, contacts| {
         k += 1;
         let t = f64::from(k) / 30.0;
         ctl.step(&[ScreenFrame { t, contacts }], t);
@@ -206,32 +216,30 @@ fn a_new_finger_on_the_pelvis_leads_the_walk_from_where_the_character_is() {
     for _ in 0..10 {
         step(&mut ctl, vec![]);
     }
-    let pelvis = |ctl: &Controller| ctl.world().positions[ch.roles.get(Role::Pelvis)];
+    let pelvis = |ctl: &Stage| ctl.ctl().world().positions[ch.roles.get(Role::Pelvis)];
     let start = pelvis(&ctl);
-    let on_screen = |ctl: &Controller, p: glam::DVec3| ctl.rig.camera().project(p).unwrap();
+    let on_screen = |ctl: &Stage, p: glam::DVec3| ctl.rig().camera().project(p).unwrap();
     // One finger leads 1.2 m to the character's left (across the view)...
     let first = start + glam::DVec3::new(1.2, 0.0, 0.0);
-    let drag = |ctl: &mut Controller,
-                id: u64,
-                to: glam::DVec3,
-                step: &mut dyn FnMut(&mut Controller, Vec<_>)| {
-        let from = pelvis(ctl);
-        step(
-            ctl,
-            vec![common::contact(id, Phase::Down, on_screen(ctl, from))],
-        );
-        for i in 1..=45 {
-            let u = f64::from(i) / 45.0;
-            let p = from + (to.with_y(from.y) - from) * u;
-            let at: ScreenPoint = on_screen(ctl, p);
-            step(ctl, vec![common::contact(id, Phase::Move, at)]);
-        }
-        let at = on_screen(ctl, to.with_y(from.y));
-        step(ctl, vec![common::contact(id, Phase::Up, at)]);
-    };
+    let drag =
+        |ctl: &mut Stage, id: u64, to: glam::DVec3, step: &mut dyn FnMut(&mut Stage, Vec<_>)| {
+            let from = pelvis(ctl);
+            step(
+                ctl,
+                vec![common::contact(id, Phase::Down, on_screen(ctl, from))],
+            );
+            for i in 1..=45 {
+                let u = f64::from(i) / 45.0;
+                let p = from + (to.with_y(from.y) - from) * u;
+                let at: ScreenPoint = on_screen(ctl, p);
+                step(ctl, vec![common::contact(id, Phase::Move, at)]);
+            }
+            let at = on_screen(ctl, to.with_y(from.y));
+            step(ctl, vec![common::contact(id, Phase::Up, at)]);
+        };
     drag(&mut ctl, 1, first, &mut step);
     assert!(
-        matches!(ctl.mode(), Mode::Walk(_)),
+        matches!(ctl.ctl().mode(), Mode::Walk(_)),
         "the first finger walks it"
     );
     // ...and, while it walks, another takes the pelvis and leads it back
@@ -240,11 +248,11 @@ fn a_new_finger_on_the_pelvis_leads_the_walk_from_where_the_character_is() {
     drag(&mut ctl, 2, second, &mut step);
     for _ in 0..240 {
         step(&mut ctl, vec![]);
-        if matches!(ctl.mode(), Mode::Posing) {
+        if matches!(ctl.ctl().mode(), Mode::Posing) {
             break;
         }
     }
-    assert!(matches!(ctl.mode(), Mode::Posing), "the walk ends");
+    assert!(matches!(ctl.ctl().mode(), Mode::Posing), "the walk ends");
     let end = pelvis(&ctl).with_y(0.0);
     let d = (end - second.with_y(0.0)).length();
     assert!(d < 0.45, "stands {d} m from where the second finger lifted");

@@ -1,39 +1,12 @@
-//! Fixed-rate stepping of a controller through recorded touch frames: each
-//! tick feeds the frames up to its time, then advances the controller to
-//! it. A touch's effect therefore shows in the first frame rendered after
-//! it, and a replay steps identically every run.
+//! Fixed-rate stepping of a table through recorded touch frames: each
+//! tick feeds the frames up to its time, then advances the table to it.
+//! A touch's effect therefore shows in the first frame rendered after it,
+//! and a replay steps identically every run.
 
-use super::controller::Controller;
 use super::stage::Stage;
 use crate::input::touch::ScreenFrame;
 
-/// What a ticker steps: a controller, or a table of them.
-pub trait Stepped {
-    /// Apply one frame of touches.
-    fn touch(&mut self, frame: &ScreenFrame);
-    /// Advance to time `t` (s).
-    fn advance(&mut self, t: f64);
-}
-
-impl Stepped for Controller {
-    fn touch(&mut self, frame: &ScreenFrame) {
-        Controller::touch(self, frame);
-    }
-    fn advance(&mut self, t: f64) {
-        Controller::advance(self, t);
-    }
-}
-
-impl Stepped for Stage {
-    fn touch(&mut self, frame: &ScreenFrame) {
-        Stage::touch(self, frame);
-    }
-    fn advance(&mut self, t: f64) {
-        Stage::advance(self, t);
-    }
-}
-
-/// Steps a controller at `hz` through `frames` (times in seconds).
+/// Steps a table at `hz` through `frames` (times in seconds).
 #[derive(Clone, Debug)]
 pub struct Ticker {
     frames: Vec<ScreenFrame>,
@@ -73,7 +46,7 @@ impl Ticker {
 
     /// One tick: feed the frames due, advance the controller; returns the
     /// tick's time.
-    pub fn step(&mut self, ctl: &mut impl Stepped) -> f64 {
+    pub fn step(&mut self, ctl: &mut Stage) -> f64 {
         self.tick += 1;
         let t = self.time();
         self.feed(ctl, t);
@@ -83,7 +56,7 @@ impl Ticker {
 
     /// Feed the controller the frames due by `t` (not yet fed), without
     /// advancing it or the ticker's own time.
-    pub fn feed(&mut self, ctl: &mut impl Stepped, t: f64) {
+    pub fn feed(&mut self, ctl: &mut Stage, t: f64) {
         while let Some(f) = self.frames.get(self.next) {
             if f.t > t + 1e-9 {
                 break;

@@ -14,6 +14,7 @@ use crate::character::roles::Role;
 use crate::control::action::trials::Lcg;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Settings};
+use crate::control::stage::Stage;
 use crate::input::calibration::RawPoint;
 use crate::input::touch::{Phase, ScreenContact, ScreenFrame, Tool};
 use crate::screen::{Picture, ScreenPoint};
@@ -67,7 +68,7 @@ pub fn author_abuse(
         (f(p.0, w), f(p.1, h))
     };
     // Where the parts are: a controller fed the same touches.
-    let mut ctl = Controller::new(Arc::clone(ch), settings, w, h, 0.0);
+    let mut table = Stage::single(Controller::new(Arc::clone(ch), settings, 0.0), w, h);
     let contact = |id: u64, phase: Phase, p: (f64, f64)| {
         let (x, y) = raw(p);
         ScreenContact {
@@ -116,10 +117,10 @@ pub fn author_abuse(
                 }
                 None if !dropping && rng.unit() < DOWN_PER_S * DT => {
                     let role = Role::ALL[(rng.unit() * 16.0) as usize % 16];
-                    let aim = ctl
-                        .rig
+                    let aim = table
+                        .rig()
                         .camera()
-                        .project(ctl.world().positions[ch.roles.get(role)])
+                        .project(table.ctl().world().positions[ch.roles.get(role)])
                         .unwrap_or(ScreenPoint::new(w / 2.0, h / 2.0));
                     let at = (
                         (aim.x + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, w),
@@ -160,7 +161,7 @@ pub fn author_abuse(
             synth.dropped();
         }
         synth.frame(DT_US);
-        ctl.step(
+        table.step(
             &[ScreenFrame {
                 t,
                 contacts: touches,

@@ -78,10 +78,10 @@ impl<'a> Author<'a> {
         picture: Picture,
     ) -> Self {
         let (w, h) = picture.size();
-        let controller = Controller::new(ch, settings, f64::from(w), f64::from(h), 0.0);
+        let controller = Controller::new(ch, settings, 0.0);
         Self::start(
             "marionette demo panel",
-            Stage::single(controller),
+            Stage::single(controller, f64::from(w), f64::from(h)),
             input,
             picture,
         )
@@ -212,8 +212,9 @@ impl<'a> Author<'a> {
     /// The second finger's touch in this frame (slot 1).
     fn second_finger(&mut self, f: &mut SecondFinger) {
         self.sync();
-        let c = &self.ctl.actors()[0].ctl;
-        match f.contact(c.character(), c, self.time) {
+        let c = self.ctl.ctl();
+        let camera = self.ctl.rig().camera();
+        match f.contact(c.character(), c, &camera, self.time) {
             Some((Phase::Down, p)) => self.down(1, p),
             Some((Phase::Up, _)) => {
                 self.synth.up(1);

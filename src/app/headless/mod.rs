@@ -426,7 +426,6 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
             let mut actor = Actor::standing(
                 ch,
                 settings,
-                (w, h),
                 glam::DVec3::new(x, 0.0, z),
                 yaw,
                 tints.get(k).copied().flatten(),

@@ -2,6 +2,7 @@
 //! and the marks drawn for the fingers and the trajectories.
 
 use super::{Controller, Grab, Matching, Mode, RecogniserKind};
+use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::control::action::model::recognize;
 use crate::control::action::player::ActionPlayer;
@@ -51,7 +52,7 @@ impl Controller {
     ) -> Option<crate::control::action::model::Recognition> {
         let at = self.placement_now();
         let found = self.fingers.grabs().find_map(|(_, g)| match g {
-            Grab::Part {
+            Grab {
                 role,
                 trail,
                 moved: true,
@@ -110,16 +111,13 @@ impl Controller {
         });
         let mut found = None;
         for (id, g) in grabs {
-            let Grab::Part {
+            let Grab {
                 role,
                 trail,
                 trail_start,
                 moved,
                 ..
-            } = g
-            else {
-                continue;
-            };
+            } = g;
             if !only(*role) {
                 // Not a part that may start anything now (the pelvis
                 // finger that walks the character): not matched.
@@ -173,17 +171,15 @@ impl Controller {
         Some(d)
     }
 
-    /// Finger marks and, while a part is held in posing, the trajectories
-    /// of the actions that part can start (executable ones marked).
+    /// The trajectory marks seen through `camera`: the path a walk will
+    /// take and, while a part is held in posing (and `trajectories`), the
+    /// trajectories of the actions that part can start (executable ones
+    /// marked).
     #[must_use]
-    pub fn marks(&self, trajectories: bool) -> Marks {
-        let mut marks = Marks {
-            fingers: self.fingers.marks(),
-            ..Marks::default()
-        };
+    pub fn trajectory_marks(&self, camera: &Camera, trajectories: bool) -> Vec<TrajectoryMark> {
+        let mut marks = Marks::default();
         if let Some(ahead) = self.walk_ahead() {
             // The path the walk will take, on the floor.
-            let camera = self.rig.camera();
             marks.trajectories.push(TrajectoryMark {
                 points: ahead.iter().filter_map(|p| camera.project(*p)).collect(),
                 executable: true,
@@ -191,7 +187,6 @@ impl Controller {
             });
         }
         if trajectories && matches!(self.mode, Mode::Posing) {
-            let camera = self.rig.camera();
             let at = self.placement_now();
             let eye = camera.eye_vector();
             for role in self.held() {
@@ -202,7 +197,7 @@ impl Controller {
                         &self.ch.recogniser,
                         &self.ch.actions,
                         role,
-                        &camera,
+                        camera,
                         &at,
                         None,
                     )),
@@ -214,7 +209,7 @@ impl Controller {
                     }
                     let dir = glam::DQuat::from_rotation_y(at.yaw) * a.direction;
                     marks.trajectories.push(TrajectoryMark {
-                        points: a.projected(&camera, &at).iter().map(|p| p.at).collect(),
+                        points: a.projected(camera, &at).iter().map(|p| p.at).collect(),
                         executable: drawable.as_ref().map_or_else(
                             || view_angle_deg(dir, eye) > self.settings.rule.min_view_angle_deg,
                             |m| m.drawable(i) > 0,
@@ -224,6 +219,6 @@ impl Controller {
                 }
             }
         }
-        marks
+        marks.trajectories
     }
 }

@@ -248,9 +248,9 @@ impl Controller {
         }
     }
 
-    /// Follow the pelvis on the screen while the character walks (after
-    /// the frame's posture is known).
-    pub(super) fn follow_drift(&mut self, camera: &Camera) {
+    /// Follow the pelvis on the screen, seen through `camera` (the
+    /// table's, settled after the step), while the character walks.
+    pub fn follow_drift(&mut self, camera: &Camera) {
         let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)];
         let now = camera.project(pelvis).map(|p| DVec2::new(p.x, p.y));
         let walking = matches!(self.mode, Mode::Walk(_));

@@ -4,10 +4,13 @@
 //! that matches an action's trajectory starts the action, which the
 //! fingers then drive (action control, section 5), and at its end the
 //! character returns to posing; the output follows the target posture by
-//! acceleration-based tracking (section 6). Fingers on empty space move
-//! the camera. Time comes only from the frames and the caller's clock, so
-//! a replay gives the same postures every run.
+//! acceleration-based tracking (section 6). The table
+//! ([`crate::control::stage`]) owns the camera and decides which part a
+//! finger takes; a controller receives both. Time comes only from the
+//! frames and the caller's clock, so a replay gives the same postures
+//! every run.
 
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -22,7 +25,6 @@ mod layer;
 mod posing;
 mod shown;
 mod step;
-mod surface;
 #[cfg(test)]
 mod testbody;
 mod walk;
@@ -32,7 +34,6 @@ use self::fingers::{Fingers, Grab, Matching};
 pub use self::layer::Layered;
 pub use self::walk::{WALK_REACH_M, WALKING, floor_point};
 use super::character::Character;
-use super::rig::Rig;
 use crate::character::body::{Anchor, Placement, leg_length_shorter};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
@@ -41,8 +42,7 @@ use crate::control::action::player::ActionPlayer;
 use crate::control::action::timeline::ActionEvent;
 use crate::control::action::trail::StartRule;
 use crate::control::posing::constraint::Constraint;
-use crate::control::posing::pick::pick_with;
-use crate::input::touch::ScreenFrame;
+use crate::input::touch::{ContactId, ScreenFrame};
 use crate::physics::effects::Attenuation;
 
 /// How the controller behaves; the recognition thresholds come from the
@@ -110,7 +110,6 @@ pub enum Mode {
 pub struct Controller {
     ch: Arc<Character>,
     pub settings: Settings,
-    pub rig: Rig,
     mode: Mode,
     /// The fingers on the table and what they hold.
     fingers: Fingers,
@@ -145,11 +144,11 @@ const MAX_TRAIL_S: f64 = 4.0;
 pub const MAX_SUBSTEP: f64 = 0.004;
 
 impl Controller {
-    /// A character at rest at the origin facing +Z, seen in a picture of
-    /// `width` x `height` pixels, at time `t` (seconds).
+    /// A character at rest at the origin facing +Z, at time `t`
+    /// (seconds).
     #[must_use]
-    pub fn new(ch: Arc<Character>, settings: Settings, width: f64, height: f64, t: f64) -> Self {
-        Self::standing(ch, settings, width, height, t, DVec3::ZERO, 0.0)
+    pub fn new(ch: Arc<Character>, settings: Settings, t: f64) -> Self {
+        Self::standing(ch, settings, t, DVec3::ZERO, 0.0)
     }
 
     /// A character at rest at floor point `position` facing `yaw`
@@ -158,8 +157,6 @@ impl Controller {
     pub fn standing(
         ch: Arc<Character>,
         settings: Settings,
-        width: f64,
-        height: f64,
         t: f64,
         position: DVec3,
         yaw: f64,
@@ -185,9 +182,8 @@ impl Controller {
                 leg_length_shorter(&ch.lib.skeleton, &ch.roles),
             ),
             settings,
-            rig: Rig::new(width, height),
             mode: Mode::Posing,
-            fingers: Fingers::new(t),
+            fingers: Fingers::default(),
             posing: posing::Posing::new(at),
             shown: shown::Shown::new(pose.clone(), world),
             target: pose,
@@ -253,22 +249,16 @@ impl Controller {
         self.fingers.held()
     }
 
-    /// Whether a finger on empty space is moving the camera.
-    #[must_use]
-    pub fn touching_camera(&self) -> bool {
-        self.fingers.touching_camera()
-    }
-
     /// Trail points kept for recognition, over all fingers (bounded).
     #[must_use]
     pub fn trail_points(&self) -> usize {
         self.fingers.trail_points()
     }
 
-    /// Seconds since the last touch.
+    /// The time of the last step (s).
     #[must_use]
-    pub fn idle_s(&self) -> f64 {
-        self.fingers.idle_s(self.time)
+    pub fn time(&self) -> f64 {
+        self.time
     }
 
     /// Where the character stands now (clip-start anchoring, for actions).
@@ -291,28 +281,15 @@ impl Controller {
         }
     }
 
-    /// Apply one frame of touches (its time is `frame.t`): the fingers
-    /// take the parts under them, or the camera; a part taken while none
-    /// was held begins posing anew where the feet stand.
-    pub fn touch(&mut self, frame: &ScreenFrame) {
-        let camera = self.rig.camera();
-        let touched = self
-            .fingers
-            .touch(frame, self.settings.rest_s, |surface, p| {
-                pick_with(
-                    &camera,
-                    &self.ch.lib.skeleton,
-                    &self.ch.roles,
-                    self.shown.world(),
-                    surface,
-                    p,
-                    self.settings.pick_radius_px,
-                )
-            });
-        if touched.first_part && matches!(self.mode, Mode::Posing) {
+    /// Apply one frame of this body's touches (its time is `frame.t`):
+    /// a finger going down takes the part the table `picked` for it; a
+    /// part taken while none was held begins posing anew where the feet
+    /// stand.
+    pub fn touch(&mut self, frame: &ScreenFrame, picked: &BTreeMap<ContactId, Role>) {
+        let first_part = self.fingers.touch(frame, self.settings.rest_s, picked);
+        if first_part && matches!(self.mode, Mode::Posing) {
             self.begin_posing();
         }
-        self.rig.gesture(&touched.camera_moves);
     }
 
     /// Posing begins anew: the feet kept where they stand.
@@ -336,11 +313,9 @@ impl Controller {
         )
     }
 
-    /// Touches up to `t`, then advance to `t`.
-    pub fn step(&mut self, frames: &[ScreenFrame], t: f64) {
-        for f in frames {
-            self.touch(f);
-        }
-        self.advance(t);
+    /// The mark of finger `id`, if it holds one of this body's parts.
+    #[must_use]
+    pub fn finger_mark(&self, id: ContactId) -> Option<crate::control::marks::FingerMark> {
+        self.fingers.mark(id)
     }
 }

@@ -2,30 +2,29 @@
 //! a part: the target posture (posing, an action or a walk), an action
 //! laid over it, tracking, the corrections of the shown posture (the
 //! physical effects, a push fading, the feet, the bound on joint
-//! accelerations), and what is shown (the world pose, the camera).
+//! accelerations), and what is shown (the world pose). The camera is the
+//! table's: a step sees through it.
 
 use super::feet::FeetStep;
 use super::{Controller, Mode};
 use crate::character::camera::Camera;
-use crate::character::roles::Role;
 use crate::control::action::timeline::Status;
 use crate::control::character::upper;
 use crate::control::posing::constraint::Constraint;
 
 impl Controller {
-    /// Advance to time `t` (seconds): synthesise the target posture and
-    /// track it.
-    pub fn advance(&mut self, t: f64) {
+    /// Advance to time `t` (seconds), seen through `camera`: synthesise
+    /// the target posture and track it.
+    pub fn advance(&mut self, t: f64, camera: &Camera) {
         let dt = (t - self.time).clamp(0.0, 0.25);
         self.time = t;
-        let camera = self.rig.camera();
-        let constraints = self.constraints(&camera);
-        self.aim(&camera, &constraints, t, dt);
-        self.layer_step(&camera, &constraints, t, dt);
+        let constraints = self.constraints(camera);
+        self.aim(camera, &constraints, t, dt);
+        self.layer_step(camera, &constraints, t, dt);
         self.fingers.settle();
         self.track(dt);
         self.correct(dt);
-        self.show(dt);
+        self.shown.show(&self.ch.lib.skeleton);
     }
 
     /// The target posture: posing to the fingers' constraints, an action
@@ -131,15 +130,5 @@ impl Controller {
             self.jerk.bound(sk, roles, output, &held, standing, dt);
             self.feet.keep_clear(sk, roles, output);
         }
-    }
-
-    /// What is shown: the posture's world pose, and the camera settling
-    /// on the body (home after a while without a touch).
-    fn show(&mut self, dt: f64) {
-        self.shown.show(&self.ch.lib.skeleton);
-        let idle = self.idle_s() > self.settings.home_after_s;
-        let floor = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)];
-        self.rig.settle(floor, idle, dt);
-        self.follow_drift(&self.rig.camera());
     }
 }

@@ -6,13 +6,17 @@
 //!   characters' parts are within reach) until it lifts: only that
 //!   character's controller sees it, so posing, action recognition and
 //!   playback, tracking and foot IK run per character.
-//! - **Camera.** A finger on empty floor turns, tilts or zooms the shared
-//!   camera only while no character is held; while one is, such a finger
-//!   does nothing until it lifts (a visitor's stray finger never swings the
-//!   view from under another visitor's drag), and the view does not follow
-//!   the characters while any is held. Idle, the camera eases home:
-//!   a view across the line the characters stand on, far enough back to
-//!   frame all of them.
+//! - **Camera.** The table owns the camera and decides, for each finger
+//!   going down, which character's part it takes (picking through the
+//!   camera everyone sees); the controllers receive both. A finger on
+//!   empty floor turns, tilts or zooms the camera. With several characters
+//!   it does so only while none is held; while one is, such a finger does
+//!   nothing until it lifts (a visitor's stray finger never swings the view
+//!   from under another visitor's drag), and the view does not follow the
+//!   characters while any is held. A lone character's view follows it
+//!   always and its floor fingers always turn the camera. Idle, the camera
+//!   eases home: for several, a view across the line the characters stand
+//!   on, far enough back to frame all of them.
 //! - **Contact.** After each step the characters' body capsules are tested
 //!   pairwise. Where two overlap they are pushed apart on the floor at once
 //!   (the push fades as the bodies recover, feet staying planted), and when
@@ -21,8 +25,8 @@
 //!   which shows through the physical effects (eq. 5-7) on the regions no
 //!   finger holds. Every hit is logged and counted.
 //!
-//! A table of one character is exactly that character's controller: every
-//! call goes straight to it.
+//! A table of one character is a table like any other: the same calls,
+//! the two rules above aside.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -37,7 +41,7 @@ use crate::character::roles::Role;
 use crate::character::skeleton::Pose;
 use crate::control::action::timeline::ActionEvent;
 use crate::control::posing::pick::pick_with;
-use crate::input::touch::{ContactId, Phase, ScreenFrame, Tool};
+use crate::input::touch::{ContactId, Phase, ScreenContact, ScreenFrame, Tool};
 use crate::physics::ragdoll::Capsule;
 use crate::screen::ScreenPoint;
 
@@ -58,24 +62,27 @@ impl Actor {
     /// Show `figure` for it (`None`: the capsule figure); a touch on a
     /// glTF figure's surface grabs the part nearest it.
     pub fn set_figure(&mut self, figure: Option<std::sync::Arc<crate::character::gltf::Skin>>) {
-        self.ctl.set_surface(figure.clone());
         self.figure = figure;
     }
 
     /// A character of `ch` at rest at floor point `at` facing `yaw`
-    /// (see [`Controller::standing`]), in `tint`, in a picture of
-    /// `width` x `height` pixels.
+    /// (see [`Controller::standing`]), in `tint`.
     #[must_use]
     pub fn standing(
         ch: std::sync::Arc<crate::control::character::Character>,
         settings: super::controller::Settings,
-        (width, height): (f64, f64),
         at: DVec3,
         yaw: f64,
         tint: Option<[f32; 3]>,
     ) -> Self {
+        Self::of(Controller::standing(ch, settings, 0.0, at, yaw), tint)
+    }
+
+    /// `ctl`'s character, in `tint`, shown as capsules.
+    #[must_use]
+    pub fn of(ctl: Controller, tint: Option<[f32; 3]>) -> Self {
         Self {
-            ctl: Controller::standing(ch, settings, width, height, 0.0, at, yaw),
+            ctl,
             tint,
             figure: None,
             hits_landed: 0,
@@ -122,7 +129,7 @@ const SEPARATION_PASSES: usize = 6;
 #[derive(Clone)]
 pub struct Stage {
     actors: Vec<Actor>,
-    /// The shared camera (several characters; one uses its controller's).
+    /// The camera everyone sees through.
     rig: Rig,
     owners: BTreeMap<ContactId, Owner>,
     /// Each character's capsules last step, for the segments' speeds.
@@ -153,12 +160,6 @@ impl Stage {
             rig.orbit = rig.home;
             rig.target = centre(&actors).with_y(rig.target.y);
         }
-        let mut actors = actors;
-        if actors.len() > 1 {
-            for a in &mut actors {
-                a.ctl.rig = rig.clone();
-            }
-        }
         let last = actors.iter().map(|a| caps(&a.ctl)).collect();
         Self {
             actors,
@@ -174,24 +175,12 @@ impl Stage {
         }
     }
 
-    /// A table of one character.
+    /// A table of one character, its picture `width` x `height` pixels,
+    /// at the controller's time.
     #[must_use]
-    pub fn single(ctl: Controller) -> Self {
-        let (w, h) = (ctl.rig.width, ctl.rig.height);
-        // A lone character keeps its own time and camera.
-        let t = 0.0;
-        Self::new(
-            vec![Actor {
-                ctl,
-                tint: None,
-                figure: None,
-                hits_landed: 0,
-                hits_taken: 0,
-            }],
-            w,
-            h,
-            t,
-        )
+    pub fn single(ctl: Controller, width: f64, height: f64) -> Self {
+        let t = ctl.time();
+        Self::new(vec![Actor::of(ctl, None)], width, height, t)
     }
 
     #[must_use]
@@ -210,19 +199,21 @@ impl Stage {
     /// The camera everyone sees through.
     #[must_use]
     pub fn rig(&self) -> &Rig {
-        if self.many() {
-            &self.rig
-        } else {
-            &self.actors[0].ctl.rig
-        }
+        &self.rig
     }
 
     pub fn rig_mut(&mut self) -> &mut Rig {
-        if self.many() {
-            &mut self.rig
-        } else {
-            &mut self.actors[0].ctl.rig
-        }
+        &mut self.rig
+    }
+
+    /// The first character's controller (a lone character's).
+    #[must_use]
+    pub fn ctl(&self) -> &Controller {
+        &self.actors[0].ctl
+    }
+
+    pub fn ctl_mut(&mut self) -> &mut Controller {
+        &mut self.actors[0].ctl
     }
 
     /// The first character's posture (a lone character's digest).
@@ -262,24 +253,16 @@ impl Stage {
     /// Whether a finger on empty floor is moving the camera.
     #[must_use]
     pub fn touching_camera(&self) -> bool {
-        if self.many() {
-            self.owners.values().any(|o| matches!(o, Owner::Camera(_)))
-        } else {
-            self.actors[0].ctl.touching_camera()
-        }
+        self.owners.values().any(|o| matches!(o, Owner::Camera(_)))
     }
 
     /// Seconds since anyone touched the table.
     #[must_use]
     pub fn idle_s(&self) -> f64 {
-        if self.many() {
-            if self.owners.is_empty() {
-                self.time - self.last_touch
-            } else {
-                0.0
-            }
+        if self.owners.is_empty() {
+            self.time - self.last_touch
         } else {
-            self.actors[0].ctl.idle_s()
+            0.0
         }
     }
 
@@ -320,96 +303,110 @@ impl Stage {
         self.trunk_depth_left
     }
 
-    /// Finger marks and trajectories of every character, in its tint, and
-    /// the marks of fingers on the floor.
+    /// A mark for every finger on the table (the part it holds, or the
+    /// camera), and each character's trajectories; with several
+    /// characters each in its tint.
     #[must_use]
     pub fn marks(&self, trajectories: bool) -> Marks {
-        if !self.many() {
-            return self.actors[0].ctl.marks(trajectories);
-        }
+        let camera = self.rig.camera();
+        let tint = |a: &Actor| if self.many() { a.tint } else { None };
         let mut marks = Marks::default();
-        for a in &self.actors {
-            let mut m = a.ctl.marks(trajectories);
-            for f in &mut m.fingers {
-                f.tint = a.tint;
-            }
-            for t in &mut m.trajectories {
-                t.tint = a.tint;
-            }
-            marks.fingers.extend(m.fingers);
-            marks.trajectories.extend(m.trajectories);
-        }
-        for o in self.owners.values() {
-            if let Owner::Camera(at) | Owner::Parked(at) = o {
-                marks.fingers.push(FingerMark {
-                    at: *at,
+        for (id, o) in &self.owners {
+            let mark = match *o {
+                Owner::Character(k) => {
+                    let a = &self.actors[k];
+                    a.ctl
+                        .finger_mark(*id)
+                        .map(|m| FingerMark { tint: tint(a), ..m })
+                }
+                Owner::Camera(at) | Owner::Parked(at) => Some(FingerMark {
+                    at,
                     usage: FingerUse::Camera,
                     tint: None,
-                });
+                }),
+            };
+            marks.fingers.extend(mark);
+        }
+        for a in &self.actors {
+            let mut t = a.ctl.trajectory_marks(&camera, trajectories);
+            for m in &mut t {
+                m.tint = tint(a);
             }
+            marks.trajectories.extend(t);
         }
         marks
     }
 
-    /// Apply one frame of touches.
+    /// Apply one frame of touches: a finger going down takes the part
+    /// nearest it of the characters within reach, else the camera (or, on
+    /// a table of several with a character held, nothing until it
+    /// lifts); each character hears its own fingers; fingers on the
+    /// camera turn it.
     pub fn touch(&mut self, frame: &ScreenFrame) {
-        if !self.many() {
-            self.actors[0].ctl.touch(frame);
-            return;
-        }
         let camera = self.rig.camera();
-        let mut per: Vec<Vec<crate::input::touch::ScreenContact>> =
-            vec![Vec::new(); self.actors.len()];
-        let mut moves = Vec::new();
+        let before: BTreeMap<ContactId, ScreenPoint> = self.camera_fingers().collect();
+        let mut per: Vec<(Vec<ScreenContact>, BTreeMap<ContactId, Role>)> =
+            vec![Default::default(); self.actors.len()];
         for c in frame.contacts.iter().filter(|c| c.tool == Tool::Finger) {
             let p = c.screen;
             if c.phase == Phase::Down {
                 let owner = match self.grabbed(&camera, p) {
-                    Some(k) => {
-                        // A character is held now: fingers on the floor
-                        // stop moving the camera.
-                        for o in self.owners.values_mut() {
-                            if let Owner::Camera(at) = *o {
-                                *o = Owner::Parked(at);
+                    Some((k, role)) => {
+                        if self.many() {
+                            // A character is held now: fingers on the
+                            // floor stop moving the camera.
+                            for o in self.owners.values_mut() {
+                                if let Owner::Camera(at) = *o {
+                                    *o = Owner::Parked(at);
+                                }
                             }
                         }
+                        per[k].0.push(*c);
+                        per[k].1.insert(c.id, role);
                         Owner::Character(k)
                     }
-                    None if self.held_any() => Owner::Parked(p),
+                    None if self.many() && self.held_any() => Owner::Parked(p),
                     None => Owner::Camera(p),
                 };
-                if let Owner::Character(k) = owner {
-                    per[k].push(*c);
-                }
                 self.owners.insert(c.id, owner);
             } else if c.phase.is_down() {
                 match self.owners.get_mut(&c.id) {
-                    Some(Owner::Character(k)) => per[*k].push(*c),
-                    Some(Owner::Camera(at)) => {
-                        moves.push((*at, p));
-                        *at = p;
-                    }
-                    Some(Owner::Parked(at)) => *at = p,
+                    Some(Owner::Character(k)) => per[*k].0.push(*c),
+                    Some(Owner::Camera(at) | Owner::Parked(at)) => *at = p,
                     None => {}
                 }
             } else if let Some(Owner::Character(k)) = self.owners.remove(&c.id) {
-                per[k].push(*c);
+                per[k].0.push(*c);
             }
         }
         if !frame.contacts.is_empty() {
             self.last_touch = frame.t;
         }
-        for (a, contacts) in self.actors.iter_mut().zip(per) {
+        for (a, (contacts, picked)) in self.actors.iter_mut().zip(per) {
             if !contacts.is_empty() {
-                // Each controller picks through the camera everyone sees.
-                a.ctl.rig = self.rig.clone();
-                a.ctl.touch(&ScreenFrame {
-                    t: frame.t,
-                    contacts,
-                });
+                a.ctl.touch(
+                    &ScreenFrame {
+                        t: frame.t,
+                        contacts,
+                    },
+                    &picked,
+                );
             }
         }
+        // Fingers on the camera: where each was and is, a gesture.
+        let moves: Vec<_> = self
+            .camera_fingers()
+            .filter_map(|(id, at)| before.get(&id).map(|b| (*b, at)))
+            .collect();
         self.rig.gesture(&moves);
+    }
+
+    /// The fingers turning the camera, and where each is.
+    fn camera_fingers(&self) -> impl Iterator<Item = (ContactId, ScreenPoint)> + '_ {
+        self.owners.iter().filter_map(|(id, o)| match o {
+            Owner::Camera(at) => Some((*id, *at)),
+            _ => None,
+        })
     }
 
     fn held_any(&self) -> bool {
@@ -418,9 +415,14 @@ impl Stage {
             .any(|o| matches!(o, Owner::Character(_)))
     }
 
-    /// The character whose body part a finger at `p` grabs: of those with
-    /// a part within reach, the one whose part is nearest on the screen.
-    fn grabbed(&self, camera: &crate::character::camera::Camera, p: ScreenPoint) -> Option<usize> {
+    /// The character whose body part a finger at `p` grabs, and the part:
+    /// of those with a part within reach, the one whose part is nearest on
+    /// the screen.
+    fn grabbed(
+        &self,
+        camera: &crate::character::camera::Camera,
+        p: ScreenPoint,
+    ) -> Option<(usize, Role)> {
         self.actors
             .iter()
             .enumerate()
@@ -436,31 +438,34 @@ impl Stage {
                     a.ctl.settings.pick_radius_px,
                 )?;
                 let at = camera.project(a.ctl.world().positions[ch.roles.get(role)])?;
-                Some((k, at.distance(p)))
+                Some((k, role, at.distance(p)))
             })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(k, _)| k)
+            .min_by(|a, b| a.2.total_cmp(&b.2))
+            .map(|(k, role, _)| (k, role))
     }
 
     /// Advance every character to `t`, then let their bodies meet.
     pub fn advance(&mut self, t: f64) {
-        if !self.many() {
-            self.actors[0].ctl.advance(t);
-            return;
-        }
         let dt = (t - self.time).clamp(0.0, 0.25);
         self.time = t;
+        let camera = self.rig.camera();
         for a in &mut self.actors {
-            a.ctl.rig = self.rig.clone();
-            a.ctl.advance(t);
+            a.ctl.advance(t, &camera);
         }
-        self.contacts(dt);
-        // The view stays put while anyone holds a character: a visitor's
-        // drag never moves the camera under another visitor's finger.
-        if !self.held_any() {
+        if self.many() {
+            self.contacts(dt);
+        }
+        // With several, the view stays put while anyone holds a character:
+        // a visitor's drag never moves the camera under another visitor's
+        // finger.
+        if !self.many() || !self.held_any() {
             let idle = self.idle_s() > self.actors[0].ctl.settings.home_after_s;
             let floor = centre(&self.actors);
             self.rig.settle(floor, idle, dt);
+        }
+        let camera = self.rig.camera();
+        for a in &mut self.actors {
+            a.ctl.follow_drift(&camera);
         }
     }
 

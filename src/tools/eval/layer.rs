@@ -10,6 +10,7 @@ use glam::{DQuat, DVec3};
 use serde::Serialize;
 
 use crate::character::body::Placement;
+use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, forward_kinematics};
 use crate::control::action::trail::TrailPoint;
@@ -94,12 +95,12 @@ impl SecondFinger {
         &mut self,
         ch: &Character,
         ctl: &Controller,
+        camera: &Camera,
         t: f64,
     ) -> Option<(Phase, ScreenPoint)> {
         if self.lifted {
             return None;
         }
-        let camera = ctl.rig.camera();
         let pelvis = camera.project(ctl.world().positions[ch.roles.get(Role::Pelvis)])?;
         let Some(d) = &self.drag else {
             if matches!(ctl.mode(), Mode::Walk(_)) {
@@ -115,7 +116,7 @@ impl SecondFinger {
                 self.lifted = true;
                 return None;
             };
-            let path = template.projected(&camera, &ctl.placement_now());
+            let path = template.projected(camera, &ctl.placement_now());
             if path.len() < 2 {
                 self.lifted = true;
                 return None;

@@ -11,6 +11,7 @@ use crate::control::action::timeline::ActionEvent;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Settings};
 use crate::control::rig::Orbit;
+use crate::control::stage::Stage;
 use crate::input::calibration::RawPoint;
 use crate::input::touch::{Phase, Tool};
 use crate::input::touch::{ScreenContact, ScreenFrame};
@@ -27,25 +28,30 @@ const STEP_HZ: f64 = 60.0;
 #[must_use]
 pub fn judge(ch: &Arc<Character>, settings: &Settings, drag: &Drag<'_>) -> Option<(String, usize)> {
     let cam = drag.camera;
-    let mut ctl = Controller::new(ch.clone(), *settings, cam.width, cam.height, 0.0);
+    let mut table = Stage::single(
+        Controller::new(ch.clone(), *settings, 0.0),
+        cam.width,
+        cam.height,
+    );
     // The same view of the character as the drag's camera has of the
     // clip's: from `angle_deg` around its facing, level, 3 m away.
-    let at = ctl.placement_now();
+    let at = table.ctl().placement_now();
     let orbit = Orbit {
         yaw: at.yaw + drag.angle_deg.to_radians(),
         pitch: 0.0,
         distance: cam.eye.distance(cam.target),
     };
-    ctl.rig.orbit = orbit;
-    ctl.rig.home = orbit;
-    ctl.rig.fov_y_deg = cam.fov_y_deg;
+    let rig = table.rig_mut();
+    rig.orbit = orbit;
+    rig.home = orbit;
+    rig.fov_y_deg = cam.fov_y_deg;
     let mut t = 0.0;
     while t < SETTLE_S {
         t += 1.0 / STEP_HZ;
-        ctl.advance(t);
+        table.advance(t);
     }
-    let view = ctl.rig.camera();
-    let start = view.project(ctl.world().positions[ch.roles.get(drag.role)])?;
+    let view = table.rig().camera();
+    let start = view.project(table.ctl().world().positions[ch.roles.get(drag.role)])?;
     let first = drag.trail.first()?;
     let t0 = t + 1.0 / STEP_HZ;
     let contact = |phase, at: ScreenPoint| ScreenContact {
@@ -58,8 +64,8 @@ pub fn judge(ch: &Arc<Character>, settings: &Settings, drag: &Drag<'_>) -> Optio
         },
         screen: at,
     };
-    let started = |ctl: &mut Controller| {
-        ctl.take_events().into_iter().find_map(|e| match e {
+    let started = |table: &mut Stage| {
+        table.take_events().into_iter().find_map(|(_, e)| match e {
             // A walk started by the pelvis finger's reach is no action.
             ActionEvent::Started {
                 action, by_reach, ..
@@ -76,19 +82,19 @@ pub fn judge(ch: &Arc<Character>, settings: &Settings, drag: &Drag<'_>) -> Optio
         // Steps between touch frames, as the kiosk's loop runs.
         while t + 1.0 / STEP_HZ < ft {
             t += 1.0 / STEP_HZ;
-            ctl.advance(t);
-            if let Some(a) = started(&mut ctl) {
+            table.advance(t);
+            if let Some(a) = started(&mut table) {
                 return Some((a, k));
             }
         }
         let phase = if k == 0 { Phase::Down } else { Phase::Move };
-        ctl.touch(&ScreenFrame {
+        table.touch(&ScreenFrame {
             t: ft,
             contacts: vec![contact(phase, at)],
         });
         t = ft;
-        ctl.advance(t);
-        if let Some(a) = started(&mut ctl) {
+        table.advance(t);
+        if let Some(a) = started(&mut table) {
             return Some((a, k + 1));
         }
     }

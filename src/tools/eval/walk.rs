@@ -17,6 +17,7 @@ use crate::control::action::trials::Lcg;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
 use crate::control::locomotion::walker::{path_length, point_along};
+use crate::control::stage::Stage;
 use crate::input::touch::{Phase, ScreenContact, ScreenFrame, Tool};
 use crate::tools::eval::layer::{LayerReport, LayerRow, SecondFinger, summarise};
 use crate::tools::metrics::Meter;
@@ -271,39 +272,44 @@ fn contact(id: u64, phase: Phase, at: crate::screen::ScreenPoint) -> ScreenConta
 
 fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkRow {
     let mut second = layer.map(SecondFinger::new);
-    let mut ctl = Controller::new(Arc::clone(ch), Settings::default(), 1280.0, 720.0, 0.0);
+    let mut table = Stage::single(
+        Controller::new(Arc::clone(ch), Settings::default(), 0.0),
+        1280.0,
+        720.0,
+    );
     let dt = 1.0 / HZ;
     let pelvis_j = ch.roles.get(Role::Pelvis);
     let feet = [Role::LeftFoot, Role::RightFoot].map(|r| ch.roles.get(r));
     let mut k = 0u32;
-    let step = |ctl: &mut Controller, frames: &[ScreenFrame], k: &mut u32| {
+    let step = |table: &mut Stage, frames: &[ScreenFrame], k: &mut u32| {
         *k += 1;
-        ctl.step(frames, f64::from(*k) * dt);
+        table.step(frames, f64::from(*k) * dt);
         f64::from(*k) * dt
     };
     for _ in 0..15 {
-        step(&mut ctl, &[], &mut k);
+        step(&mut table, &[], &mut k);
     }
-    let pelvis = ctl.world().positions[pelvis_j];
+    let pelvis = table.ctl().world().positions[pelvis_j];
     let height = pelvis.y;
     let pts: Vec<DVec3> = world_points(path)
         .into_iter()
         .map(|p| p + pelvis.with_y(0.0))
         .collect();
-    let feet_rest = feet.map(|f| ctl.world().positions[f]);
+    let feet_rest = feet.map(|f| table.ctl().world().positions[f]);
     let total = path_length(&pts);
-    let screen = |ctl: &Controller, p: DVec3| {
-        ctl.rig
+    let screen = |table: &Stage, p: DVec3| {
+        table
+            .rig()
             .camera()
             .project(p.with_y(height))
             .unwrap_or_default()
     };
-    let t0 = step(&mut ctl, &[], &mut k);
+    let t0 = step(&mut table, &[], &mut k);
     let down = ScreenFrame {
         t: t0,
-        contacts: vec![contact(1, Phase::Down, screen(&ctl, pts[0]))],
+        contacts: vec![contact(1, Phase::Down, screen(&table, pts[0]))],
     };
-    step(&mut ctl, &[down], &mut k);
+    step(&mut table, &[down], &mut k);
     let mut meter = Meter::new(&ch.lib.skeleton, &ch.roles, dt);
     let (mut dev_sum, mut dev_n) = (0.0, 0usize);
     let mut left_reach: Option<f64> = None;
@@ -315,15 +321,18 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         let t = f64::from(k + 1) * dt;
         let s = (t - start) * path.speed_mps;
         let mut contacts = Vec::new();
-        if let Some((phase, at)) = second.as_mut().and_then(|f| f.contact(ch, &ctl, t)) {
+        if let Some((phase, at)) = second
+            .as_mut()
+            .and_then(|f| f.contact(ch, table.ctl(), &table.rig().camera(), t))
+        {
             contacts.push(contact(2, phase, at));
         }
         if !lifted {
             let p = point_along(&pts, s);
             let phase = if s >= total { Phase::Up } else { Phase::Move };
-            contacts.push(contact(1, phase, screen(&ctl, p)));
+            contacts.push(contact(1, phase, screen(&table, p)));
             if left_reach.is_none()
-                && (p - ctl.world().positions[pelvis_j].with_y(0.0)).length()
+                && (p - table.ctl().world().positions[pelvis_j].with_y(0.0)).length()
                     > crate::control::controller::WALK_REACH_M
             {
                 left_reach = Some(t);
@@ -335,13 +344,13 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         } else {
             vec![ScreenFrame { t, contacts }]
         };
-        step(&mut ctl, &frames, &mut k);
+        step(&mut table, &frames, &mut k);
         if let Some(f) = second.as_mut() {
-            f.measure(ch, &ctl);
+            f.measure(ch, table.ctl());
         }
         let held = if lifted { vec![] } else { vec![Role::Pelvis] };
-        meter.push(ctl.pose(), &held);
-        let w = ctl.world();
+        meter.push(table.ctl().pose(), &held);
+        let w = table.ctl().world();
         if first_step.is_none()
             && feet.iter().zip(&feet_rest).any(|(f, r)| {
                 let p = w.positions[*f];
@@ -350,20 +359,21 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         {
             first_step = Some(t);
         }
-        if matches!(ctl.mode(), Mode::Walk(_)) {
+        if matches!(table.ctl().mode(), Mode::Walk(_)) {
             dev_sum += off_path(&pts, w.positions[pelvis_j].with_y(0.0));
             dev_n += 1;
         }
         if lifted {
             after_lift += dt;
-            let busy = matches!(ctl.mode(), Mode::Walk(_)) || ctl.layered().is_some();
+            let busy =
+                matches!(table.ctl().mode(), Mode::Walk(_)) || table.ctl().layered().is_some();
             if (!busy && after_lift > 1.0) || after_lift > 15.0 {
                 break;
             }
         }
     }
     let end = *pts.last().expect("a path has points");
-    let arrival = (ctl.world().positions[pelvis_j].with_y(0.0) - end).length();
+    let arrival = (table.ctl().world().positions[pelvis_j].with_y(0.0) - end).length();
     let m = meter.finish();
     WalkRow {
         length_m: (total * 1000.0).round() / 1000.0,
