@@ -99,6 +99,7 @@ impl ExitStatus for PresentError {
             Self::Gpu(e) if e.is_configuration() => CONFIG,
             Self::Gpu(_) => UNAVAILABLE,
             Self::Io { .. } => IOERR,
+            Self::NoRenderer => SOFTWARE,
         }
     }
 }

@@ -50,6 +50,42 @@ pub enum PresentError {
     /// back.
     #[error("{0}: the display was taken by another program (VT switch)")]
     LostMaster(PathBuf),
+    /// Asked to render on a presenter opened to show pictures drawn on
+    /// the CPU only.
+    #[error("this display was opened to show pictures only; it has no renderer")]
+    NoRenderer,
+}
+
+/// How a caller answers a display error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorClass {
+    /// The display is not ours for now, or a flip was refused for now:
+    /// stop drawing and take it back later.
+    TryAgain,
+    /// The GPU device is gone: make a new one.
+    GpuGone,
+    /// Nothing the program can do by waiting: stop, saying why.
+    Fatal,
+}
+
+impl PresentError {
+    /// How to answer it.
+    #[must_use]
+    pub fn class(&self) -> ErrorClass {
+        match self {
+            Self::LostMaster(_) => ErrorClass::TryAgain,
+            Self::Io { source, .. }
+                if matches!(
+                    source.raw_os_error(),
+                    Some(libc::EINTR | libc::EAGAIN | libc::EBUSY)
+                ) =>
+            {
+                ErrorClass::TryAgain
+            }
+            Self::Gpu(crate::render::gpu::GpuError::Lost(_)) => ErrorClass::GpuGone,
+            _ => ErrorClass::Fatal,
+        }
+    }
 }
 
 /// RGBA rows into XRGB8888 (little-endian B, G, R, X) rows of `pitch`
@@ -73,6 +109,32 @@ pub fn copy_rgba_to_xrgb(img: &Image, dst: &mut [u8], pitch: usize, width: u32, 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn errors_are_sorted_by_how_they_are_answered() {
+        let io = |errno| PresentError::Io {
+            path: PathBuf::from("/dev/dri/card0"),
+            what: "page flip",
+            source: std::io::Error::from_raw_os_error(errno),
+        };
+        assert_eq!(
+            PresentError::LostMaster(PathBuf::from("/dev/dri/card0")).class(),
+            ErrorClass::TryAgain
+        );
+        assert_eq!(io(libc::EBUSY).class(), ErrorClass::TryAgain);
+        assert_eq!(io(libc::EINTR).class(), ErrorClass::TryAgain);
+        assert_eq!(io(libc::ENODEV).class(), ErrorClass::Fatal);
+        assert_eq!(
+            PresentError::Gpu(crate::render::gpu::GpuError::Lost("device lost".into())).class(),
+            ErrorClass::GpuGone
+        );
+        // Misuse is no lost GPU: rebuilding it would not help.
+        assert_eq!(PresentError::NoRenderer.class(), ErrorClass::Fatal);
+        assert_eq!(
+            PresentError::NoOutput("no connector".into()).class(),
+            ErrorClass::Fatal
+        );
+    }
 
     #[test]
     fn rgba_becomes_xrgb_with_the_pitch() {

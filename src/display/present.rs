@@ -343,10 +343,7 @@ impl CopyPresenter {
     pub fn draw(&mut self, list: &crate::render::mesh::DrawList) -> Result<(), PresentError> {
         let back = self.back()?;
         let Some(imported) = self.imported.as_mut() else {
-            return Err(crate::render::gpu::GpuError::Lost(
-                "the presenter copies frames; it has no renderer of its own".to_owned(),
-            )
-            .into());
+            return Err(PresentError::NoRenderer);
         };
         #[allow(
             clippy::disallowed_methods,

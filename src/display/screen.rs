@@ -1,8 +1,8 @@
-//! The KMS output behind one interface, whichever presenter drives it:
-//! direct (Vulkan renders into the display's swapchain), gbm (rendered
-//! straight into gbm's scanout buffers where the Vulkan driver imports
-//! them, else rendered offscreen and written into them) or copy (the same
-//! into dumb buffers). `auto` tries direct, then gbm zero-copy, then gbm,
+//! The KMS output behind one interface, whichever of four presenters
+//! drives it: direct (Vulkan renders into the display's swapchain), gbm
+//! zero copy (rendered straight into gbm's scanout buffers where the
+//! Vulkan driver imports them), gbm (rendered offscreen and written into
+//! them) or copy (the same into dumb buffers). `auto` tries direct, then gbm zero-copy, then gbm,
 //! then copy, and the journal says which and why each earlier one was
 //! refused.
 
@@ -16,15 +16,57 @@ use crate::render::gpu::{AdapterChoice, Gpu};
 use crate::render::headless::{Headless, Image};
 use crate::render::mesh::DrawList;
 
-/// What drives the output.
+/// What drives the output: one of four presenters, each said as what it
+/// is.
 pub enum Presenter {
+    /// Vulkan drives the display (`VK_EXT_acquire_drm_display`): frames
+    /// are rendered into its swapchain.
     Direct(Box<DirectPresenter>),
-    Copy {
-        presenter: Box<CopyPresenter>,
-        /// The offscreen renderer; `None` where only pictures drawn on the
-        /// CPU are shown (`marionette calibrate`).
-        headless: Option<Box<Headless>>,
-    },
+    /// The renderer draws straight into gbm's scanout buffers.
+    GbmZeroCopy(Box<CopyPresenter>),
+    /// Frames rendered offscreen written into gbm's scanout buffers.
+    GbmWritten(Box<Written>),
+    /// Frames rendered offscreen written into dumb buffers (every KMS
+    /// driver has them).
+    Dumb(Box<Written>),
+}
+
+/// A presenter frames are written into: the output's buffers, and the
+/// offscreen renderer (`None` where only pictures drawn on the CPU are
+/// shown: `marionette calibrate`).
+pub struct Written {
+    buffers: CopyPresenter,
+    headless: Option<Headless>,
+}
+
+impl Presenter {
+    /// The KMS output's buffers, for the three presenters that flip them.
+    fn kms(&self) -> Option<&CopyPresenter> {
+        match self {
+            Self::Direct(_) => None,
+            Self::GbmZeroCopy(p) => Some(p),
+            Self::GbmWritten(w) | Self::Dumb(w) => Some(&w.buffers),
+        }
+    }
+
+    fn kms_mut(&mut self) -> Option<&mut CopyPresenter> {
+        match self {
+            Self::Direct(_) => None,
+            Self::GbmZeroCopy(p) => Some(p),
+            Self::GbmWritten(w) | Self::Dumb(w) => Some(&mut w.buffers),
+        }
+    }
+
+    /// Its name in the journal.
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Direct(_) => "direct",
+            Self::GbmZeroCopy(_) => "gbm, zero copy",
+            Self::GbmWritten(_) => "gbm",
+            Self::Dumb(_) => "copy",
+        }
+    }
 }
 
 /// An output being driven, and how to open it again.
@@ -96,22 +138,13 @@ impl Screen {
             };
             match opened {
                 Ok(p) => {
-                    match attempt {
-                        Attempt::Direct => tracing::info!("presenter: direct ({why})"),
-                        Attempt::GbmZeroCopy if renderer.is_some() => {
-                            let samples = match &p {
-                                Presenter::Copy { presenter, .. } => presenter.samples(),
-                                Presenter::Direct(_) => None,
-                            };
-                            tracing::info!(
-                                samples = samples.unwrap_or(1),
-                                "presenter: gbm, zero copy ({why})"
-                            );
-                        }
-                        Attempt::GbmZeroCopy | Attempt::Gbm => {
-                            tracing::info!("presenter: gbm ({why})");
-                        }
-                        Attempt::Dumb => tracing::info!("presenter: copy ({why})"),
+                    match &p {
+                        Presenter::GbmZeroCopy(z) => tracing::info!(
+                            samples = z.samples().unwrap_or(1),
+                            "presenter: {} ({why})",
+                            p.name()
+                        ),
+                        _ => tracing::info!("presenter: {} ({why})", p.name()),
                     }
                     presenter = Some(p);
                     break;
@@ -143,8 +176,11 @@ impl Screen {
         samples: u32,
         via: Via,
     ) -> Result<Presenter, PresentError> {
-        let presenter = Box::new(CopyPresenter::open(dir, choice, via)?);
-        let (w, h) = presenter.size();
+        let buffers = CopyPresenter::open(dir, choice, via)?;
+        if buffers.renders() {
+            return Ok(Presenter::GbmZeroCopy(Box::new(buffers)));
+        }
+        let (w, h) = buffers.size();
         let headless = match renderer {
             Some(adapter) => {
                 let headless = Headless::new(Gpu::new(adapter)?, w, h, samples)?;
@@ -154,13 +190,14 @@ impl Screen {
                     samples = headless.renderer.samples(),
                     "rendering offscreen"
                 );
-                Some(Box::new(headless))
+                Some(headless)
             }
             None => None,
         };
-        Ok(Presenter::Copy {
-            presenter,
-            headless,
+        let written = Box::new(Written { buffers, headless });
+        Ok(match via {
+            Via::Dumb => Presenter::Dumb(written),
+            Via::Gbm | Via::GbmZeroCopy { .. } => Presenter::GbmWritten(written),
         })
     }
 
@@ -169,7 +206,7 @@ impl Screen {
     pub fn size(&self) -> (u32, u32) {
         match &self.presenter {
             Presenter::Direct(d) => d.size(),
-            Presenter::Copy { presenter, .. } => presenter.size(),
+            p => p.kms().map_or((0, 0), CopyPresenter::size),
         }
     }
 
@@ -178,7 +215,7 @@ impl Screen {
     pub fn name(&self) -> &str {
         match &self.presenter {
             Presenter::Direct(d) => d.name(),
-            Presenter::Copy { presenter, .. } => presenter.name(),
+            p => p.kms().map_or("", CopyPresenter::name),
         }
     }
 
@@ -187,7 +224,7 @@ impl Screen {
     pub fn refresh_hz(&self) -> u32 {
         match &self.presenter {
             Presenter::Direct(d) => d.refresh_hz(),
-            Presenter::Copy { presenter, .. } => presenter.refresh_hz(),
+            p => p.kms().map_or(60, CopyPresenter::refresh_hz),
         }
     }
 
@@ -196,7 +233,7 @@ impl Screen {
     pub fn flips(&self) -> u64 {
         match &self.presenter {
             Presenter::Direct(d) => d.flips(),
-            Presenter::Copy { presenter, .. } => presenter.flips(),
+            p => p.kms().map_or(0, CopyPresenter::flips),
         }
     }
 
@@ -204,27 +241,22 @@ impl Screen {
     /// swapchain paces the direct presenter itself).
     #[must_use]
     pub fn flip_pending(&self) -> bool {
-        match &self.presenter {
-            Presenter::Direct(_) => false,
-            Presenter::Copy { presenter, .. } => presenter.flip_pending(),
-        }
+        self.presenter
+            .kms()
+            .is_some_and(CopyPresenter::flip_pending)
     }
 
     /// The descriptor that becomes readable when a flip completed.
     #[must_use]
     pub fn fd(&self) -> Option<BorrowedFd<'_>> {
-        match &self.presenter {
-            Presenter::Direct(_) => None,
-            Presenter::Copy { presenter, .. } => Some(presenter.fd()),
-        }
+        self.presenter.kms().map(CopyPresenter::fd)
     }
 
     /// Read the display's events: whether a flip completed.
     pub fn dispatch(&mut self) -> Result<bool, PresentError> {
-        match &mut self.presenter {
-            Presenter::Direct(_) => Ok(false),
-            Presenter::Copy { presenter, .. } => presenter.dispatch(),
-        }
+        self.presenter
+            .kms_mut()
+            .map_or(Ok(false), CopyPresenter::dispatch)
     }
 
     /// Wait up to `timeout` until the last frame is on screen: whether it
@@ -238,29 +270,26 @@ impl Screen {
                 });
                 Ok(d.flips() > 0)
             }
-            Presenter::Copy { presenter, .. } => presenter.wait_flip(timeout),
+            p => p.kms_mut().map_or(Ok(false), |k| k.wait_flip(timeout)),
         }
     }
 
     /// Draw `list` and show it at the next vblank. Whether a frame went out
     /// (the direct presenter skips one while its swapchain is rebuilt).
-    /// A rendering failure is [`PresentError::Gpu`]: [`Screen::rebuild`].
+    /// A rendering failure is [`PresentError::Gpu`]: [`Screen::rebuild`];
+    /// a presenter opened for pictures only has no renderer
+    /// ([`PresentError::NoRenderer`]).
     pub fn draw(&mut self, list: &DrawList) -> Result<bool, PresentError> {
         match &mut self.presenter {
             Presenter::Direct(d) => d.draw(list),
-            Presenter::Copy { presenter, .. } if presenter.renders() => {
-                presenter.draw(list)?;
+            Presenter::GbmZeroCopy(z) => {
+                z.draw(list)?;
                 Ok(true)
             }
-            Presenter::Copy {
-                presenter,
-                headless,
-            } => {
-                let headless = headless.as_mut().ok_or_else(|| {
-                    crate::render::gpu::GpuError::Lost("opened for pictures only".to_owned())
-                })?;
+            Presenter::GbmWritten(w) | Presenter::Dumb(w) => {
+                let headless = w.headless.as_mut().ok_or(PresentError::NoRenderer)?;
                 let img = headless.render(list)?;
-                presenter.present(&img)?;
+                w.buffers.present(&img)?;
                 Ok(true)
             }
         }
@@ -270,7 +299,7 @@ impl Screen {
     pub fn show_image(&mut self, img: &Image) -> Result<(), PresentError> {
         match &mut self.presenter {
             Presenter::Direct(d) => d.show_image(img),
-            Presenter::Copy { presenter, .. } => presenter.present(img),
+            p => p.kms_mut().map_or(Ok(()), |k| k.present(img)),
         }
     }
 
@@ -278,30 +307,26 @@ impl Screen {
     pub fn reacquire(&mut self) -> bool {
         match &mut self.presenter {
             Presenter::Direct(d) => d.reacquire(),
-            Presenter::Copy { presenter, .. } => presenter.reacquire(),
+            p => p.kms_mut().is_some_and(CopyPresenter::reacquire),
         }
     }
 
-    /// A new GPU device after the old one was lost: the renderer again for
-    /// the copy presenter, the whole output for the direct one.
+    /// A new GPU device after the old one was lost: the renderer drawing
+    /// into gbm's buffers, or the offscreen renderer, again; the whole
+    /// output for the direct presenter.
     pub fn rebuild(&mut self) -> Result<(), PresentError> {
         match &mut self.presenter {
-            Presenter::Copy { presenter, .. } if presenter.renders() => {
-                presenter.rebuild_gpu(self.adapter)?;
-            }
-            Presenter::Copy {
-                presenter,
-                headless,
-            } => {
-                let (w, h) = presenter.size();
-                *headless = Some(Box::new(Headless::new(
-                    Gpu::new(self.adapter)?,
-                    w,
-                    h,
-                    self.samples,
-                )?));
-            }
             Presenter::Direct(d) => d.rebuild_gpu()?,
+            Presenter::GbmZeroCopy(z) => z.rebuild_gpu(self.adapter)?,
+            Presenter::GbmWritten(w) | Presenter::Dumb(w) => {
+                let (w_px, h_px) = w.buffers.size();
+                w.headless = Some(Headless::new(
+                    Gpu::new(self.adapter)?,
+                    w_px,
+                    h_px,
+                    self.samples,
+                )?);
+            }
         }
         Ok(())
     }

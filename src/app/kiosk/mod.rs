@@ -25,6 +25,7 @@ use thiserror::Error;
 use super::config::Config;
 use crate::control::character::Character;
 use crate::control::stage::Stage;
+use crate::display::error::ErrorClass;
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
 use crate::input::hub::{HubEvent, LiveError};
@@ -450,16 +451,18 @@ impl Backend for Kiosk<'_> {
                         }
                     }
                 }
-                Err(PresentError::LostMaster(card)) => {
-                    stats.display_losses += 1;
-                    tracing::warn!(card = %card.display(), "the display was taken (VT switch?): paused until it comes back");
-                    timers.display_lost(t);
-                }
-                Err(PresentError::Gpu(e)) => {
-                    tracing::error!(error = %e, "rendering failed: rebuilding the GPU device");
-                    timers.gpu_lost(t);
-                }
-                Err(e) => return Err(e.into()),
+                Err(e) => match e.class() {
+                    ErrorClass::TryAgain => {
+                        stats.display_losses += 1;
+                        tracing::warn!(error = %e, "the display is not ours for now (VT switch?): paused until it comes back");
+                        timers.display_lost(t);
+                    }
+                    ErrorClass::GpuGone => {
+                        tracing::error!(error = %e, "rendering failed: rebuilding the GPU device");
+                        timers.gpu_lost(t);
+                    }
+                    ErrorClass::Fatal => return Err(e.into()),
+                },
             }
         }
         if !self.ready && screen.flip_pending() {
