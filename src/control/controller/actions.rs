@@ -38,8 +38,14 @@ impl Controller {
             return None;
         }
         let at = self.placement_now();
-        let player =
-            ActionPlayer::start(&self.ch.actions, action, start_at, at, t, &mut self.events);
+        let player = ActionPlayer::start(
+            &self.ch.actions,
+            action,
+            start_at,
+            at,
+            t,
+            &mut self.motion.events,
+        );
         self.fingers.restart_drags(t);
         self.fingers.forget_matches();
         Some(player)
@@ -89,7 +95,7 @@ impl Controller {
         let at = self.placement_now();
         let actions = &self.ch.actions;
         let thresholds = self.ch.recogniser.thresholds;
-        let drift = self.layering.drift_px();
+        let drift = self.motion.layering.drift_px();
         let (grabs, matching) = self.fingers.grabs_and_matches();
         matching.retain(|id, m| {
             let held = grabs.contains_key(id);
@@ -186,7 +192,7 @@ impl Controller {
                 tint: None,
             });
         }
-        if trajectories && matches!(self.mode, Mode::Posing) {
+        if trajectories && matches!(self.motion.mode, Mode::Posing) {
             let at = self.placement_now();
             let eye = camera.eye_vector();
             for role in self.held() {

@@ -167,12 +167,12 @@ impl Controller {
     /// legs), if one plays.
     #[must_use]
     pub fn layered(&self) -> Option<Layered<'_>> {
-        self.layering.told(&self.ch)
+        self.motion.layering.told(&self.ch)
     }
 
     /// Whether an action can be laid over what the body does now.
     fn layerable(&self) -> bool {
-        match &self.mode {
+        match &self.motion.mode {
             Mode::Walk(_) => true,
             Mode::Action(p) => !upper(self.ch.actions[p.action()].def.primary),
             Mode::Posing => false,
@@ -188,7 +188,7 @@ impl Controller {
         t: f64,
         dt: f64,
     ) {
-        if !self.layering.playing() {
+        if !self.motion.layering.playing() {
             if !self.layerable() || self.ch.regions.is_none() {
                 return;
             }
@@ -209,9 +209,9 @@ impl Controller {
                 d.generalized,
                 at,
                 t,
-                &mut self.events,
+                &mut self.motion.events,
             );
-            self.layering.begin(player, mask, &self.target);
+            self.motion.layering.begin(player, mask, &self.target);
             self.fingers.restart_drags(t);
             self.fingers.forget_matches();
         }
@@ -225,7 +225,7 @@ impl Controller {
             .copied()
             .filter(|c| upper(c.role))
             .collect();
-        let Some(posture) = self.layering.step(
+        let Some(posture) = self.motion.layering.step(
             &self.ch,
             regions,
             at,
@@ -233,15 +233,15 @@ impl Controller {
             !moved,
             &self.target,
             dt,
-            &mut self.events,
+            &mut self.motion.events,
         ) else {
             return;
         };
         self.target = posture;
-        if !self.layering.playing() {
+        if !self.motion.layering.playing() {
             tracing::debug!("the layered action is over");
             self.fingers.restart_drags(t);
-            if matches!(self.mode, Mode::Posing) && !self.held().is_empty() {
+            if matches!(self.motion.mode, Mode::Posing) && !self.held().is_empty() {
                 // The fingers still down pose the body again.
                 self.begin_posing();
             }
@@ -253,8 +253,8 @@ impl Controller {
     pub fn follow_drift(&mut self, camera: &Camera) {
         let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)];
         let now = camera.project(pelvis).map(|p| DVec2::new(p.x, p.y));
-        let walking = matches!(self.mode, Mode::Walk(_));
-        self.layering.follow_drift(now, walking);
+        let walking = matches!(self.motion.mode, Mode::Walk(_));
+        self.motion.layering.follow_drift(now, walking);
     }
 }
 

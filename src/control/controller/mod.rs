@@ -110,7 +110,9 @@ pub enum Mode {
 pub struct Controller {
     ch: Arc<Character>,
     pub settings: Settings,
-    mode: Mode,
+    /// What the body does: posing, an action or a walk, and what is laid
+    /// over it.
+    motion: Motion,
     /// The fingers on the table and what they hold.
     fingers: Fingers,
     /// Where posing places its samples, and the feet it keeps.
@@ -123,18 +125,22 @@ pub struct Controller {
     /// Physics-based tracking: the ragdoll, the effects taken from it,
     /// and a push from another body fading.
     physical: effects::Physical,
-    /// The target switched controllers this step (its feet jumped).
-    switched: bool,
     time: f64,
-    events: Vec<ActionEvent>,
+}
+
+/// What the body does, and what it has told since the caller last asked.
+#[derive(Clone)]
+struct Motion {
+    /// Posing, an action playing, or a walk.
+    mode: Mode,
     /// Where a finger on the pelvis leads, for walking, and what the walk
     /// under way is told as.
     lead: walk::Lead,
     /// An arm or head action laid over the walk (or an action led by the
     /// legs), and where the pelvis went on the screen while walking.
     layering: layer::Layering,
-    /// The shown posture's last joint velocities, bounding their change.
-    jerk: jerk::Jerk,
+    /// Actions started and finished, for the caller.
+    events: Vec<ActionEvent>,
 }
 
 /// The longest drag kept for recognition (s): longer than any action.
@@ -182,17 +188,17 @@ impl Controller {
                 leg_length_shorter(&ch.lib.skeleton, &ch.roles),
             ),
             settings,
-            mode: Mode::Posing,
+            motion: Motion {
+                mode: Mode::Posing,
+                lead: walk::Lead::new(pelvis_h),
+                layering: layer::Layering::default(),
+                events: Vec::new(),
+            },
             fingers: Fingers::default(),
             posing: posing::Posing::new(at),
             shown: shown::Shown::new(pose.clone(), world),
             target: pose,
-            switched: false,
             time: t,
-            events: Vec::new(),
-            lead: walk::Lead::new(pelvis_h),
-            layering: layer::Layering::default(),
-            jerk: jerk::Jerk::default(),
             ch,
         }
     }
@@ -224,23 +230,23 @@ impl Controller {
 
     #[must_use]
     pub fn mode(&self) -> &Mode {
-        &self.mode
+        &self.motion.mode
     }
 
     /// The action playing (or the walk under way, with how much of its
     /// path is behind), if any.
     #[must_use]
     pub fn action(&self) -> Option<(&str, f64)> {
-        match &self.mode {
+        match &self.motion.mode {
             Mode::Action(p) => Some((self.ch.actions[p.action()].def.name.as_str(), p.time())),
-            Mode::Walk(w) => Some((self.lead.told(), w.progress())),
+            Mode::Walk(w) => Some((self.motion.lead.told(), w.progress())),
             Mode::Posing => None,
         }
     }
 
     /// Action events since the last call.
     pub fn take_events(&mut self) -> Vec<ActionEvent> {
-        std::mem::take(&mut self.events)
+        std::mem::take(&mut self.motion.events)
     }
 
     /// Body parts held by fingers.
@@ -274,7 +280,7 @@ impl Controller {
     /// makes it a smooth motion); an action playing is left to finish.
     /// For a kiosk nobody has touched for a while.
     pub fn go_to_rest(&mut self) {
-        if matches!(self.mode, Mode::Posing) && self.fingers.none_down() {
+        if matches!(self.motion.mode, Mode::Posing) && self.fingers.none_down() {
             let at = self.placement_now();
             self.target = self.ch.rest_pose(&at);
             self.posing.rest(at);
@@ -287,7 +293,7 @@ impl Controller {
     /// stand.
     pub fn touch(&mut self, frame: &ScreenFrame, picked: &BTreeMap<ContactId, Role>) {
         let first_part = self.fingers.touch(frame, self.settings.rest_s, picked);
-        if first_part && matches!(self.mode, Mode::Posing) {
+        if first_part && matches!(self.motion.mode, Mode::Posing) {
             self.begin_posing();
         }
     }

@@ -1,10 +1,12 @@
 //! The shown part: the posture tracking control shows (the paper's
-//! section 6), following the target by bounded accelerations, and its
-//! world pose.
+//! section 6), following the target by bounded accelerations, its world
+//! pose, and the bound on its joint accelerations once corrected.
 
 use glam::DVec3;
 
 use super::MAX_SUBSTEP;
+use super::jerk::Jerk;
+use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
 use crate::control::tracking::accel::{AccelTracker, Gains};
 
@@ -16,6 +18,8 @@ pub(super) struct Shown {
     output: Pose,
     /// Its world pose, as of the last [`Self::show`].
     world: WorldPose,
+    /// Its last joint velocities, bounding their change.
+    jerk: Jerk,
 }
 
 impl Shown {
@@ -25,6 +29,7 @@ impl Shown {
             tracker: AccelTracker::new(pose.clone()),
             output: pose,
             world,
+            jerk: Jerk::default(),
         }
     }
 
@@ -63,6 +68,21 @@ impl Shown {
     /// (the feet hold the tracker where they stand).
     pub fn for_correction(&mut self) -> (&WorldPose, &mut Pose, &mut AccelTracker) {
         (&self.world, &mut self.output, &mut self.tracker)
+    }
+
+    /// The bound on the shown posture's joint accelerations
+    /// ([`Jerk::bound`]): the parts fingers `held` and the feet
+    /// `standing` (left, right) are kept.
+    pub fn bound(
+        &mut self,
+        skeleton: &Skeleton,
+        roles: &RoleMap,
+        held: &[Role],
+        standing: [bool; 2],
+        dt: f64,
+    ) {
+        self.jerk
+            .bound(skeleton, roles, &mut self.output, held, standing, dt);
     }
 
     /// The corrected posture is shown: its world pose.

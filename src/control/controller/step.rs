@@ -19,33 +19,35 @@ impl Controller {
         let dt = (t - self.time).clamp(0.0, 0.25);
         self.time = t;
         let constraints = self.constraints(camera);
-        self.aim(camera, &constraints, t, dt);
+        let switched = self.aim(camera, &constraints, t, dt);
         self.layer_step(camera, &constraints, t, dt);
         self.fingers.settle();
         self.track(dt);
-        self.correct(dt);
+        self.correct(dt, switched);
         self.shown.show(&self.ch.lib.skeleton);
     }
 
     /// The target posture: posing to the fingers' constraints, an action
-    /// a drag started (or the one playing), or a walk.
-    fn aim(&mut self, camera: &Camera, constraints: &[Constraint], t: f64, dt: f64) {
+    /// a drag started (or the one playing), or a walk. Whether the target
+    /// switched controllers (its feet jumped).
+    fn aim(&mut self, camera: &Camera, constraints: &[Constraint], t: f64, dt: f64) -> bool {
+        let mut switched = false;
         // Under a layered action the arms and head are its own.
         let base: Vec<Constraint> = constraints
             .iter()
             .copied()
-            .filter(|c| !self.layering.playing() || !upper(c.role))
+            .filter(|c| !self.motion.layering.playing() || !upper(c.role))
             .collect();
         let moved = self.fingers.moved(|_| true);
-        match &mut self.mode {
+        match &mut self.motion.mode {
             Mode::Walk(_) => self.walk_step(camera, t, dt),
             Mode::Posing => {
                 // An action laid over a walk that ended plays out first.
-                let found = (!self.layering.playing()).then(|| self.recognise(camera, t));
+                let found = (!self.motion.layering.playing()).then(|| self.recognise(camera, t));
                 if let Some(player) = found.flatten() {
-                    self.mode = Mode::Action(Box::new(player));
-                    self.switched = true;
-                } else if matches!(self.mode, Mode::Walk(_)) || self.try_walk(camera, t) {
+                    self.motion.mode = Mode::Action(Box::new(player));
+                    switched = true;
+                } else if matches!(self.motion.mode, Mode::Walk(_)) || self.try_walk(camera, t) {
                     // A walk's drag started a walk, or the finger left reach.
                     self.walk_step(camera, t, dt);
                 } else if !base.is_empty() {
@@ -66,13 +68,13 @@ impl Controller {
                     &base,
                     !moved,
                     dt,
-                    &mut self.events,
+                    &mut self.motion.events,
                 );
                 if player.status() != Status::Playing {
                     let placed = self.placement_now();
                     self.posing.place(placed);
-                    self.mode = Mode::Posing;
-                    self.switched = true;
+                    self.motion.mode = Mode::Posing;
+                    switched = true;
                     if !self.held().is_empty() {
                         self.begin_posing();
                     }
@@ -80,6 +82,7 @@ impl Controller {
                 }
             }
         }
+        switched
     }
 
     /// Tracking control (section 6): the shown posture follows the target
@@ -89,8 +92,9 @@ impl Controller {
     }
 
     /// The tracked posture corrected: the physical effects (eq. 5-7), a
-    /// push fading, the feet, then the bound on joint accelerations.
-    fn correct(&mut self, dt: f64) {
+    /// push fading, the feet, then the bound on joint accelerations;
+    /// `switched`: the target switched controllers this step.
+    fn correct(&mut self, dt: f64, switched: bool) {
         let held = self.held();
         let (sk, roles) = (&self.ch.lib.skeleton, &self.ch.roles);
         if self.settings.physics && self.settings.settle_s > 0.0 {
@@ -113,11 +117,11 @@ impl Controller {
             target: &self.target,
             shown_last,
             held: &held,
-            switched: std::mem::take(&mut self.switched),
+            switched,
             settle_s: self.settings.settle_s,
             // While walking, the clip's own foot contacts say which foot
             // stands.
-            contacts: match &self.mode {
+            contacts: match &self.motion.mode {
                 Mode::Walk(w) => Some(w.contacts(&self.ch.gait)),
                 _ => None,
             },
@@ -127,8 +131,8 @@ impl Controller {
         if self.settings.settle_s > 0.0 {
             // Part of tracking: off, the synthesised postures are shown.
             let standing = [self.feet.standing(0), self.feet.standing(1)];
-            self.jerk.bound(sk, roles, output, &held, standing, dt);
-            self.feet.keep_clear(sk, roles, output);
+            self.shown.bound(sk, roles, &held, standing, dt);
+            self.feet.keep_clear(sk, roles, self.shown.pose_mut());
         }
     }
 }

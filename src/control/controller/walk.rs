@@ -179,7 +179,7 @@ impl Controller {
         }
         let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
         let finger = self.pelvis_finger();
-        let Some(goal) = self.lead.out_of_reach(camera, finger, pelvis, t) else {
+        let Some(goal) = self.motion.lead.out_of_reach(camera, finger, pelvis, t) else {
             return false;
         };
         tracing::debug!("the pelvis finger left posing's reach");
@@ -193,7 +193,10 @@ impl Controller {
     /// Walk to where the pelvis finger leads, if one does (and the
     /// library can walk).
     pub(super) fn start_walk(&mut self, camera: &Camera, t: f64, label: &str) -> bool {
-        match self.pelvis_finger().map(|f| self.lead.goal(camera, f.at)) {
+        match self
+            .pelvis_finger()
+            .map(|f| self.motion.lead.goal(camera, f.at))
+        {
             Some(goal) if !self.ch.gait.is_empty() => {
                 self.walk_to(goal, t, label, false);
                 true
@@ -214,31 +217,33 @@ impl Controller {
             t,
         );
         tracing::debug!(to_x = goal.x, to_z = goal.z, "walking");
-        self.events.push(ActionEvent::Started {
+        self.motion.events.push(ActionEvent::Started {
             action: label.to_owned(),
             time_s: t,
             by_reach,
         });
-        self.mode = Mode::Walk(Box::new(walker));
-        self.lead.began(label, self.pelvis_finger().map(|f| f.id));
+        self.motion.mode = Mode::Walk(Box::new(walker));
+        self.motion
+            .lead
+            .began(label, self.pelvis_finger().map(|f| f.id));
         self.fingers.forget_matches();
     }
 
     /// One step of the walk; posing again once it is over.
     pub(super) fn walk_step(&mut self, camera: &Camera, t: f64, dt: f64) {
         let finger = self.pelvis_finger();
-        let Mode::Walk(walker) = &mut self.mode else {
+        let Mode::Walk(walker) = &mut self.motion.mode else {
             return;
         };
-        self.lead.steer(walker, camera, finger, t);
+        self.motion.lead.steer(walker, camera, finger, t);
         self.target = walker.step(&self.ch.gait, &self.ch.lib.skeleton, dt);
         if walker.done() {
             tracing::debug!("the walk is over: posing");
-            self.events.push(ActionEvent::Finished {
-                action: self.lead.finished(),
+            self.motion.events.push(ActionEvent::Finished {
+                action: self.motion.lead.finished(),
                 time_s: t,
             });
-            self.mode = Mode::Posing;
+            self.motion.mode = Mode::Posing;
             let at = self.placement_now();
             self.posing.rest(at);
             if !self.held().is_empty() {
@@ -251,7 +256,7 @@ impl Controller {
     /// The path still ahead of a walk under way, on the floor.
     #[must_use]
     pub fn walk_ahead(&self) -> Option<Vec<DVec3>> {
-        match &self.mode {
+        match &self.motion.mode {
             Mode::Walk(w) => Some(w.ahead()),
             _ => None,
         }
