@@ -144,33 +144,7 @@ impl Renderer {
             label: Some("scene.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/scene.wgsl").into()),
         });
-        let globals = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("globals"),
-            size: std::mem::size_of::<Globals>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("globals"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals.as_entire_binding(),
-            }],
-        });
+        let (globals, layout, bind_group) = globals(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scene"),
             bind_group_layouts: &[Some(&layout)],
@@ -194,6 +168,12 @@ impl Renderer {
             bias: wgpu::DepthBiasState::default(),
         };
         let blend = Some(wgpu::BlendState::ALPHA_BLENDING);
+        let maker = Maker {
+            device,
+            shader: &shader,
+            format,
+            samples,
+        };
         let make = |label: &str,
                     pipeline_layout: &wgpu::PipelineLayout,
                     vs: &str,
@@ -202,37 +182,7 @@ impl Renderer {
                     cull: Option<wgpu::Face>,
                     ds: wgpu::DepthStencilState,
                     blend: Option<wgpu::BlendState>| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &shader,
-                    entry_point: Some(vs),
-                    compilation_options: wgpu::PipelineCompilationOptions::default(),
-                    buffers: &[Some(layout)],
-                },
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: cull,
-                    ..wgpu::PrimitiveState::default()
-                },
-                depth_stencil: Some(ds),
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..wgpu::MultisampleState::default()
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &shader,
-                    entry_point: Some(fs),
-                    compilation_options: wgpu::PipelineCompilationOptions::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            maker.make(label, pipeline_layout, (vs, fs), layout, cull, ds, blend)
         };
         let once = wgpu::StencilFaceState {
             compare: wgpu::CompareFunction::Equal,
@@ -311,24 +261,6 @@ impl Renderer {
                 None,
             )
         });
-        let mut ground = Mesh::default();
-        ground.ground(FLOOR_HALF, 0.0, [0.62, 0.60, 0.56, 0.0]);
-        let floor_vb = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("floor vertices"),
-            size: std::mem::size_of_val(ground.vertices.as_slice()) as u64,
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        gpu.queue
-            .write_buffer(&floor_vb, 0, bytemuck::cast_slice(&ground.vertices));
-        let floor_ib = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("floor indices"),
-            size: std::mem::size_of_val(ground.indices.as_slice()) as u64,
-            usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        gpu.queue
-            .write_buffer(&floor_ib, 0, bytemuck::cast_slice(&ground.indices));
         Self {
             format,
             samples,
@@ -340,7 +272,7 @@ impl Renderer {
             overlay,
             skinned,
             figures,
-            floor_mesh: (floor_vb, floor_ib, ground.indices.len() as u32),
+            floor_mesh: floor_mesh(gpu),
             body_vertices: GrowBuffer::new(device, "body vertices", wgpu::BufferUsages::VERTEX),
             body_indices: GrowBuffer::new(device, "body indices", wgpu::BufferUsages::INDEX),
             shadow_vertices: GrowBuffer::new(device, "shadow vertices", wgpu::BufferUsages::VERTEX),
@@ -596,5 +528,116 @@ impl Renderer {
             pass.set_vertex_buffer(0, self.overlay_vertices.buffer.slice(..));
             pass.draw(0..overlay_count, 0..1);
         }
+    }
+}
+/// The scene's uniforms: their buffer, its layout and its bind group.
+fn globals(device: &wgpu::Device) -> (wgpu::Buffer, wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let globals = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("globals"),
+        size: std::mem::size_of::<Globals>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("globals"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("globals"),
+        layout: &layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: globals.as_entire_binding(),
+        }],
+    });
+    (globals, layout, bind_group)
+}
+
+/// The floor's vertices and indices on the GPU, and how many indices.
+fn floor_mesh(gpu: &Gpu) -> (wgpu::Buffer, wgpu::Buffer, u32) {
+    let device = &gpu.device;
+    let mut ground = Mesh::default();
+    ground.ground(FLOOR_HALF, 0.0, [0.62, 0.60, 0.56, 0.0]);
+    let floor_vb = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("floor vertices"),
+        size: std::mem::size_of_val(ground.vertices.as_slice()) as u64,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    gpu.queue
+        .write_buffer(&floor_vb, 0, bytemuck::cast_slice(&ground.vertices));
+    let floor_ib = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("floor indices"),
+        size: std::mem::size_of_val(ground.indices.as_slice()) as u64,
+        usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    gpu.queue
+        .write_buffer(&floor_ib, 0, bytemuck::cast_slice(&ground.indices));
+    (floor_vb, floor_ib, ground.indices.len() as u32)
+}
+
+/// Makes the scene's render pipelines: one shader, one colour target.
+struct Maker<'a> {
+    device: &'a wgpu::Device,
+    shader: &'a wgpu::ShaderModule,
+    format: wgpu::TextureFormat,
+    samples: u32,
+}
+
+impl Maker<'_> {
+    /// A pipeline of the shader's entry points `(vs, fs)`.
+    #[allow(clippy::too_many_arguments)]
+    fn make(
+        &self,
+        label: &str,
+        pipeline_layout: &wgpu::PipelineLayout,
+        (vs, fs): (&str, &str),
+        layout: wgpu::VertexBufferLayout<'_>,
+        cull: Option<wgpu::Face>,
+        ds: wgpu::DepthStencilState,
+        blend: Option<wgpu::BlendState>,
+    ) -> wgpu::RenderPipeline {
+        self.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: self.shader,
+                    entry_point: Some(vs),
+                    compilation_options: wgpu::PipelineCompilationOptions::default(),
+                    buffers: &[Some(layout)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: cull,
+                    ..wgpu::PrimitiveState::default()
+                },
+                depth_stencil: Some(ds),
+                multisample: wgpu::MultisampleState {
+                    count: self.samples,
+                    ..wgpu::MultisampleState::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: self.shader,
+                    entry_point: Some(fs),
+                    compilation_options: wgpu::PipelineCompilationOptions::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: self.format,
+                        blend,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
     }
 }

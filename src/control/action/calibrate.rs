@@ -16,7 +16,7 @@ use super::model::ActionModel;
 use super::recogniser::{
     CAPS, COVERAGE_FLOORS, DragMatch, GATES, Recogniser, SLOW_CAPS, TemplateRule, Thresholds,
 };
-use super::trials::each_drag;
+use super::trials::{Drag, each_drag};
 use crate::character::library::Library;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
@@ -140,65 +140,15 @@ fn first_decisions(
     }
 }
 
-/// Choose the thresholds of `actions` (the library's models) by
-/// leave-one-clip-out.
-#[must_use]
-pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> Calibration {
-    let recogniser = Recogniser {
-        rule,
-        thresholds: Thresholds::default(),
-    };
-    // Every template whose clip the library holds is a test.
-    let mut which: Vec<(usize, usize)> = Vec::new();
-    let mut tests: Vec<(Role, &Clip)> = Vec::new();
-    for (ai, a) in actions.iter().enumerate() {
-        for (ci, t) in a.templates.iter().enumerate() {
-            if let Some(clip) = lib.clips.get(&t.clip) {
-                which.push((ai, ci));
-                tests.push((a.def.primary, clip));
-            }
-        }
-    }
-    let mut recorded = Vec::new();
-    each_drag(&tests, SEED, &mut |d| {
-        let mut m = DragMatch::new(
-            &recogniser,
-            actions,
-            d.role,
-            d.camera,
-            d.at,
-            Some(which[d.test]),
-        );
-        let (t0, t1) = (
-            d.trail.first().map_or(0.0, |p| p.t),
-            d.trail.last().map_or(0.0, |p| p.t),
-        );
-        let mut trace = Trace::with_capacity(d.trail.len());
-        let mut seen = Vec::with_capacity(d.trail.len());
-        for p in d.trail {
-            m.push(*p);
-            let mut row = [(u16::MAX, f32::INFINITY, f32::INFINITY); GATES];
-            for (k, r) in row.iter_mut().enumerate() {
-                if let Some((a, c, n)) = m.lead(k) {
-                    *r = (a as u16, c as f32, n as f32);
-                }
-            }
-            trace.push(row);
-            seen.push(if t1 > t0 {
-                ((p.t - t0) / (t1 - t0)) as f32
-            } else {
-                1.0
-            });
-        }
-        recorded.push(Recorded {
-            test: d.test,
-            view_deg: d.angle_deg,
-            slow: d.slow,
-            seen,
-            trace,
-        });
-    });
-    let limits: Vec<Option<f64>> = actions.iter().map(|a| a.def.threshold_m).collect();
+/// The thresholds that start the most drags of `recorded` as their own
+/// action (`which` says each test's action and template), the fewest as
+/// another and earliest, with slow drags' starts within budget; whether
+/// they are.
+fn search(
+    recorded: &[Recorded],
+    which: &[(usize, usize)],
+    limits: &[Option<f64>],
+) -> (bool, Thresholds) {
     let true_drags = recorded.iter().filter(|r| !r.slow).count().max(1) as f64;
     let slow_drags = recorded.iter().filter(|r| r.slow).count().max(1) as f64;
     // (within budget, score, earlier decisions, fewer slow starts) and the
@@ -213,8 +163,8 @@ pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> 
             let mut wrong = [0usize; COSTS_M.len()];
             let mut slow = [0usize; COSTS_M.len()];
             let mut decided = [0.0f64; COSTS_M.len()];
-            for r in &recorded {
-                first_decisions(r, gate, margin_m, &limits, &mut decisions);
+            for r in recorded {
+                first_decisions(r, gate, margin_m, limits, &mut decisions);
                 for (k, d) in decisions.iter().enumerate() {
                     match (r.slow, d) {
                         (true, Some(_)) => slow[k] += 1,
@@ -252,7 +202,77 @@ pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> 
             }
         }
     }
-    let (within_budget, thresholds) = best.map_or((true, Thresholds::default()), |(k, t)| (k.0, t));
+    best.map_or((true, Thresholds::default()), |(k, t)| (k.0, t))
+}
+
+impl Recorded {
+    /// Drag `d` fed point by point to its match `m`: each point's lead
+    /// under every gate, and how much of the drag was seen by then.
+    fn of(mut m: DragMatch, d: &Drag<'_>) -> Self {
+        let (t0, t1) = (
+            d.trail.first().map_or(0.0, |p| p.t),
+            d.trail.last().map_or(0.0, |p| p.t),
+        );
+        let mut trace = Trace::with_capacity(d.trail.len());
+        let mut seen = Vec::with_capacity(d.trail.len());
+        for p in d.trail {
+            m.push(*p);
+            let mut row = [(u16::MAX, f32::INFINITY, f32::INFINITY); GATES];
+            for (k, r) in row.iter_mut().enumerate() {
+                if let Some((a, c, n)) = m.lead(k) {
+                    *r = (a as u16, c as f32, n as f32);
+                }
+            }
+            trace.push(row);
+            seen.push(if t1 > t0 {
+                ((p.t - t0) / (t1 - t0)) as f32
+            } else {
+                1.0
+            });
+        }
+        Self {
+            test: d.test,
+            view_deg: d.angle_deg,
+            slow: d.slow,
+            seen,
+            trace,
+        }
+    }
+}
+
+/// Choose the thresholds of `actions` (the library's models) by
+/// leave-one-clip-out.
+#[must_use]
+pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> Calibration {
+    let recogniser = Recogniser {
+        rule,
+        thresholds: Thresholds::default(),
+    };
+    // Every template whose clip the library holds is a test.
+    let mut which: Vec<(usize, usize)> = Vec::new();
+    let mut tests: Vec<(Role, &Clip)> = Vec::new();
+    for (ai, a) in actions.iter().enumerate() {
+        for (ci, t) in a.templates.iter().enumerate() {
+            if let Some(clip) = lib.clips.get(&t.clip) {
+                which.push((ai, ci));
+                tests.push((a.def.primary, clip));
+            }
+        }
+    }
+    let mut recorded = Vec::new();
+    each_drag(&tests, SEED, &mut |d| {
+        let m = DragMatch::new(
+            &recogniser,
+            actions,
+            d.role,
+            d.camera,
+            d.at,
+            Some(which[d.test]),
+        );
+        recorded.push(Recorded::of(m, d));
+    });
+    let limits: Vec<Option<f64>> = actions.iter().map(|a| a.def.threshold_m).collect();
+    let (within_budget, thresholds) = search(&recorded, &which, &limits);
     let floor = super::recogniser::gate_of(&thresholds);
     let outcomes = recorded
         .iter()

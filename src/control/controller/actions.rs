@@ -4,12 +4,44 @@
 use super::{Controller, Grab, Matching, Mode, RecogniserKind};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
-use crate::control::action::model::recognize;
+use crate::control::action::model::{ActionModel, recognize};
 use crate::control::action::player::ActionPlayer;
-use crate::control::action::recogniser::{Decision, DragMatch};
+use crate::control::action::recogniser::{Decision, DragMatch, Thresholds};
 use crate::control::action::trail::{TrailPoint, view_angle_deg};
 use crate::control::marks::{Marks, TrajectoryMark};
 use crate::screen::ScreenPoint;
+
+impl Matching {
+    /// Feed the match the points of `trail` it has not seen, the pelvis's
+    /// way on the screen (`drift`) taken out.
+    fn feed(&mut self, trail: &[TrailPoint], drift: glam::DVec2) {
+        for p in &trail[self.fed..] {
+            self.drag.push(TrailPoint {
+                at: ScreenPoint::new(p.at.x - drift.x, p.at.y - drift.y),
+                t: p.t,
+            });
+        }
+        self.fed = trail.len();
+    }
+
+    /// The drag lifted having started nothing: what it came nearest to,
+    /// and which threshold held it back, for a closer look.
+    fn started_nothing(&self, actions: &[ActionModel], thresholds: &Thresholds) {
+        let Some(c) = self.drag.closest() else {
+            return;
+        };
+        tracing::debug!(
+            nearest = %actions[c.action].def.name,
+            clip = %c.clip,
+            cost_m = c.cost_m,
+            cost_limit_m = actions[c.action].def.threshold_m.unwrap_or(thresholds.cost_m),
+            margin_m = c.margin_m,
+            margin_needed_m = thresholds.margin_m,
+            coverage = c.coverage,
+            "drag started no action"
+        );
+    }
+}
 
 impl Controller {
     /// A drag that starts an action, if any.
@@ -99,19 +131,8 @@ impl Controller {
         let (grabs, matching) = self.fingers.grabs_and_matches();
         matching.retain(|id, m| {
             let held = grabs.contains_key(id);
-            if let (false, Some(c)) = (held, m.drag.closest()) {
-                // A drag that started nothing: what it came nearest to, and
-                // which threshold held it back.
-                tracing::debug!(
-                    nearest = %actions[c.action].def.name,
-                    clip = %c.clip,
-                    cost_m = c.cost_m,
-                    cost_limit_m = actions[c.action].def.threshold_m.unwrap_or(thresholds.cost_m),
-                    margin_m = c.margin_m,
-                    margin_needed_m = thresholds.margin_m,
-                    coverage = c.coverage,
-                    "drag started no action"
-                );
+            if !held {
+                m.started_nothing(actions, &thresholds);
             }
             held
         });
@@ -147,13 +168,7 @@ impl Controller {
                 // oldest points dropped): so does the match.
                 *m = fresh();
             }
-            for p in &trail[m.fed..] {
-                m.drag.push(TrailPoint {
-                    at: ScreenPoint::new(p.at.x - drift.x, p.at.y - drift.y),
-                    t: p.t,
-                });
-            }
-            m.fed = trail.len();
+            m.feed(trail, drift);
             if !*moved || trail.len() < 2 || found.is_some() {
                 continue;
             }

@@ -16,7 +16,9 @@ use glam::{DQuat, DVec3};
 
 use super::feet::rise_over_floor;
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::{Pose, Skeleton, forward_kinematics, rotation_difference};
+use crate::character::skeleton::{
+    Pose, Skeleton, WorldPose, forward_kinematics, rotation_difference,
+};
 use crate::control::posing::ik::{ccd_within, chain};
 
 /// The most a shown joint's angular velocity changes in a second
@@ -73,16 +75,7 @@ impl Jerk {
         }
         // The feet go back where the feet passes put them as far as the
         // bound lets their legs turn...
-        let after = forward_kinematics(sk, output);
-        let goals: Vec<(usize, Vec<usize>, DVec3)> = [Role::LeftFoot, Role::RightFoot]
-            .into_iter()
-            .filter(|r| !held.contains(r))
-            .filter_map(|r| {
-                let j = roles.get(r);
-                let moved = (before.positions[j] - after.positions[j]).length() > 5e-4;
-                moved.then(|| (j, chain(sk, roles, r), before.positions[j]))
-            })
-            .collect();
+        let goals = moved_feet(sk, roles, &before, output, held);
         if !goals.is_empty() {
             ccd_within(sk, output, &goals, 8, bounded);
         }
@@ -90,24 +83,8 @@ impl Jerk {
             *v = rotation_difference(last.rotations[j], output.rotations[j]) / dt;
         }
         // ...and a planted foot they could not bring back (its leg held
-        // back under a lunging body) stays where it stands: the body moves
-        // back over it, its joints untouched. Not for a foot the sweep lifts
-        // (it moves over the floor; moving the body for it slid the foot
-        // that had just begun a step).
-        let after = forward_kinematics(sk, output);
-        let mut shift = DVec3::ZERO;
-        let mut n = 0.0;
-        for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
-            if !standing[k] || held.contains(&role) {
-                continue;
-            }
-            let j = roles.get(role);
-            shift += (before.positions[j] - after.positions[j]).with_y(0.0);
-            n += 1.0;
-        }
-        if n > 0.0 {
-            output.translations[0] += shift / n;
-        }
+        // back under a lunging body) stays where it stands.
+        back_over_standing(sk, roles, &before, output, held, standing);
         // The floor still holds: a foot or a hand the bound (or a finger)
         // left under it lifts the body, its joints untouched (bending the leg
         // to lift the foot undid the bound: a knee popped as a kick began).
@@ -124,6 +101,55 @@ impl Jerk {
         );
         last.clone_from(output);
         self.last = Some((last, vel));
+    }
+}
+
+/// The feet no finger `held` that `output` has moved from where they are
+/// in `before`: each joint with its leg's chain and where it was.
+fn moved_feet(
+    sk: &Skeleton,
+    roles: &RoleMap,
+    before: &WorldPose,
+    output: &Pose,
+    held: &[Role],
+) -> Vec<(usize, Vec<usize>, DVec3)> {
+    let after = forward_kinematics(sk, output);
+    [Role::LeftFoot, Role::RightFoot]
+        .into_iter()
+        .filter(|r| !held.contains(r))
+        .filter_map(|r| {
+            let j = roles.get(r);
+            let moved = (before.positions[j] - after.positions[j]).length() > 5e-4;
+            moved.then(|| (j, chain(sk, roles, r), before.positions[j]))
+        })
+        .collect()
+}
+
+/// The body of `output` moved back over the planted feet (`standing`,
+/// left and right; not `held`) that stood elsewhere in `before`, its joints
+/// untouched. Not for a foot the sweep lifts (it moves over the floor;
+/// moving the body for it slid the foot that had just begun a step).
+fn back_over_standing(
+    sk: &Skeleton,
+    roles: &RoleMap,
+    before: &WorldPose,
+    output: &mut Pose,
+    held: &[Role],
+    standing: [bool; 2],
+) {
+    let after = forward_kinematics(sk, output);
+    let mut shift = DVec3::ZERO;
+    let mut n = 0.0;
+    for (k, role) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
+        if !standing[k] || held.contains(&role) {
+            continue;
+        }
+        let j = roles.get(role);
+        shift += (before.positions[j] - after.positions[j]).with_y(0.0);
+        n += 1.0;
+    }
+    if n > 0.0 {
+        output.translations[0] += shift / n;
     }
 }
 

@@ -9,13 +9,13 @@
 
 use glam::{DQuat, DVec3};
 
-use super::constraint::{Constraint, SynthOptions, Target, localize};
+use super::constraint::{Constraint, Local, SynthOptions, Target, localize};
 use super::fit::{mean_rotation, refit, refit_limbs};
 use super::ik::apply_ik;
 use super::model::{LearnedModel, PartColumns};
 use super::rank::keep_best;
 use super::sample::{Sample, pose_of};
-use crate::character::body::{Placement, wrap};
+use crate::character::body::{Anchor, Placement, wrap};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 
@@ -32,60 +32,11 @@ pub fn select(
 ) -> Vec<(usize, f64)> {
     let local = localize(constraints, at);
     let index = &model.index;
-    // The summed distance to the targets of each entry of `cols[run]`
-    // (less `slack` times the entry's spread, where it has one),
-    // constraint by constraint down the columns, appended to `out` with
-    // the entry's position in `cols` (sums rank as the means do; only the
-    // kept ones are divided).
-    let score = |cols: &PartColumns,
-                 run: std::ops::Range<usize>,
-                 slack: f64,
-                 out: &mut Vec<(usize, f64)>| {
-        let from = out.len();
-        out.extend(run.clone().map(|k| (k, 0.0)));
-        let sums = &mut out[from..];
-        for c in &local {
-            let col = &cols.column(at.anchor, c.role)[run.clone()];
-            let spread = cols.spread(at.anchor, c.role);
-            if slack > 0.0 && !spread.is_empty() {
-                let spread = &spread[run.clone()];
-                match c.target {
-                    Target::Point(q) => {
-                        for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
-                            s.1 += ((*p - q).length() - slack * r).max(0.0);
-                        }
-                    }
-                    Target::Ray(ray) => {
-                        for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
-                            s.1 += (ray.distance(*p) - slack * r).max(0.0);
-                        }
-                    }
-                    Target::Within { at, radius } => {
-                        for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
-                            s.1 += ((*p - at).length() - radius - slack * r).max(0.0);
-                        }
-                    }
-                }
-                continue;
-            }
-            match c.target {
-                Target::Point(q) => {
-                    for (s, p) in sums.iter_mut().zip(col) {
-                        s.1 += (*p - q).length();
-                    }
-                }
-                Target::Ray(r) => {
-                    for (s, p) in sums.iter_mut().zip(col) {
-                        s.1 += r.distance(*p);
-                    }
-                }
-                Target::Within { at, radius } => {
-                    for (s, p) in sums.iter_mut().zip(col) {
-                        s.1 += ((*p - at).length() - radius).max(0.0);
-                    }
-                }
-            }
-        }
+    let score_run = |cols: &PartColumns,
+                     run: std::ops::Range<usize>,
+                     slack: f64,
+                     out: &mut Vec<(usize, f64)>| {
+        score(&local, at.anchor, cols, run, slack, out);
     };
     // One buffer for every stage: each stage appends its scores after the
     // kept entries of the stage before, which are then dropped.
@@ -95,7 +46,7 @@ pub fn select(
         // The cells to look at: those of the blocks whose representatives
         // meet the constraints best, or every one.
         if opts.blocks > 0 && !index.blocks.is_empty() {
-            score(
+            score_run(
                 &index.blocks,
                 0..index.blocks.len(),
                 opts.block_slack,
@@ -105,7 +56,7 @@ pub fn select(
             let blocks = scored.len();
             for k in 0..blocks {
                 let b = scored[k].0;
-                score(
+                score_run(
                     &index.cells,
                     range(&index.cells_of_block, b),
                     0.0,
@@ -114,7 +65,7 @@ pub fn select(
             }
             scored.drain(..blocks);
         } else {
-            score(&index.cells, 0..index.cells.len(), 0.0, &mut scored);
+            score_run(&index.cells, 0..index.cells.len(), 0.0, &mut scored);
         }
         // The samples of the cells whose representatives meet the
         // constraints best.
@@ -122,7 +73,7 @@ pub fn select(
         let cells = scored.len();
         for k in 0..cells {
             let c = index.cell_ids[scored[k].0] as usize;
-            score(
+            score_run(
                 &index.samples,
                 range(&index.samples_of_cell, c),
                 0.0,
@@ -131,7 +82,7 @@ pub fn select(
         }
         scored.drain(..cells);
     } else {
-        score(&index.samples, 0..index.samples.len(), 0.0, &mut scored);
+        score_run(&index.samples, 0..index.samples.len(), 0.0, &mut scored);
     }
     keep_best(&mut scored, opts.blend);
     // The mean over the caller's constraints: bounds cost nothing where
@@ -147,6 +98,66 @@ pub fn select(
         scored.swap(0, first);
     }
     scored
+}
+
+/// The summed distance to the targets of each entry of `cols[run]` (less
+/// `slack` times the entry's spread, where it has one), constraint by
+/// constraint down the columns, appended to `out` with the entry's
+/// position in `cols` (sums rank as the means do; only the kept ones are
+/// divided).
+fn score(
+    local: &[Local],
+    anchor: Anchor,
+    cols: &PartColumns,
+    run: std::ops::Range<usize>,
+    slack: f64,
+    out: &mut Vec<(usize, f64)>,
+) {
+    let from = out.len();
+    out.extend(run.clone().map(|k| (k, 0.0)));
+    let sums = &mut out[from..];
+    for c in local {
+        let col = &cols.column(anchor, c.role)[run.clone()];
+        let spread = cols.spread(anchor, c.role);
+        if slack > 0.0 && !spread.is_empty() {
+            let spread = &spread[run.clone()];
+            match c.target {
+                Target::Point(q) => {
+                    for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
+                        s.1 += ((*p - q).length() - slack * r).max(0.0);
+                    }
+                }
+                Target::Ray(ray) => {
+                    for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
+                        s.1 += (ray.distance(*p) - slack * r).max(0.0);
+                    }
+                }
+                Target::Within { at, radius } => {
+                    for ((s, p), r) in sums.iter_mut().zip(col).zip(spread) {
+                        s.1 += ((*p - at).length() - radius - slack * r).max(0.0);
+                    }
+                }
+            }
+            continue;
+        }
+        match c.target {
+            Target::Point(q) => {
+                for (s, p) in sums.iter_mut().zip(col) {
+                    s.1 += (*p - q).length();
+                }
+            }
+            Target::Ray(r) => {
+                for (s, p) in sums.iter_mut().zip(col) {
+                    s.1 += r.distance(*p);
+                }
+            }
+            Target::Within { at, radius } => {
+                for (s, p) in sums.iter_mut().zip(col) {
+                    s.1 += ((*p - at).length() - radius).max(0.0);
+                }
+            }
+        }
+    }
 }
 
 /// The samples to blend and their weights (summing to one), best first:

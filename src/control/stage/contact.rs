@@ -61,47 +61,9 @@ impl Stage {
                             } else {
                                 (i, j, a, b, -normal)
                             };
-                        let ms = self.actors[striker].ctl.segment_masses()[s_seg];
-                        let mt = self.actors[struck].ctl.segment_masses()[t_seg];
-                        let reduced = ms * mt / (ms + mt).max(1e-9);
-                        let impulse = (1.0 + RESTITUTION) * reduced * closing;
-                        let names = |k: usize, s: usize| {
-                            self.actors[k]
-                                .ctl
-                                .capsules()
-                                .get(s)
-                                .map_or_else(String::new, |c| c.1.to_owned())
-                        };
-                        let hit = Hit {
-                            time_s: self.time,
-                            striker,
-                            struck,
-                            striker_part: names(striker, s_seg),
-                            struck_part: names(struck, t_seg),
-                            impulse_ns: impulse,
-                            speed_m_s: closing,
-                        };
-                        tracing::info!(
-                            striker = hit.striker,
-                            struck = hit.struck,
-                            striker_part = %hit.striker_part,
-                            struck_part = %hit.struck_part,
-                            impulse_ns = hit.impulse_ns,
-                            speed_m_s = hit.speed_m_s,
-                            depth_m = depth,
-                            "hit"
-                        );
-                        self.actors[struck]
-                            .ctl
-                            .hit(t_seg, dir * impulse, DVec3::ZERO);
-                        self.actors[striker]
-                            .ctl
-                            .hit(s_seg, -dir * impulse, DVec3::ZERO);
+                        self.land(striker, (s_seg, t_seg), struck, dir, closing, depth);
                         hit_now.insert((i, a, j));
                         hit_now.insert((j, b, i));
-                        self.actors[striker].hits_landed += 1;
-                        self.actors[struck].hits_taken += 1;
-                        self.hits.push(hit);
                     }
                 }
             }
@@ -115,6 +77,60 @@ impl Stage {
         self.depth_left = self.overlap(false);
         self.trunk_depth_left = self.overlap(true);
         self.last = self.actors.iter().map(|a| caps(&a.ctl)).collect();
+    }
+
+    /// A hit: segment `segs.0` of `striker` moving into segment `segs.1`
+    /// of `struck` along `dir` at `closing` m/s (overlapping `depth` m):
+    /// the impulse on both (its reaction on the striker), logged and
+    /// counted.
+    fn land(
+        &mut self,
+        striker: usize,
+        (s_seg, t_seg): (usize, usize),
+        struck: usize,
+        dir: DVec3,
+        closing: f64,
+        depth: f64,
+    ) {
+        let ms = self.actors[striker].ctl.segment_masses()[s_seg];
+        let mt = self.actors[struck].ctl.segment_masses()[t_seg];
+        let reduced = ms * mt / (ms + mt).max(1e-9);
+        let impulse = (1.0 + RESTITUTION) * reduced * closing;
+        let names = |k: usize, s: usize| {
+            self.actors[k]
+                .ctl
+                .capsules()
+                .get(s)
+                .map_or_else(String::new, |c| c.1.to_owned())
+        };
+        let hit = Hit {
+            time_s: self.time,
+            striker,
+            struck,
+            striker_part: names(striker, s_seg),
+            struck_part: names(struck, t_seg),
+            impulse_ns: impulse,
+            speed_m_s: closing,
+        };
+        tracing::info!(
+            striker = hit.striker,
+            struck = hit.struck,
+            striker_part = %hit.striker_part,
+            struck_part = %hit.struck_part,
+            impulse_ns = hit.impulse_ns,
+            speed_m_s = hit.speed_m_s,
+            depth_m = depth,
+            "hit"
+        );
+        self.actors[struck]
+            .ctl
+            .hit(t_seg, dir * impulse, DVec3::ZERO);
+        self.actors[striker]
+            .ctl
+            .hit(s_seg, -dir * impulse, DVec3::ZERO);
+        self.actors[striker].hits_landed += 1;
+        self.actors[struck].hits_taken += 1;
+        self.hits.push(hit);
     }
 
     /// Each character's capsules: all, or the trunk's alone.

@@ -128,6 +128,74 @@ pub(super) struct FeetStep<'a> {
     pub(super) dt: f64,
 }
 
+impl FootHold {
+    /// Where the foot is tracked to this step, following the target's
+    /// foot `p` (from `shown`, where the tracked posture has it, when it
+    /// was not tracked yet) by bounded accelerations settling in about
+    /// `settle_s` (0: tracking off, the target's foot).
+    fn follow(&mut self, p: DVec3, shown: DVec3, settle_s: f64, dt: f64) -> DVec3 {
+        let tracked = match self.track {
+            _ if settle_s <= 0.0 => (p, DVec3::ZERO),
+            Some((at, v)) => {
+                let gains = Gains::critical(settle_s);
+                let acc = ((p - at) * gains.k - v * gains.d).clamp_length_max(MAX_FOOT_ACCEL);
+                let v = v + acc * dt;
+                (at + v * dt, v)
+            }
+            None => (shown, DVec3::ZERO),
+        };
+        self.track = Some(tracked);
+        tracked.0
+    }
+
+    /// The turn added to the foot, its posture's turn being `yaw`: what
+    /// holds it to the way it points while held (without wrapping round;
+    /// at most [`MAX_TWIST`], beyond which it turns with the body), else
+    /// let go smoothly over [`TWIST_RELEASE_S`], easing in and out.
+    fn retwist(&mut self, yaw: f64, dt: f64) {
+        self.twist = match self.held_yaw {
+            Some(y) => {
+                let wrap = crate::character::body::wrap;
+                let t = self.twist + wrap(wrap(y - yaw) - self.twist);
+                let held = t.clamp(-MAX_TWIST, MAX_TWIST);
+                if held != t {
+                    self.held_yaw = Some(yaw + held);
+                }
+                held
+            }
+            None if self.twist != 0.0 => {
+                let (from, u) = self.release.unwrap_or((self.twist, 0.0));
+                let u = (u + dt / TWIST_RELEASE_S).min(1.0);
+                self.release = (u < 1.0).then_some((from, u));
+                from * (1.0 - u * u * (3.0 - 2.0 * u))
+            }
+            None => 0.0,
+        };
+        if self.held_yaw.is_some() {
+            self.release = None;
+        }
+    }
+
+    /// Where a step under way has the foot now, heading for `tracked`
+    /// (`None`: no step, or it has just landed).
+    fn stepping(&mut self, tracked: DVec3, dt: f64) -> Option<DVec3> {
+        let (from, s, dur, lift) = self.step?;
+        let s = s + dt / dur;
+        if s >= 1.0 {
+            // Landed: where the tracked posture has the foot.
+            self.step = None;
+            return None;
+        }
+        self.step = Some((from, s, dur, lift));
+        let e = s * s * (3.0 - 2.0 * s);
+        let dist = (tracked - from).with_y(0.0).length();
+        let arc = STEP_HEIGHT_M
+            * (std::f64::consts::PI * s).sin()
+            * (dist / STEP_TRIGGER_M).clamp(lift, 1.0);
+        Some(from + (tracked - from) * e + DVec3::Y * arc)
+    }
+}
+
 impl Feet {
     /// The feet of a body standing in `world` (its rest posture), with
     /// legs `leg_length` long from hip to ankle.
@@ -177,106 +245,91 @@ impl Feet {
         let (sk, roles, dt) = (s.skeleton, s.roles, s.dt);
         let target = forward_kinematics(sk, s.target);
         let shown = forward_kinematics(sk, output);
-        let held = s.held;
-        let settle = 1.0 - (-dt / 0.06).exp();
-        let switched = s.switched;
-        let gains = Gains::critical(s.settle_s);
-        // While walking, the clip's own foot contacts say which foot
-        // stands.
-        let contacts = s.contacts;
-        let feet = [Role::LeftFoot, Role::RightFoot];
-        let hips = [Role::LeftHip, Role::RightHip];
-        let mut goals = [None; 2];
-        for (k, role) in feet.into_iter().enumerate() {
-            let foot_j = roles.get(role);
-            let p = target.positions[foot_j];
-            // Across a switch of controller the target's feet jump: that
-            // is not the foot moving.
-            let speed = if dt > 0.0 && !switched {
-                (p - self.last_target[k]).length() / dt
-            } else {
-                0.0
-            };
-            self.last_target[k] = p;
-            let other_planted = self.holds[1 - k].anchor.is_some();
-            let last = s.shown_last.positions[foot_j];
-            let foot = &mut self.holds[k];
-            if held.contains(&role) {
-                *foot = FootHold::default();
-                continue;
-            }
-            let tracked = match foot.track {
-                // Tracking off: the target's foot.
-                _ if s.settle_s <= 0.0 => (p, DVec3::ZERO),
-                Some((at, v)) => {
-                    let acc = ((p - at) * gains.k - v * gains.d).clamp_length_max(MAX_FOOT_ACCEL);
-                    let v = v + acc * dt;
-                    (at + v * dt, v)
-                }
-                None => (shown.positions[foot_j], DVec3::ZERO),
-            };
-            foot.track = Some(tracked);
-            let tracked = tracked.0;
-            if let Some((from, s, dur, lift)) = foot.step {
-                let s = s + dt / dur;
-                if s < 1.0 {
-                    foot.step = Some((from, s, dur, lift));
-                    let e = s * s * (3.0 - 2.0 * s);
-                    let dist = (tracked - from).with_y(0.0).length();
-                    let arc = STEP_HEIGHT_M
-                        * (std::f64::consts::PI * s).sin()
-                        * (dist / STEP_TRIGGER_M).clamp(lift, 1.0);
-                    goals[k] = Some(from + (tracked - from) * e + DVec3::Y * arc);
-                    continue;
-                }
-                // Landed: where the tracked posture has the foot.
-                foot.step = None;
-            }
-            let on_floor = contacts.map_or(p.y <= self.ankle_rest + GROUND_CONTACT_M, |c| c[k]);
-            match foot.anchor {
-                Some(a) => {
-                    let away = (p - a).with_y(0.0).length();
-                    let hip = shown.positions[roles.get(hips[k])];
-                    let out_of_reach = (hip - a).length() > self.leg_length * 1.02;
-                    // A foot the posture lifts goes at once; one it moves
-                    // along the floor waits for the other to stand.
-                    let lifts = !on_floor;
-                    let strays = (out_of_reach || (contacts.is_none() && away > STEP_TRIGGER_M))
-                        && other_planted;
-                    if lifts || strays {
-                        foot.anchor = None;
-                        let dist = (tracked - a).with_y(0.0).length();
-                        foot.step = Some((a, 0.0, step_duration(dist), 0.0));
-                        goals[k] = Some(a);
-                    } else {
-                        // Height from the target (a heel may rise over
-                        // planted toes), reached smoothly.
-                        let a = a.with_y(a.y + (p.y - a.y) * settle);
-                        foot.anchor = Some(a);
-                        goals[k] = Some(a);
-                    }
-                }
-                None if on_floor && (contacts.is_some() || speed < LANDING_SPEED_M_S) => {
-                    // Comes down where it was shown last (the bound on
-                    // joint accelerations may have held it off its
-                    // track): no jump.
-                    let a = last.with_y(tracked.y);
-                    foot.anchor = Some(a);
-                    goals[k] = Some(a);
-                }
-                None => goals[k] = Some(tracked),
-            }
-            if let (Some(a), Some(_)) = (foot.anchor, goals[k]) {
-                // Carrying the body: shown where it stands.
-                foot.track = Some((a, DVec3::ZERO));
-            }
-        }
+        let goals = [0, 1].map(|k| self.goal(k, s, &target, &shown));
         self.tether(roles, &shown, output, tracker);
         if goals.iter().any(Option::is_some) {
             plant_feet(sk, roles, output, goals);
         }
-        self.hold_turn(sk, roles, output, contacts.is_some(), dt);
-        onto_floor(sk, roles, self.ankle_rest, held, output, goals);
+        self.hold_turn(sk, roles, output, s.contacts.is_some(), dt);
+        onto_floor(sk, roles, self.ankle_rest, s.held, output, goals);
+    }
+
+    /// Where foot `k` (0 left, 1 right) goes this step, given the target
+    /// posture's and the tracked posture's world poses: on its anchor
+    /// while planted, along its step while stepping, else where it is
+    /// tracked; `None` while a finger holds it.
+    fn goal(
+        &mut self,
+        k: usize,
+        s: &FeetStep,
+        target: &WorldPose,
+        shown: &WorldPose,
+    ) -> Option<DVec3> {
+        let (roles, dt) = (s.roles, s.dt);
+        let role = [Role::LeftFoot, Role::RightFoot][k];
+        let foot_j = roles.get(role);
+        let p = target.positions[foot_j];
+        // Across a switch of controller the target's feet jump: that is
+        // not the foot moving.
+        let speed = if dt > 0.0 && !s.switched {
+            (p - self.last_target[k]).length() / dt
+        } else {
+            0.0
+        };
+        self.last_target[k] = p;
+        let other_planted = self.holds[1 - k].anchor.is_some();
+        let foot = &mut self.holds[k];
+        if s.held.contains(&role) {
+            *foot = FootHold::default();
+            return None;
+        }
+        let tracked = foot.follow(p, shown.positions[foot_j], s.settle_s, dt);
+        if let Some(g) = foot.stepping(tracked, dt) {
+            return Some(g);
+        }
+        // While walking, the clip's own foot contacts say which foot
+        // stands.
+        let on_floor = s
+            .contacts
+            .map_or(p.y <= self.ankle_rest + GROUND_CONTACT_M, |c| c[k]);
+        let goal = match foot.anchor {
+            Some(a) => {
+                let away = (p - a).with_y(0.0).length();
+                let hip = shown.positions[roles.get([Role::LeftHip, Role::RightHip][k])];
+                let out_of_reach = (hip - a).length() > self.leg_length * 1.02;
+                // A foot the posture lifts goes at once; one it moves along
+                // the floor waits for the other to stand.
+                let lifts = !on_floor;
+                let strays = (out_of_reach || (s.contacts.is_none() && away > STEP_TRIGGER_M))
+                    && other_planted;
+                if lifts || strays {
+                    foot.anchor = None;
+                    let dist = (tracked - a).with_y(0.0).length();
+                    foot.step = Some((a, 0.0, step_duration(dist), 0.0));
+                    a
+                } else {
+                    // Height from the target (a heel may rise over planted
+                    // toes), reached smoothly.
+                    let settle = 1.0 - (-dt / 0.06).exp();
+                    let a = a.with_y(a.y + (p.y - a.y) * settle);
+                    foot.anchor = Some(a);
+                    a
+                }
+            }
+            None if on_floor && (s.contacts.is_some() || speed < LANDING_SPEED_M_S) => {
+                // Comes down where it was shown last (the bound on joint
+                // accelerations may have held it off its track): no jump.
+                let a = s.shown_last.positions[foot_j].with_y(tracked.y);
+                foot.anchor = Some(a);
+                a
+            }
+            None => tracked,
+        };
+        if let Some(a) = foot.anchor {
+            // Carrying the body: shown where it stands.
+            foot.track = Some((a, DVec3::ZERO));
+        }
+        Some(goal)
     }
 
     /// A planted foot holds the body within its leg's reach (one that
@@ -369,30 +422,7 @@ impl Feet {
                 foot.held_yaw = Some(yaw);
             }
             foot.walked = foot.held_yaw.is_some() && (foot.walked || walking);
-            foot.twist = match foot.held_yaw {
-                // Followed without wrapping round; at most MAX_TWIST held:
-                // beyond, the foot turns with the body.
-                Some(y) => {
-                    let wrap = crate::character::body::wrap;
-                    let t = foot.twist + wrap(wrap(y - yaw) - foot.twist);
-                    let held = t.clamp(-MAX_TWIST, MAX_TWIST);
-                    if held != t {
-                        foot.held_yaw = Some(yaw + held);
-                    }
-                    held
-                }
-                // Let go smoothly over TWIST_RELEASE_S, easing in and out.
-                None if foot.twist != 0.0 => {
-                    let (from, u) = foot.release.unwrap_or((foot.twist, 0.0));
-                    let u = (u + dt / TWIST_RELEASE_S).min(1.0);
-                    foot.release = (u < 1.0).then_some((from, u));
-                    from * (1.0 - u * u * (3.0 - 2.0 * u))
-                }
-                None => 0.0,
-            };
-            if foot.held_yaw.is_some() {
-                foot.release = None;
-            }
+            foot.retwist(yaw, dt);
             if foot.twist.abs() < 1e-4 {
                 foot.twist = 0.0;
                 continue;
