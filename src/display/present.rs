@@ -134,8 +134,31 @@ impl CopyPresenter {
             Some(mode),
         )
         .map_err(|e| io("setting the mode", e))?;
-        match &buffers {
-            Buffers::Gbm(g) if imported.is_some() => tracing::info!(
+        let presenter = Self {
+            card,
+            path,
+            name,
+            connector,
+            crtc,
+            mode,
+            buffers,
+            flips: super::flips::Flips::default(),
+            saved,
+            copy_s: 0.0,
+            copies: 0,
+            costs_ms: Vec::new(),
+            imported,
+        };
+        presenter.say_driving();
+        Ok(presenter)
+    }
+
+    /// The journal's line on the output driven, and how.
+    fn say_driving(&self) {
+        let (path, name, mode) = (&self.path, &self.name, self.mode);
+        let (w, h) = mode.size();
+        match &self.buffers {
+            Buffers::Gbm(g) if self.imported.is_some() => tracing::info!(
                 card = %path.display(),
                 output = %name,
                 width = w,
@@ -167,21 +190,6 @@ impl CopyPresenter {
                 "driving the display (frames rendered offscreen, copied into dumb buffers, page-flipped on vblank)"
             ),
         }
-        Ok(Self {
-            card,
-            path,
-            name,
-            connector,
-            crtc,
-            mode,
-            buffers,
-            flips: super::flips::Flips::default(),
-            saved,
-            copy_s: 0.0,
-            copies: 0,
-            costs_ms: Vec::new(),
-            imported,
-        })
     }
 }
 

@@ -423,6 +423,23 @@ impl Renderer {
         self.attachments.as_ref().expect("just made")
     }
 
+    /// The frame's uniforms and geometry to the GPU.
+    fn upload(&mut self, gpu: &Gpu, list: &DrawList, globals: &Globals) {
+        gpu.queue
+            .write_buffer(&self.globals, 0, bytemuck::bytes_of(globals));
+        self.body_vertices
+            .write(gpu, bytemuck::cast_slice(&list.body.vertices));
+        self.body_indices
+            .write(gpu, bytemuck::cast_slice(&list.body.indices));
+        self.overlay_vertices
+            .write(gpu, bytemuck::cast_slice(&list.overlay.vertices));
+        self.shadow_vertices
+            .write(gpu, bytemuck::cast_slice(&list.shadow.vertices));
+        self.shadow_indices
+            .write(gpu, bytemuck::cast_slice(&list.shadow.indices));
+        self.figures.upload(gpu, list);
+    }
+
     /// Record the frame into `encoder`, drawing into `target` (which
     /// needs `RENDER_ATTACHMENT`, and `COPY_DST` for the floor cache).
     pub fn draw(
@@ -436,32 +453,8 @@ impl Renderer {
         let target_view = target.create_view(&wgpu::TextureViewDescriptor::default());
         let target = (target, &target_view);
         let shadow = planar_shadow(list.light, 0.002);
-        let globals = Globals {
-            view_proj: list.view_proj.to_cols_array_2d(),
-            shadow_view_proj: (list.view_proj * shadow).to_cols_array_2d(),
-            screen: list.screen.to_cols_array_2d(),
-            eye: list.eye.extend(1.0).to_array(),
-            light: list.light.normalize().extend(0.0).to_array(),
-            fog: [
-                list.background[0],
-                list.background[1],
-                list.background[2],
-                list.fog_start,
-            ],
-        };
-        gpu.queue
-            .write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
-        self.body_vertices
-            .write(gpu, bytemuck::cast_slice(&list.body.vertices));
-        self.body_indices
-            .write(gpu, bytemuck::cast_slice(&list.body.indices));
-        self.overlay_vertices
-            .write(gpu, bytemuck::cast_slice(&list.overlay.vertices));
-        self.shadow_vertices
-            .write(gpu, bytemuck::cast_slice(&list.shadow.vertices));
-        self.shadow_indices
-            .write(gpu, bytemuck::cast_slice(&list.shadow.indices));
-        self.figures.upload(gpu, list);
+        let globals = Globals::of(list, shadow);
+        self.upload(gpu, list, &globals);
         let shadow_count = list.shadow.indices.len() as u32;
         let body_count = list.body.indices.len() as u32;
         let overlay_count = list.overlay.vertices.len() as u32;
@@ -530,6 +523,25 @@ impl Renderer {
         }
     }
 }
+impl Globals {
+    /// The uniforms of `list`, its shadows cast by `shadow`.
+    fn of(list: &DrawList, shadow: glam::Mat4) -> Self {
+        Self {
+            view_proj: list.view_proj.to_cols_array_2d(),
+            shadow_view_proj: (list.view_proj * shadow).to_cols_array_2d(),
+            screen: list.screen.to_cols_array_2d(),
+            eye: list.eye.extend(1.0).to_array(),
+            light: list.light.normalize().extend(0.0).to_array(),
+            fog: [
+                list.background[0],
+                list.background[1],
+                list.background[2],
+                list.fog_start,
+            ],
+        }
+    }
+}
+
 /// The scene's uniforms: their buffer, its layout and its bind group.
 fn globals(device: &wgpu::Device) -> (wgpu::Buffer, wgpu::BindGroupLayout, wgpu::BindGroup) {
     let globals = device.create_buffer(&wgpu::BufferDescriptor {

@@ -194,31 +194,13 @@ pub(super) fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) 
         push_chain(&mut out, Role::Pelvis, Role::Pelvis, hip, 0.095, TROUSERS);
         push_chain(&mut out, knee, hip, knee, 0.078, TROUSERS);
         push_chain(&mut out, foot, knee, foot, 0.058, TROUSERS);
-        // A mitten past the wrist, along the forearm or the hand's bones.
-        let forearm = (p(hand) - p(elbow)).normalize_or_zero();
-        let h = p(hand);
-        let end = tip(skeleton, world, roles.get(hand), forearm * 0.08);
-        let along = (end - h).normalize_or(forearm);
-        out.push(Segment {
-            part: hand,
-            a: h,
-            b: h + along * 0.07,
-            r: 0.047,
-            color: SKIN,
-        });
-        // A shoe from the ankle to the toes, resting on its sole.
-        let f = p(foot);
-        let facing = (p(knee) - p(hip)).cross(p(Role::LeftHip) - p(Role::RightHip));
-        let fallback = DVec3::new(facing.x, 0.0, facing.z).normalize_or(DVec3::Z) * 0.14;
-        let toe = tip(skeleton, world, roles.get(foot), fallback);
-        let r = 0.045;
-        out.push(Segment {
-            part: foot,
-            a: f,
-            b: toe.with_y(toe.y.max(r)),
-            r,
-            color: SHOES,
-        });
+        out.extend(mitten_and_shoe(
+            skeleton,
+            roles,
+            world,
+            [elbow, hand],
+            [hip, knee, foot],
+        ));
     }
     // Chest across the shoulders and hips across the hip joints, so that
     // the trunk reads as a body and not a stick.
@@ -255,6 +237,44 @@ pub(super) fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) 
         color: SKIN,
     });
     out
+}
+
+/// A mitten past the wrist (along the forearm or the hand's bones) and a
+/// shoe from the ankle to the toes, resting on its sole, for one side.
+fn mitten_and_shoe(
+    skeleton: &Skeleton,
+    roles: &RoleMap,
+    world: &WorldPose,
+    [elbow, hand]: [Role; 2],
+    [hip, knee, foot]: [Role; 3],
+) -> [Segment; 2] {
+    let p = |r: Role| world.positions[roles.get(r)];
+    // A mitten past the wrist, along the forearm or the hand's bones.
+    let forearm = (p(hand) - p(elbow)).normalize_or_zero();
+    let h = p(hand);
+    let end = tip(skeleton, world, roles.get(hand), forearm * 0.08);
+    let along = (end - h).normalize_or(forearm);
+    let mitten = Segment {
+        part: hand,
+        a: h,
+        b: h + along * 0.07,
+        r: 0.047,
+        color: SKIN,
+    };
+    // A shoe from the ankle to the toes, resting on its sole.
+    let f = p(foot);
+    let facing = (p(knee) - p(hip)).cross(p(Role::LeftHip) - p(Role::RightHip));
+    let fallback = DVec3::new(facing.x, 0.0, facing.z).normalize_or(DVec3::Z) * 0.14;
+    let toe = tip(skeleton, world, roles.get(foot), fallback);
+    let r = 0.045;
+    let shoe = Segment {
+        part: foot,
+        a: f,
+        b: toe.with_y(toe.y.max(r)),
+        r,
+        color: SHOES,
+    };
+    [mitten, shoe]
 }
 
 /// Which segments glow when a finger holds `role`.

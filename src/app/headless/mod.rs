@@ -222,6 +222,169 @@ struct Replay<'a> {
     held_by: Vec<BTreeSet<String>>,
 }
 
+impl Replay<'_> {
+    /// The frame at `t` rendered and written, when one is due (and kept
+    /// for the contact sheet at a key step).
+    fn render(&mut self, ctl: &Stage, t: f64) -> Result<(), HeadlessError> {
+        if let (Some(h), Some(dir)) = (self.headless.as_mut(), self.opts.out.as_ref()) {
+            let is_key = self.key.binary_search(&self.summary.steps).is_ok();
+            if self.summary.steps % self.every == 0 || is_key {
+                let display = &self.config.display;
+                let mut marks = ctl.marks(display.trajectories);
+                if display.status_line {
+                    marks.status = Some(status(ctl, t));
+                }
+                let list = super::frame::compose(ctl, display.rotation(), &marks);
+                let started = std::time::Instant::now();
+                let img = h.render(&list)?;
+                self.times.push(started.elapsed().as_secs_f64() * 1e3);
+                let n = self.summary.frames_written;
+                write(&dir.join(format!("frames/frame-{n:05}.png")), &img)?;
+                if is_key {
+                    self.thumbs.push((img, label(ctl, t), t));
+                }
+                self.summary.frames_written += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// A hit on the table, recorded for both characters.
+    fn hit(&mut self, h: &crate::control::stage::Hit) {
+        for (k, role, other, part, other_part) in [
+            (
+                h.striker,
+                "landed",
+                h.struck,
+                &h.striker_part,
+                &h.struck_part,
+            ),
+            (
+                h.struck,
+                "taken",
+                h.striker,
+                &h.struck_part,
+                &h.striker_part,
+            ),
+        ] {
+            if let Some(c) = self.per.get_mut(k) {
+                c.hits.push(HitRecord {
+                    time_s: h.time_s,
+                    role: role.to_owned(),
+                    other,
+                    part: part.clone(),
+                    other_part: other_part.clone(),
+                    impulse_ns: h.impulse_ns,
+                    speed_m_s: h.speed_m_s,
+                });
+            }
+        }
+    }
+
+    /// Action event `e` of character `k`, recorded: an action started, or
+    /// the one of that name playing ended.
+    fn event(&mut self, k: usize, e: ActionEvent) {
+        let records = if self.per.is_empty() {
+            &mut self.summary.actions
+        } else {
+            match self.per.get_mut(k) {
+                Some(c) => &mut c.actions,
+                None => return,
+            }
+        };
+        match e {
+            ActionEvent::Started { action, time_s, .. } => records.push(ActionRecord {
+                action,
+                started_s: time_s,
+                outcome: "playing".into(),
+                ended_s: None,
+            }),
+            ActionEvent::Finished {
+                ref action, time_s, ..
+            }
+            | ActionEvent::Cancelled {
+                ref action, time_s, ..
+            } => {
+                // The action of that name still playing (a walk and an
+                // action laid over it end apart).
+                let open = records
+                    .iter_mut()
+                    .rev()
+                    .find(|r| r.ended_s.is_none() && r.action == *action);
+                if let Some(r) = open {
+                    r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
+                        "finished".into()
+                    } else {
+                        "cancelled".into()
+                    };
+                    r.ended_s = Some(time_s);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl Replay<'_> {
+    /// The replay's summary, with the table's hits and each character's
+    /// parts and actions, and the contact sheet's thumbnails.
+    fn finish(self, ctl: &Stage) -> (Summary, Vec<(Image, String, f64)>) {
+        let Replay {
+            mut summary,
+            hash,
+            held_ever,
+            thumbs,
+            times,
+            meter,
+            mut per,
+            held_by,
+            ..
+        } = self;
+        for ((c, held), a) in per.iter_mut().zip(held_by).zip(ctl.actors()) {
+            c.parts_held = held.into_iter().collect();
+            c.hits_landed = a.hits_landed;
+            c.hits_taken = a.hits_taken;
+        }
+        if !per.is_empty() {
+            let mut all: Vec<ActionRecord> = per.iter().flat_map(|c| c.actions.clone()).collect();
+            all.sort_by(|a, b| a.started_s.total_cmp(&b.started_s));
+            summary.actions = all;
+        }
+        summary.characters = per;
+        summary.metrics = meter.map(crate::tools::metrics::Meter::finish);
+        summary.parts_held = held_ever.into_iter().collect();
+        summary.pose_digest = format!("{hash:016x}");
+        if !times.is_empty() {
+            summary.frame_ms_mean = times.iter().sum::<f64>() / times.len() as f64;
+            summary.frame_ms_max = times.iter().copied().fold(0.0, f64::max);
+        }
+        (summary, thumbs)
+    }
+}
+
+/// The output folder `dir` ready for frames (its old frames cleared), and
+/// a renderer on `adapter` of `size` pixels with up to `samples` a pixel.
+fn open_output(
+    dir: &Path,
+    adapter: AdapterChoice,
+    (width, height): (u32, u32),
+    samples: u32,
+) -> Result<Headless, HeadlessError> {
+    std::fs::create_dir_all(dir.join("frames")).map_err(|source| HeadlessError::Write {
+        path: dir.join("frames"),
+        source,
+    })?;
+    clear_old_frames(&dir.join("frames"))?;
+    let h = Headless::new(Gpu::new(adapter)?, width, height, samples)?;
+    tracing::info!(
+        width,
+        height,
+        samples = h.renderer.samples(),
+        "rendering headless"
+    );
+    Ok(h)
+}
+
 impl Backend for Replay<'_> {
     type Error = HeadlessError;
 
@@ -255,97 +418,14 @@ impl Backend for Replay<'_> {
             }
         }
         for h in ctl.take_hits() {
-            for (k, role, other, part, other_part) in [
-                (
-                    h.striker,
-                    "landed",
-                    h.struck,
-                    &h.striker_part,
-                    &h.struck_part,
-                ),
-                (
-                    h.struck,
-                    "taken",
-                    h.striker,
-                    &h.struck_part,
-                    &h.striker_part,
-                ),
-            ] {
-                if let Some(c) = self.per.get_mut(k) {
-                    c.hits.push(HitRecord {
-                        time_s: h.time_s,
-                        role: role.to_owned(),
-                        other,
-                        part: part.clone(),
-                        other_part: other_part.clone(),
-                        impulse_ns: h.impulse_ns,
-                        speed_m_s: h.speed_m_s,
-                    });
-                }
-            }
+            self.hit(&h);
         }
         for (k, e) in ctl.take_events() {
-            let records = if self.per.is_empty() {
-                &mut summary.actions
-            } else {
-                match self.per.get_mut(k) {
-                    Some(c) => &mut c.actions,
-                    None => continue,
-                }
-            };
-            match e {
-                ActionEvent::Started { action, time_s, .. } => records.push(ActionRecord {
-                    action,
-                    started_s: time_s,
-                    outcome: "playing".into(),
-                    ended_s: None,
-                }),
-                ActionEvent::Finished {
-                    ref action, time_s, ..
-                }
-                | ActionEvent::Cancelled {
-                    ref action, time_s, ..
-                } => {
-                    // The action of that name still playing (a walk and an
-                    // action laid over it end apart).
-                    let open = records
-                        .iter_mut()
-                        .rev()
-                        .find(|r| r.ended_s.is_none() && r.action == *action);
-                    if let Some(r) = open {
-                        r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
-                            "finished".into()
-                        } else {
-                            "cancelled".into()
-                        };
-                        r.ended_s = Some(time_s);
-                    }
-                }
-                _ => {}
-            }
+            self.event(k, e);
         }
-        if let (Some(h), Some(dir)) = (self.headless.as_mut(), self.opts.out.as_ref()) {
-            let is_key = self.key.binary_search(&summary.steps).is_ok();
-            if summary.steps % self.every == 0 || is_key {
-                let display = &self.config.display;
-                let mut marks = ctl.marks(display.trajectories);
-                if display.status_line {
-                    marks.status = Some(status(ctl, t));
-                }
-                let list = super::frame::compose(ctl, display.rotation(), &marks);
-                let started = std::time::Instant::now();
-                let img = h.render(&list)?;
-                self.times.push(started.elapsed().as_secs_f64() * 1e3);
-                let n = summary.frames_written;
-                write(&dir.join(format!("frames/frame-{n:05}.png")), &img)?;
-                if is_key {
-                    self.thumbs.push((img, label(ctl, t), t));
-                }
-                summary.frames_written += 1;
-            }
-        }
+        self.render(ctl, t)?;
         if t >= self.end {
-            summary.duration_s = t;
+            self.summary.duration_s = t;
             return Ok(Flow::Stop);
         }
         Ok(Flow::Continue)
@@ -460,22 +540,12 @@ pub fn run_table(
     let ticker = Ticker::new(frames, opts.tick_hz);
     let end = (ticker.end() + opts.tail_s).max(opts.until.unwrap_or(0.0));
     let headless = match &opts.out {
-        Some(dir) => {
-            std::fs::create_dir_all(dir.join("frames")).map_err(|source| HeadlessError::Write {
-                path: dir.join("frames"),
-                source,
-            })?;
-            clear_old_frames(&dir.join("frames"))?;
-            let gpu = Gpu::new(opts.adapter)?;
-            let h = Headless::new(gpu, ow, oh, config.display.samples)?;
-            tracing::info!(
-                width = ow,
-                height = oh,
-                samples = h.renderer.samples(),
-                "rendering headless"
-            );
-            Some(h)
-        }
+        Some(dir) => Some(open_output(
+            dir,
+            opts.adapter,
+            (ow, oh),
+            config.display.samples,
+        )?),
         None => None,
     };
     let key = if opts.out.is_some() {
@@ -520,35 +590,7 @@ pub fn run_table(
         }),
     };
     super::frame::run(&mut ctl, &mut Steps::new(opts.tick_hz), &mut replay)?;
-    let Replay {
-        mut summary,
-        hash,
-        held_ever,
-        thumbs,
-        times,
-        meter,
-        mut per,
-        held_by,
-        ..
-    } = replay;
-    for ((c, held), a) in per.iter_mut().zip(held_by).zip(ctl.actors()) {
-        c.parts_held = held.into_iter().collect();
-        c.hits_landed = a.hits_landed;
-        c.hits_taken = a.hits_taken;
-    }
-    if !per.is_empty() {
-        let mut all: Vec<ActionRecord> = per.iter().flat_map(|c| c.actions.clone()).collect();
-        all.sort_by(|a, b| a.started_s.total_cmp(&b.started_s));
-        summary.actions = all;
-    }
-    summary.characters = per;
-    summary.metrics = meter.map(crate::tools::metrics::Meter::finish);
-    summary.parts_held = held_ever.into_iter().collect();
-    summary.pose_digest = format!("{hash:016x}");
-    if !times.is_empty() {
-        summary.frame_ms_mean = times.iter().sum::<f64>() / times.len() as f64;
-        summary.frame_ms_max = times.iter().copied().fold(0.0, f64::max);
-    }
+    let (mut summary, thumbs) = replay.finish(&ctl);
     if let Some(dir) = &opts.out {
         if !thumbs.is_empty() {
             let list: Vec<(&Image, String)> =

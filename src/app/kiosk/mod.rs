@@ -347,32 +347,12 @@ impl Backend for Kiosk<'_> {
         }
         self.service.tick(t);
         self.vital_signs(t);
-        let (screen, timers, stats) = (&mut self.screen, &mut self.timers, &mut self.stats);
-        // Show it, unless the display is another program's for now.
-        if timers.display_retry_due(t) && screen.reacquire() {
-            tracing::info!("display back: showing again");
-            timers.display_back();
-            self.last_shown = None;
-        }
-        if timers.gpu_retry_due(t) {
-            match screen.rebuild() {
-                Ok(()) => {
-                    stats.gpu_rebuilds += 1;
-                    timers.gpu_back();
-                    self.last_shown = None;
-                    tracing::info!("GPU device rebuilt");
-                }
-                Err(e) => {
-                    tracing::warn!(error = %e, "GPU still unavailable; retrying");
-                }
-            }
-        }
-        let display = &self.config.display;
+        self.recover_display(t);
         for h in ctl.take_hits() {
             self.vitals.hit(h.impulse_ns);
         }
         let orbit = ctl.rig().orbit;
-        let marks = ctl.marks(display.trajectories);
+        let marks = ctl.marks(self.config.display.trajectories);
         let key = (
             ctl.actors()
                 .iter()
@@ -383,8 +363,74 @@ impl Backend for Kiosk<'_> {
             orbit.distance,
             marks.fingers.len(),
         );
-        // No touchscreen for a while: say so on the display (the kiosk
-        // goes on and picks one up when it is plugged in).
+        let no_panel = self.no_panel(t);
+        let changed = self.service.on
+            || no_panel != self.no_panel_shown
+            || self.last_shown.as_ref().is_none_or(|s| {
+                s.0.len() != key.0.len()
+                    || s.0.iter().zip(&key.0).any(|(a, b)| !same_pose(a, b))
+                    || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
+                    || !marks.fingers.is_empty()
+                    || ctl.action().is_some()
+            });
+        if self.timers.can_draw() && !self.screen.flip_pending() && changed {
+            self.draw(ctl, t, marks, key, no_panel)?;
+        }
+        let screen = &mut self.screen;
+        if !self.ready && screen.flip_pending() {
+            // The first frame reaches the screen at this flip.
+            if screen.wait_flip(Duration::from_millis(500))? {
+                self.ready = true;
+                self.notifier
+                    .notify("READY=1\nSTATUS=showing the character");
+                tracing::info!(output = screen.name(), "first frame on screen: ready");
+            }
+        }
+        if self.timers.watchdog_due(t) {
+            self.notifier.notify("WATCHDOG=1");
+        }
+        // Wait for a flip, a touch, or the next frame's time; longer when
+        // nothing moves (no busy-wait when idle).
+        let moving = changed || self.attract.is_some();
+        let wait_s = timers::wait_s(moving, screen.fd().is_none(), self.frame_s);
+        wait(&self.input, screen, Duration::from_secs_f64(wait_s))?;
+        if screen.fd().is_some() && screen.flips() > self.flips_seen {
+            self.flips_seen = screen.flips();
+            self.vitals.flipped(self.start.now());
+        }
+        Ok(Flow::Continue)
+    }
+}
+
+impl Kiosk<'_> {
+    /// The display taken back once it is ours again, and the GPU rebuilt
+    /// once it can be, each when its retry is due.
+    fn recover_display(&mut self, t: f64) {
+        let (screen, timers) = (&mut self.screen, &mut self.timers);
+        if timers.display_retry_due(t) && screen.reacquire() {
+            tracing::info!("display back: showing again");
+            timers.display_back();
+            self.last_shown = None;
+        }
+        if timers.gpu_retry_due(t) {
+            match screen.rebuild() {
+                Ok(()) => {
+                    self.stats.gpu_rebuilds += 1;
+                    timers.gpu_back();
+                    self.last_shown = None;
+                    tracing::info!("GPU device rebuilt");
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "GPU still unavailable; retrying");
+                }
+            }
+        }
+    }
+
+    /// Whether no touchscreen has been read for a while (the display then
+    /// says so; the kiosk goes on and picks one up when it is plugged
+    /// in), said in the journal once.
+    fn no_panel(&mut self, t: f64) -> bool {
         let no_panel = self.service.panels.is_empty() && {
             let since = *self.no_panel_since.get_or_insert(t);
             t - since >= NO_PANEL_NOTICE_S
@@ -398,95 +444,84 @@ impl Backend for Kiosk<'_> {
             self.no_panel_since = None;
             self.no_panel_said = false;
         }
-        let changed = self.service.on
-            || no_panel != self.no_panel_shown
-            || self.last_shown.as_ref().is_none_or(|s| {
-                s.0.len() != key.0.len()
-                    || s.0.iter().zip(&key.0).any(|(a, b)| !same_pose(a, b))
-                    || (s.1, s.2, s.3, s.4) != (key.1, key.2, key.3, key.4)
-                    || !marks.fingers.is_empty()
-                    || ctl.action().is_some()
-            });
-        if timers.can_draw() && !screen.flip_pending() && changed {
-            let mut marks = marks;
-            if display.status_line {
-                marks.status = status_line(ctl);
+        no_panel
+    }
+
+    /// Draw the table with `marks` (and the status line, the notice of no
+    /// touchscreen, the service view) and show it; a display error is
+    /// answered as its class says.
+    fn draw(
+        &mut self,
+        ctl: &Stage,
+        t: f64,
+        mut marks: crate::control::marks::Marks,
+        key: Shown,
+        no_panel: bool,
+    ) -> Result<(), RunError> {
+        let display = &self.config.display;
+        if display.status_line {
+            marks.status = status_line(ctl);
+        }
+        if no_panel {
+            marks.status = Some(NO_PANEL_NOTICE.to_owned());
+        }
+        if self.service.on {
+            let now = self.vitals.summary(t);
+            let figures = match self.vitals.last {
+                Some(last) if now.frames < 30 => last,
+                _ => now,
+            };
+            marks.service = self
+                .service
+                .marks(&figures, self.screen.name(), display.size());
+        }
+        let list = frame::compose(ctl, display.rotation(), &marks);
+        let started = std::time::Instant::now();
+        match self.screen.draw(&list) {
+            Ok(true) => {
+                let ms = started.elapsed().as_secs_f64() * 1e3;
+                self.shown(t, ms, key, no_panel);
             }
-            if no_panel {
-                marks.status = Some(NO_PANEL_NOTICE.to_owned());
-            }
-            if self.service.on {
-                let now = self.vitals.summary(t);
-                let figures = match self.vitals.last {
-                    Some(last) if now.frames < 30 => last,
-                    _ => now,
-                };
-                marks.service = self.service.marks(&figures, screen.name(), display.size());
-            }
-            let list = frame::compose(ctl, display.rotation(), &marks);
-            let started = std::time::Instant::now();
-            match screen.draw(&list) {
-                Ok(shown) => {
-                    if shown {
-                        let ms = started.elapsed().as_secs_f64() * 1e3;
-                        stats.render_ms_mean += ms;
-                        stats.render_ms_max = stats.render_ms_max.max(ms);
-                        stats.frames += 1;
-                        self.vitals.drawn(ms);
-                        self.no_panel_shown = no_panel;
-                        if screen.fd().is_none() {
-                            // The swapchain shows it at the next vblank.
-                            self.vitals.flipped(t + self.frame_s);
-                        }
-                        self.last_shown = Some(key);
-                        if !self.ready && screen.fd().is_none() {
-                            // The swapchain shows it at the next vblank.
-                            self.ready = true;
-                            self.notifier
-                                .notify("READY=1\nSTATUS=showing the character");
-                            tracing::info!(
-                                output = screen.name(),
-                                "first frame queued to the display: ready"
-                            );
-                        }
-                    }
+            Ok(false) => {}
+            Err(e) => match e.class() {
+                ErrorClass::TryAgain => {
+                    self.stats.display_losses += 1;
+                    tracing::warn!(error = %e, "the display is not ours for now (VT switch?): paused until it comes back");
+                    self.timers.display_lost(t);
                 }
-                Err(e) => match e.class() {
-                    ErrorClass::TryAgain => {
-                        stats.display_losses += 1;
-                        tracing::warn!(error = %e, "the display is not ours for now (VT switch?): paused until it comes back");
-                        timers.display_lost(t);
-                    }
-                    ErrorClass::GpuGone => {
-                        tracing::error!(error = %e, "rendering failed: rebuilding the GPU device");
-                        timers.gpu_lost(t);
-                    }
-                    ErrorClass::Fatal => return Err(e.into()),
-                },
-            }
+                ErrorClass::GpuGone => {
+                    tracing::error!(error = %e, "rendering failed: rebuilding the GPU device");
+                    self.timers.gpu_lost(t);
+                }
+                ErrorClass::Fatal => return Err(e.into()),
+            },
         }
-        if !self.ready && screen.flip_pending() {
-            // The first frame reaches the screen at this flip.
-            if screen.wait_flip(Duration::from_millis(500))? {
-                self.ready = true;
-                self.notifier
-                    .notify("READY=1\nSTATUS=showing the character");
-                tracing::info!(output = screen.name(), "first frame on screen: ready");
-            }
+        Ok(())
+    }
+
+    /// A frame drawn in `ms` went out showing `key`.
+    fn shown(&mut self, t: f64, ms: f64, key: Shown, no_panel: bool) {
+        let stats = &mut self.stats;
+        stats.render_ms_mean += ms;
+        stats.render_ms_max = stats.render_ms_max.max(ms);
+        stats.frames += 1;
+        self.vitals.drawn(ms);
+        self.no_panel_shown = no_panel;
+        if self.screen.fd().is_none() {
+            // The swapchain shows it at the next vblank.
+            self.vitals.flipped(t + self.frame_s);
         }
-        if timers.watchdog_due(t) {
-            self.notifier.notify("WATCHDOG=1");
+        self.last_shown = Some(key);
+        if !self.ready && self.screen.fd().is_none() {
+            // The swapchain shows it at the next vblank.
+            self.ready = true;
+            self.notifier
+                .notify("READY=1\nSTATUS=showing the character");
+            tracing::info!(
+                output = self.screen.name(),
+                "first frame queued to the display: ready"
+            );
         }
-        // Wait for a flip, a touch, or the next frame's time; longer when
-        // nothing moves (no busy-wait when idle).
-        let moving = changed || self.attract.is_some();
-        let wait_s = timers::wait_s(moving, screen.fd().is_none(), self.frame_s);
-        wait(&self.input, screen, Duration::from_secs_f64(wait_s))?;
-        if screen.fd().is_some() && screen.flips() > self.flips_seen {
-            self.flips_seen = screen.flips();
-            self.vitals.flipped(self.start.now());
-        }
-        Ok(Flow::Continue)
     }
 }
 

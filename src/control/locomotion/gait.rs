@@ -10,7 +10,7 @@ use crate::character::body::{facing_yaw, wrap};
 use crate::character::library::Library;
 use crate::character::motion::Clip;
 use crate::character::roles::{Role, RoleMap};
-use crate::character::skeleton::forward_kinematics;
+use crate::character::skeleton::{WorldPose, forward_kinematics};
 
 /// Seconds ahead at which the root's future places are matched.
 pub(crate) const FUTURE_S: [f64; 3] = [0.3, 0.6, 0.9];
@@ -103,7 +103,6 @@ impl Gait {
             let yaw: Vec<f64> = worlds.iter().map(|w| facing_yaw(w, roles)).collect();
             let dt = clip.frame_time;
             let n = clip.frames.len();
-            let at = |k: f64| -> usize { (k.round() as usize).min(n - 1) };
             let feet = [Role::LeftFoot, Role::RightFoot].map(|r| roles.get(r));
             let index = gait.clips.len();
             let first = gait.frames.len();
@@ -116,29 +115,10 @@ impl Gait {
             });
             for k in 0..n {
                 let unyaw = DQuat::from_rotation_y(-yaw[k]);
-                let local = |p: DVec3| unyaw * (p - root[k]);
                 let next = (k + 1).min(n - 1);
                 let step = unyaw * (root[next] - root[k]);
                 speeds.push(step.length() / dt);
-                let mut features = [0.0; FEATURES];
-                for (i, s) in FUTURE_S.iter().enumerate() {
-                    let f = local(root[at(k as f64 + s / dt)]);
-                    features[2 * i] = f.x;
-                    features[2 * i + 1] = f.z;
-                }
-                // Feet: where they are, and how far they moved over the
-                // last 0.1 s; the root: how far it moved over the last 0.3 s.
-                let back = at((k as f64 - 0.1 / dt).max(0.0));
-                for (i, j) in feet.iter().enumerate() {
-                    let p = local(worlds[k].positions[*j]);
-                    features[6 + 3 * i..9 + 3 * i].copy_from_slice(&[p.x, p.y, p.z]);
-                    let d = unyaw * (worlds[k].positions[*j] - worlds[back].positions[*j]);
-                    features[12 + 2 * i] = d.x;
-                    features[13 + 2 * i] = d.z;
-                }
-                let d = unyaw * (root[k] - root[at((k as f64 - 0.3 / dt).max(0.0))]);
-                features[16] = d.x;
-                features[17] = d.z;
+                let features = features(&worlds, &root, feet, k, dt, unyaw);
                 let mut rotations = clip.frames[k].rotations.clone();
                 rotations[0] = (unyaw * worlds[k].rotations[0]).normalize();
                 let contacts = [0, 1].map(|i| {
@@ -236,6 +216,43 @@ impl Gait {
         }
         best
     }
+}
+
+/// Frame `k`'s features, in the frame's own facing (`unyaw` turns the
+/// world into it): where the root goes over the next [`FUTURE_S`], where
+/// the feet (joints `feet`) are and how far they moved over the last
+/// 0.1 s, and how far the root moved over the last 0.3 s.
+fn features(
+    worlds: &[WorldPose],
+    root: &[DVec3],
+    feet: [usize; 2],
+    k: usize,
+    dt: f64,
+    unyaw: DQuat,
+) -> [f64; FEATURES] {
+    let n = worlds.len();
+    let at = |k: f64| -> usize { (k.round() as usize).min(n - 1) };
+    let local = |p: DVec3| unyaw * (p - root[k]);
+    let mut features = [0.0; FEATURES];
+    for (i, s) in FUTURE_S.iter().enumerate() {
+        let f = local(root[at(k as f64 + s / dt)]);
+        features[2 * i] = f.x;
+        features[2 * i + 1] = f.z;
+    }
+    // Feet: where they are, and how far they moved over the
+    // last 0.1 s; the root: how far it moved over the last 0.3 s.
+    let back = at((k as f64 - 0.1 / dt).max(0.0));
+    for (i, j) in feet.iter().enumerate() {
+        let p = local(worlds[k].positions[*j]);
+        features[6 + 3 * i..9 + 3 * i].copy_from_slice(&[p.x, p.y, p.z]);
+        let d = unyaw * (worlds[k].positions[*j] - worlds[back].positions[*j]);
+        features[12 + 2 * i] = d.x;
+        features[13 + 2 * i] = d.z;
+    }
+    let d = unyaw * (root[k] - root[at((k as f64 - 0.3 / dt).max(0.0))]);
+    features[16] = d.x;
+    features[17] = d.z;
+    features
 }
 
 /// How far a clip's root comes from where it starts, over the floor (m).

@@ -359,24 +359,7 @@ impl Walker {
                 .finger_speed
                 .clamp(gait.low_speed() * 0.8, gait.top_speed() * 1.1);
         }
-        let frame = |pos: f64| &gait.frames[(pos.round() as usize).min(gait.frames.len() - 1)];
-        let clip = &gait.clips[frame(self.pos).clip];
-        let at_end = self.pos >= (clip.first + clip.len - 1) as f64 - 0.5;
-        self.search_in -= dt;
-        if (self.search_in <= 0.0 || at_end) && self.from.is_none() {
-            self.search_in = SEARCH_S;
-            let current = frame(self.pos).features;
-            let query = self.query(&current);
-            let now = cost(&current, &query, &WEIGHTS);
-            if let Some((best, c)) = gait.best(&query, &WEIGHTS) {
-                let same = gait.frames[best].clip == frame(self.pos).clip
-                    && (best as f64 - self.pos).abs() * clip.frame_time < SAME_S;
-                if at_end || (!same && c < now - HYSTERESIS) {
-                    self.from = Some((Source::Frame(self.pos), 0.0));
-                    self.pos = best as f64;
-                }
-            }
-        }
+        self.search(gait, dt);
         // Root motion, from the frames playing (blended).
         let (step, turn) = self.motion(gait, dt);
         let steer_to = self.along(self.speed.mul_add(0.5, 0.3));
@@ -400,6 +383,42 @@ impl Walker {
         self.yaw = wrap(self.yaw + turn + steer);
         // Time moves on.
         self.pos = advance(gait, self.pos, dt);
+        self.blend_on(gait, dt);
+        let speed_now = step.length() / dt.max(1e-6);
+        if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
+            self.done = true;
+        }
+        self.give_up(remaining, dt);
+        self.pose(gait, sk)
+    }
+
+    /// Every [`SEARCH_S`], or at a clip's end, the frame that best
+    /// continues the path (kept unless another clip's is clearly better):
+    /// a blend begins from the frame playing.
+    fn search(&mut self, gait: &Gait, dt: f64) {
+        let frame = |pos: f64| &gait.frames[(pos.round() as usize).min(gait.frames.len() - 1)];
+        let clip = &gait.clips[frame(self.pos).clip];
+        let at_end = self.pos >= (clip.first + clip.len - 1) as f64 - 0.5;
+        self.search_in -= dt;
+        if (self.search_in <= 0.0 || at_end) && self.from.is_none() {
+            self.search_in = SEARCH_S;
+            let current = frame(self.pos).features;
+            let query = self.query(&current);
+            let now = cost(&current, &query, &WEIGHTS);
+            if let Some((best, c)) = gait.best(&query, &WEIGHTS) {
+                let same = gait.frames[best].clip == frame(self.pos).clip
+                    && (best as f64 - self.pos).abs() * clip.frame_time < SAME_S;
+                if at_end || (!same && c < now - HYSTERESIS) {
+                    self.from = Some((Source::Frame(self.pos), 0.0));
+                    self.pos = best as f64;
+                }
+            }
+        }
+    }
+
+    /// A blend from an earlier frame (or the posture the walk began from)
+    /// moves on by `dt`, and ends once complete.
+    fn blend_on(&mut self, gait: &Gait, dt: f64) {
         if let Some((src, s)) = self.from.take() {
             let blend = if matches!(src, Source::Pose { .. }) {
                 BLEND_FROM_POSE_S
@@ -415,14 +434,13 @@ impl Walker {
                 self.from = Some((src, s));
             }
         }
-        let speed_now = step.length() / dt.max(1e-6);
-        if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
-            self.done = true;
-        }
-        // A walk that cannot reach the end stops in the end: once it has
-        // come no closer for a while after the finger lifted (frames that
-        // cannot carry the body there: a sideways walk asked to go ahead),
-        // or taken far longer than the path needs.
+    }
+
+    /// A walk that cannot reach the end stops in the end: once it has come
+    /// no closer (`remaining` m left) for a while after the finger lifted
+    /// (frames that cannot carry the body there: a sideways walk asked to
+    /// go ahead), or taken far longer than the path needs.
+    fn give_up(&mut self, remaining: f64, dt: f64) {
         if self.leading {
             self.closest_m = f64::INFINITY;
             self.stalled_s = 0.0;
@@ -440,7 +458,6 @@ impl Walker {
             );
             self.done = true;
         }
-        self.pose(gait, sk)
     }
 
     /// The root's move over `dt` (in the character's frame) and its turn,

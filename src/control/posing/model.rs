@@ -229,45 +229,8 @@ impl LearnedModel {
     pub fn with_density(samples: Vec<Sample>, coords: Vec<[f64; 2]>, per_cell: f64) -> Self {
         let n = samples.len();
         let grid = ((n as f64 / per_cell).sqrt().round() as usize).clamp(1, 256);
-        // Equal shares of a sorted run: part k of `parts`.
-        let share = |len: usize, parts: usize, k: usize| k * len / parts..(k + 1) * len / parts;
-        let points = &coords;
-        let by = |axis: usize| {
-            move |a: &u32, b: &u32| {
-                points[*a as usize][axis]
-                    .total_cmp(&points[*b as usize][axis])
-                    .then(a.cmp(b))
-            }
-        };
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        order.sort_by(by(0));
-        // Cells by (column, row), each with its members.
-        let mut by_cell: Vec<Vec<u32>> = vec![Vec::new(); grid * grid];
-        for col in 0..grid {
-            let mut column = order[share(n, grid, col)].to_vec();
-            column.sort_by(by(1));
-            for row in 0..grid {
-                by_cell[row * grid + col] = column[share(column.len(), grid, row)].to_vec();
-            }
-        }
-        // The member nearest the members' mean in the latent space.
-        let central = |members: &mut dyn Iterator<Item = u32>| {
-            let members: Vec<u32> = members.collect();
-            let mut centre = [0.0; 2];
-            for &m in &members {
-                for (k, c) in centre.iter_mut().enumerate() {
-                    *c += coords[m as usize][k] / members.len() as f64;
-                }
-            }
-            let d = |i: u32| {
-                let c = coords[i as usize];
-                (c[0] - centre[0]).powi(2) + (c[1] - centre[1]).powi(2)
-            };
-            members
-                .into_iter()
-                .min_by(|a, b| d(*a).total_cmp(&d(*b)).then(a.cmp(b)))
-                .expect("non-empty")
-        };
+        let by_cell = equal_cells(&coords, grid);
+        let central = |members: &mut dyn Iterator<Item = u32>| central(&coords, members);
         let mut cells = Vec::new();
         let mut cell_of = vec![0u32; n];
         let side = grid.div_ceil(BLOCK_CELLS);
@@ -348,4 +311,52 @@ pub fn posing_samples(lib: &crate::character::library::Library) -> (Vec<String>,
         }
     }
     (names, samples)
+}
+/// The points `coords` in `grid` x `grid` cells of equal counts: columns
+/// of equal shares along x, each cut in rows of equal shares along y;
+/// each cell (by row, then column) with its members.
+fn equal_cells(coords: &[[f64; 2]], grid: usize) -> Vec<Vec<u32>> {
+    let n = coords.len();
+    // Equal shares of a sorted run: part k of `parts`.
+    let share = |len: usize, parts: usize, k: usize| k * len / parts..(k + 1) * len / parts;
+    let points = coords;
+    let by = |axis: usize| {
+        move |a: &u32, b: &u32| {
+            points[*a as usize][axis]
+                .total_cmp(&points[*b as usize][axis])
+                .then(a.cmp(b))
+        }
+    };
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by(by(0));
+    // Cells by (column, row), each with its members.
+    let mut by_cell: Vec<Vec<u32>> = vec![Vec::new(); grid * grid];
+    for col in 0..grid {
+        let mut column = order[share(n, grid, col)].to_vec();
+        column.sort_by(by(1));
+        for row in 0..grid {
+            by_cell[row * grid + col] = column[share(column.len(), grid, row)].to_vec();
+        }
+    }
+    by_cell
+}
+
+/// The member of `members` nearest their mean in the latent space
+/// (`coords`).
+fn central(coords: &[[f64; 2]], members: &mut dyn Iterator<Item = u32>) -> u32 {
+    let members: Vec<u32> = members.collect();
+    let mut centre = [0.0; 2];
+    for &m in &members {
+        for (k, c) in centre.iter_mut().enumerate() {
+            *c += coords[m as usize][k] / members.len() as f64;
+        }
+    }
+    let d = |i: u32| {
+        let c = coords[i as usize];
+        (c[0] - centre[0]).powi(2) + (c[1] - centre[1]).powi(2)
+    };
+    members
+        .into_iter()
+        .min_by(|a, b| d(*a).total_cmp(&d(*b)).then(a.cmp(b)))
+        .expect("non-empty")
 }
