@@ -171,65 +171,8 @@ impl Config {
             }
             Ok(())
         };
-        let d = &self.display;
-        for (key, v) in [("display.width", d.width), ("display.height", d.height)] {
-            if !(16..=16384).contains(&v) {
-                return Err(invalid(
-                    key,
-                    format!("must be between 16 and 16384 pixels, found {v}"),
-                ));
-            }
-        }
-        if Rotation::from_degrees(i64::from(d.rotation)).is_none() {
-            return Err(invalid(
-                "display.rotation",
-                format!(
-                    "must be one of 0, 90, 180, 270 (degrees clockwise), found {}",
-                    d.rotation
-                ),
-            ));
-        }
-        if ![0, 1, 2, 4, 8].contains(&d.samples) {
-            return Err(invalid(
-                "display.samples",
-                format!("must be 0 (automatic), 1, 2, 4 or 8, found {}", d.samples),
-            ));
-        }
+        self.validate_display(&invalid)?;
         self.validate_characters(&invalid)?;
-        if !d.mode.is_empty()
-            && crate::display::present::OutputChoice::parse_mode(&d.mode).is_none()
-        {
-            return Err(invalid(
-                "display.mode",
-                format!(
-                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found \"{}\"",
-                    d.mode
-                ),
-            ));
-        }
-        if ![
-            crate::display::config::BODY_SKINNED,
-            crate::display::config::BODY_CAPSULES,
-        ]
-        .contains(&d.body.as_str())
-        {
-            return Err(invalid(
-                "display.body",
-                format!(
-                    "must be \"skinned\" (one smooth skinned body) or \"capsules\" (the mannequin of capsules), found \"{}\"",
-                    d.body
-                ),
-            ));
-        }
-        if crate::display::present::PresenterKind::parse(&d.presenter).is_none() {
-            return Err(invalid(
-                "display.presenter",
-                format!(
-                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (gbm's scanout buffers, rendered into where the Vulkan driver imports them, else written into: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found \"{}\"",
-                    d.presenter
-                ),
-            ));
-        }
         in_ranges(&[
             ("kiosk.idle_after_s", self.kiosk.idle_after_s, 1.0, 86_400.0),
             (
@@ -264,6 +207,109 @@ impl Config {
                 ),
             ));
         }
+        self.validate_devices(&invalid)?;
+        let a = &self.action;
+        in_ranges(&[
+            ("action.h", a.h, 0.0, 10_000.0),
+            ("action.tempo_tolerance", a.tempo_tolerance, 1.0, 10.0),
+            ("action.threshold_px", a.threshold_px, 0.0, 1_000.0),
+            (
+                "action.threshold_per_speed",
+                a.threshold_per_speed,
+                0.0,
+                10.0,
+            ),
+            ("action.min_trail_px", a.min_trail_px, 0.0, 2_000.0),
+            ("action.min_coverage", a.min_coverage, 0.0, 1.0),
+            ("action.min_view_angle_deg", a.min_view_angle_deg, 0.0, 90.0),
+        ])?;
+        if !["error", "warn", "info", "debug", "trace"].contains(&self.log.level.as_str()) {
+            return Err(invalid(
+                "log.level",
+                format!(
+                    "must be one of error, warn, info, debug, trace, found \"{}\"",
+                    self.log.level
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Config {
+    /// `[display]`: the picture's size, rotation and samples, the mode,
+    /// the body and the presenter.
+    fn validate_display(
+        &self,
+        invalid: &dyn Fn(&str, String) -> ConfigError,
+    ) -> Result<(), ConfigError> {
+        let d = &self.display;
+        for (key, v) in [("display.width", d.width), ("display.height", d.height)] {
+            if !(16..=16384).contains(&v) {
+                return Err(invalid(
+                    key,
+                    format!("must be between 16 and 16384 pixels, found {v}"),
+                ));
+            }
+        }
+        if Rotation::from_degrees(i64::from(d.rotation)).is_none() {
+            return Err(invalid(
+                "display.rotation",
+                format!(
+                    "must be one of 0, 90, 180, 270 (degrees clockwise), found {}",
+                    d.rotation
+                ),
+            ));
+        }
+        if ![0, 1, 2, 4, 8].contains(&d.samples) {
+            return Err(invalid(
+                "display.samples",
+                format!("must be 0 (automatic), 1, 2, 4 or 8, found {}", d.samples),
+            ));
+        }
+        if !d.mode.is_empty()
+            && crate::display::present::OutputChoice::parse_mode(&d.mode).is_none()
+        {
+            return Err(invalid(
+                "display.mode",
+                format!(
+                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found \"{}\"",
+                    d.mode
+                ),
+            ));
+        }
+        if ![
+            crate::display::config::BODY_SKINNED,
+            crate::display::config::BODY_CAPSULES,
+        ]
+        .contains(&d.body.as_str())
+        {
+            return Err(invalid(
+                "display.body",
+                format!(
+                    "must be \"skinned\" (one smooth skinned body) or \"capsules\" (the mannequin of capsules), found \"{}\"",
+                    d.body
+                ),
+            ));
+        }
+        if crate::display::present::PresenterKind::parse(&d.presenter).is_none() {
+            return Err(invalid(
+                "display.presenter",
+                format!(
+                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (gbm's scanout buffers, rendered into where the Vulkan driver imports them, else written into: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found \"{}\"",
+                    d.presenter
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `[[input.device]]`: each matched by name or USB id, its axes and
+    /// its calibration.
+    fn validate_devices(
+        &self,
+        invalid: &dyn Fn(&str, String) -> ConfigError,
+    ) -> Result<(), ConfigError> {
         for (i, dev) in self.input.device.iter().enumerate() {
             let key = |k: &str| format!("input.device[{i}].{k}");
             if dev.match_name.is_none() && dev.match_usb.is_none() {
@@ -311,35 +357,9 @@ impl Config {
                 ));
             }
         }
-        let a = &self.action;
-        in_ranges(&[
-            ("action.h", a.h, 0.0, 10_000.0),
-            ("action.tempo_tolerance", a.tempo_tolerance, 1.0, 10.0),
-            ("action.threshold_px", a.threshold_px, 0.0, 1_000.0),
-            (
-                "action.threshold_per_speed",
-                a.threshold_per_speed,
-                0.0,
-                10.0,
-            ),
-            ("action.min_trail_px", a.min_trail_px, 0.0, 2_000.0),
-            ("action.min_coverage", a.min_coverage, 0.0, 1.0),
-            ("action.min_view_angle_deg", a.min_view_angle_deg, 0.0, 90.0),
-        ])?;
-        if !["error", "warn", "info", "debug", "trace"].contains(&self.log.level.as_str()) {
-            return Err(invalid(
-                "log.level",
-                format!(
-                    "must be one of error, warn, info, debug, trace, found \"{}\"",
-                    self.log.level
-                ),
-            ));
-        }
         Ok(())
     }
-}
 
-impl Config {
     /// `[character]` / `[[character]]`: how many, where they stand, their
     /// tints and the table-wide settings of the first.
     fn validate_characters(

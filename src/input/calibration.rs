@@ -232,22 +232,18 @@ impl Default for SolveOptions {
     }
 }
 
-/// Solve the libinput matrix by least squares from `pairs` of (target on
-/// screen, raw touch), at least 4, and check it on `check`.
-///
-/// `base` supplies the device ranges, rotation and screen size; its own
-/// matrix is ignored. Refuses collinear targets or touches, a single bad
-/// tap (reported by index) and touches that no linear map explains.
-pub fn solve(
+/// Fewer taps than this cannot be solved for.
+const MIN_POINTS: usize = 4;
+
+/// The touches and targets of `pairs` in the panel's normalised units,
+/// refused when too few or collinear.
+fn normalised(
     base: &Calibration,
     pairs: &[(ScreenPoint, RawPoint)],
-    check: (ScreenPoint, RawPoint),
-    opts: SolveOptions,
-) -> Result<Solution, CalibrationError> {
-    const NEED: usize = 4;
-    if pairs.len() < NEED {
+) -> Result<(Vec<NormPoint>, Vec<NormPoint>), CalibrationError> {
+    if pairs.len() < MIN_POINTS {
         return Err(CalibrationError::TooFewPoints {
-            need: NEED,
+            need: MIN_POINTS,
             got: pairs.len(),
         });
     }
@@ -262,6 +258,22 @@ pub fn solve(
     if is_collinear(&targets) {
         return Err(CalibrationError::Collinear { what: "targets" });
     }
+    Ok((touches, targets))
+}
+
+/// Solve the libinput matrix by least squares from `pairs` of (target on
+/// screen, raw touch), at least 4, and check it on `check`.
+///
+/// `base` supplies the device ranges, rotation and screen size; its own
+/// matrix is ignored. Refuses collinear targets or touches, a single bad
+/// tap (reported by index) and touches that no linear map explains.
+pub fn solve(
+    base: &Calibration,
+    pairs: &[(ScreenPoint, RawPoint)],
+    check: (ScreenPoint, RawPoint),
+    opts: SolveOptions,
+) -> Result<Solution, CalibrationError> {
+    let (touches, targets) = normalised(base, pairs)?;
     let fit = |skip: Option<usize>| -> Option<Matrix> {
         let (t, g): (Vec<NormPoint>, Vec<NormPoint>) = touches
             .iter()
@@ -285,7 +297,7 @@ pub fn solve(
     }
     // A single slip: with enough points, find the one whose removal leaves
     // the others most consistent, and refuse if it lies far off their fit.
-    if pairs.len() > NEED {
+    if pairs.len() > MIN_POINTS {
         let rms_without = |m: &Matrix, skip: usize| -> f64 {
             let sum: f64 = (0..pairs.len())
                 .filter(|i| *i != skip)

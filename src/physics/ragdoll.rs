@@ -273,24 +273,7 @@ impl Ragdoll {
                 let parent_com = rest.positions[parent.def.joint] + parent.com_off;
                 let a1 = v32(joint_at - parent_com);
                 let a2 = v32(joint_at - com);
-                let joint: GenericJoint = match hinge {
-                    Hinge::Ball(l) => SphericalJointBuilder::new()
-                        .local_anchor1(a1)
-                        .local_anchor2(a2)
-                        .limits(JointAxis::AngX, [-l[0] as f32, l[0] as f32])
-                        .limits(JointAxis::AngY, [-l[1] as f32, l[1] as f32])
-                        .limits(JointAxis::AngZ, [-l[2] as f32, l[2] as f32])
-                        .contacts_enabled(false)
-                        .build()
-                        .into(),
-                    Hinge::Hinge(axis, l) => RevoluteJointBuilder::new(v32(axis))
-                        .local_anchor1(a1)
-                        .local_anchor2(a2)
-                        .limits([l[0] as f32, l[1] as f32])
-                        .contacts_enabled(false)
-                        .build()
-                        .into(),
-                };
+                let joint = joint(hinge, a1, a2);
                 world.impulse_joints.insert(parent.body, body, joint, true);
             }
             segments.push(Segment {
@@ -453,5 +436,27 @@ impl Clone for Ragdoll {
         }
         copy.resets = self.resets;
         copy
+    }
+}
+/// The joint `hinge` makes between a segment and its parent, anchored at
+/// `a1` on the parent and `a2` on the segment (from their centres).
+fn joint(hinge: Hinge, a1: Vec3, a2: Vec3) -> GenericJoint {
+    match hinge {
+        Hinge::Ball(l) => SphericalJointBuilder::new()
+            .local_anchor1(a1)
+            .local_anchor2(a2)
+            .limits(JointAxis::AngX, [-l[0] as f32, l[0] as f32])
+            .limits(JointAxis::AngY, [-l[1] as f32, l[1] as f32])
+            .limits(JointAxis::AngZ, [-l[2] as f32, l[2] as f32])
+            .contacts_enabled(false)
+            .build()
+            .into(),
+        Hinge::Hinge(axis, l) => RevoluteJointBuilder::new(v32(axis))
+            .local_anchor1(a1)
+            .local_anchor2(a2)
+            .limits([l[0] as f32, l[1] as f32])
+            .contacts_enabled(false)
+            .build()
+            .into(),
     }
 }

@@ -203,24 +203,11 @@ pub fn damage(list: &DrawList, shadow_view_proj: Mat4, size: (u32, u32)) -> Dama
         if whole {
             break;
         }
-        let (c, r) = (Vec3::new(ball[0], ball[1], ball[2]), ball[3]);
-        let corners: Option<Vec<Vec2>> = (0..8)
-            .map(|k| {
-                let s = Vec3::new(
-                    if k & 1 == 0 { -r } else { r },
-                    if k & 2 == 0 { -r } else { r },
-                    if k & 4 == 0 { -r } else { r },
-                );
-                project(&list.view_proj, (c + s).extend(1.0))
-            })
-            .collect();
         // Behind the eye: give up on bounds.
-        let Some(p) = corners else {
+        let Some((lo, hi)) = ball_box(*ball, |p| project(&list.view_proj, p)) else {
             whole = true;
             break;
         };
-        let lo = p.iter().fold(Vec2::INFINITY, |a, q| a.min(*q));
-        let hi = p.iter().fold(Vec2::NEG_INFINITY, |a, q| a.max(*q));
         // The box as a triangle spanning it.
         triangles(
             vec![Some(lo), Some(hi), Some(lo)],
@@ -250,6 +237,25 @@ pub fn damage(list: &DrawList, shadow_view_proj: Mat4, size: (u32, u32)) -> Dama
         return Damage::all(size);
     }
     d
+}
+
+/// The picture box around the cube holding `ball` (centre, radius), its
+/// corners seen through `project` (`None`: one is behind the eye).
+fn ball_box(ball: [f32; 4], project: impl Fn(Vec4) -> Option<Vec2>) -> Option<(Vec2, Vec2)> {
+    let (c, r) = (Vec3::new(ball[0], ball[1], ball[2]), ball[3]);
+    let p: Vec<Vec2> = (0..8)
+        .map(|k| {
+            let s = Vec3::new(
+                if k & 1 == 0 { -r } else { r },
+                if k & 2 == 0 { -r } else { r },
+                if k & 4 == 0 { -r } else { r },
+            );
+            project((c + s).extend(1.0))
+        })
+        .collect::<Option<_>>()?;
+    let lo = p.iter().fold(Vec2::INFINITY, |a, q| a.min(*q));
+    let hi = p.iter().fold(Vec2::NEG_INFINITY, |a, q| a.max(*q));
+    Some((lo, hi))
 }
 
 #[cfg(test)]

@@ -23,6 +23,41 @@ struct Uploaded {
     indices: wgpu::Buffer,
 }
 
+impl Uploaded {
+    /// The buffers of `geometry` (the project's own body when `own`), its
+    /// vertices on the GPU when skinned there (`on_gpu`), else kept here.
+    fn new(gpu: &Gpu, geometry: &Arc<Geometry>, own: bool, on_gpu: bool) -> Self {
+        let buffer = |label, usage, bytes: &[u8]| {
+            let b = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (bytes.len() as u64).next_multiple_of(4).max(4),
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            gpu.queue.write_buffer(&b, 0, bytes);
+            b
+        };
+        let v = vertices(geometry, own);
+        Self {
+            geometry: Arc::clone(geometry),
+            vertices: if on_gpu {
+                Ok(buffer(
+                    "figure vertices",
+                    wgpu::BufferUsages::VERTEX,
+                    bytemuck::cast_slice(&v),
+                ))
+            } else {
+                Err(v)
+            },
+            indices: buffer(
+                "figure indices",
+                wgpu::BufferUsages::INDEX,
+                bytemuck::cast_slice(&geometry.indices),
+            ),
+        }
+    }
+}
+
 /// The skinned figures' buffers.
 pub(super) struct Figures {
     layout: wgpu::BindGroupLayout,
@@ -105,34 +140,8 @@ impl Figures {
             {
                 Some(k) => k,
                 None => {
-                    let buffer = |label, usage, bytes: &[u8]| {
-                        let b = device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some(label),
-                            size: (bytes.len() as u64).next_multiple_of(4).max(4),
-                            usage: usage | wgpu::BufferUsages::COPY_DST,
-                            mapped_at_creation: false,
-                        });
-                        gpu.queue.write_buffer(&b, 0, bytes);
-                        b
-                    };
-                    let v = vertices(&f.geometry, f.own);
-                    self.uploaded.push(Uploaded {
-                        geometry: Arc::clone(&f.geometry),
-                        vertices: if on_gpu {
-                            Ok(buffer(
-                                "figure vertices",
-                                wgpu::BufferUsages::VERTEX,
-                                bytemuck::cast_slice(&v),
-                            ))
-                        } else {
-                            Err(v)
-                        },
-                        indices: buffer(
-                            "figure indices",
-                            wgpu::BufferUsages::INDEX,
-                            bytemuck::cast_slice(&f.geometry.indices),
-                        ),
-                    });
+                    self.uploaded
+                        .push(Uploaded::new(gpu, &f.geometry, f.own, on_gpu));
                     self.uploaded.len() - 1
                 }
             };

@@ -83,22 +83,7 @@ pub(crate) fn fit_weights(
     // Minimise w'Mw/2 - g'w subject to sum(w) = 1: w = M^-1 (g + mu 1).
     let mut active: Vec<usize> = (0..k).collect();
     while !active.is_empty() {
-        // ridge I + A'A over the active samples.
-        let mut inner = vec![0.0; d * d];
-        for &s in &active {
-            let row = &a[s * d..(s + 1) * d];
-            for i in 0..d {
-                for j in 0..=i {
-                    inner[i * d + j] += row[i] * row[j];
-                }
-            }
-        }
-        for i in 0..d {
-            inner[i * d + i] += ridge;
-            for j in 0..i {
-                inner[j * d + i] = inner[i * d + j];
-            }
-        }
+        let mut inner = normal_matrix(&a, d, &active, ridge);
         if !cholesky(&mut inner, d) {
             return;
         }
@@ -144,6 +129,27 @@ pub(crate) fn fit_weights(
             .map(|(s, _)| *s)
             .collect();
     }
+}
+
+/// `ridge I + A'A` over the `active` rows of `a` (each `d` long), row by
+/// row (`d` x `d`).
+fn normal_matrix(a: &[f64], d: usize, active: &[usize], ridge: f64) -> Vec<f64> {
+    let mut inner = vec![0.0; d * d];
+    for &s in active {
+        let row = &a[s * d..(s + 1) * d];
+        for i in 0..d {
+            for j in 0..=i {
+                inner[i * d + j] += row[i] * row[j];
+            }
+        }
+    }
+    for i in 0..d {
+        inner[i * d + i] += ridge;
+        for j in 0..i {
+            inner[j * d + i] = inner[i * d + j];
+        }
+    }
+    inner
 }
 
 /// Blend each constrained limb on its own (the joints from its base down;

@@ -376,68 +376,8 @@ impl DragMatch {
         let rule = self.rule;
         self.costs.clear();
         for s in &mut self.seen {
-            let m = s.at.len();
-            let mut prev = std::mem::take(&mut s.row);
-            let mut cur: Vec<(f64, u32)> = Vec::with_capacity(m);
-            for j in 0..m {
-                let c = (q - s.at[j]).length() + rule.h * tempo_gap(u, s.t[j], rule.tempo);
-                let mut best = (f64::INFINITY, 0u32);
-                if first {
-                    if j == 0 {
-                        best = (0.0, 0);
-                    } else {
-                        best = cur[j - 1];
-                    }
-                } else {
-                    for cand in [
-                        Some(prev[j]),
-                        j.checked_sub(1).map(|k| prev[k]),
-                        j.checked_sub(1).map(|k| cur[k]),
-                    ]
-                    .into_iter()
-                    .flatten()
-                    {
-                        if cand.0 < best.0 {
-                            best = cand;
-                        }
-                    }
-                }
-                cur.push((best.0 + c, best.1 + 1));
-            }
-            prev.clear();
-            s.row = cur;
-            // The best end point: not one the drag is far too slow for.
-            let mut any = [f64::INFINITY; CAPS];
-            let mut covered = [f64::INFINITY; GATES];
-            let mut covered_j = [0; GATES];
-            // How long the template took to go as far as the drag has.
-            let took = s.time_to_cover(drawn);
-            for (j, &(sum, len)) in s.row.iter().enumerate() {
-                if drawn < rule.min_drawn * s.arc_m[j] {
-                    continue;
-                }
-                let mean = sum / f64::from(len.max(1));
-                for (c, cap) in SLOW_CAPS.iter().enumerate() {
-                    if u > cap * took + 0.05 {
-                        continue;
-                    }
-                    any[c] = any[c].min(mean);
-                    for (f, floor) in COVERAGE_FLOORS.iter().enumerate() {
-                        let g = f * CAPS + c;
-                        if s.along[j] >= *floor && mean < covered[g] {
-                            covered[g] = mean;
-                            covered_j[g] = j;
-                        }
-                    }
-                }
-            }
-            self.costs.push(TemplateCost {
-                action: s.action,
-                clip: s.clip,
-                any,
-                covered,
-                covered_j,
-            });
+            s.advance(q, u, &rule, first);
+            self.costs.push(s.cost(drawn, u, &rule));
         }
     }
 
@@ -541,6 +481,80 @@ pub fn gate_of(thresholds: &Thresholds) -> usize {
         .rposition(|c| *c <= thresholds.max_slow + 1e-9)
         .unwrap_or(0);
     f * CAPS + c
+}
+
+impl Seen {
+    /// One more row of the dynamic programme: the drag's point `q` (m, from
+    /// its start) at `u` s (`first`: its first row).
+    fn advance(&mut self, q: DVec2, u: f64, rule: &TemplateRule, first: bool) {
+        let m = self.at.len();
+        let mut prev = std::mem::take(&mut self.row);
+        let mut cur: Vec<(f64, u32)> = Vec::with_capacity(m);
+        for j in 0..m {
+            let c = (q - self.at[j]).length() + rule.h * tempo_gap(u, self.t[j], rule.tempo);
+            let mut best = (f64::INFINITY, 0u32);
+            if first {
+                if j == 0 {
+                    best = (0.0, 0);
+                } else {
+                    best = cur[j - 1];
+                }
+            } else {
+                for cand in [
+                    Some(prev[j]),
+                    j.checked_sub(1).map(|k| prev[k]),
+                    j.checked_sub(1).map(|k| cur[k]),
+                ]
+                .into_iter()
+                .flatten()
+                {
+                    if cand.0 < best.0 {
+                        best = cand;
+                    }
+                }
+            }
+            cur.push((best.0 + c, best.1 + 1));
+        }
+        prev.clear();
+        self.row = cur;
+    }
+
+    /// What the template costs now, the drag having drawn `drawn` m in `u`
+    /// s: its best end point (not one the drag is far too slow for) under
+    /// every cap on slowness, and under every coverage floor too.
+    fn cost(&self, drawn: f64, u: f64, rule: &TemplateRule) -> TemplateCost {
+        let mut any = [f64::INFINITY; CAPS];
+        let mut covered = [f64::INFINITY; GATES];
+        let mut covered_j = [0; GATES];
+        // How long the template took to go as far as the drag has.
+        let took = self.time_to_cover(drawn);
+        for (j, &(sum, len)) in self.row.iter().enumerate() {
+            if drawn < rule.min_drawn * self.arc_m[j] {
+                continue;
+            }
+            let mean = sum / f64::from(len.max(1));
+            for (c, cap) in SLOW_CAPS.iter().enumerate() {
+                if u > cap * took + 0.05 {
+                    continue;
+                }
+                any[c] = any[c].min(mean);
+                for (f, floor) in COVERAGE_FLOORS.iter().enumerate() {
+                    let g = f * CAPS + c;
+                    if self.along[j] >= *floor && mean < covered[g] {
+                        covered[g] = mean;
+                        covered_j[g] = j;
+                    }
+                }
+            }
+        }
+        TemplateCost {
+            action: self.action,
+            clip: self.clip,
+            any,
+            covered,
+            covered_j,
+        }
+    }
 }
 
 #[cfg(test)]
