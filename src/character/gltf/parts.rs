@@ -23,7 +23,7 @@ pub(super) fn parts(
     // Decoded images by index (`None`: could not be read, said once).
     let mut textures: Vec<Option<Option<super::texture::Texture>>> =
         vec![None; file.doc.images().len()];
-    let (mut unweighted, mut renormalised, mut worst_sum) = (0usize, 0usize, 1.0f64);
+    let mut fixes = WeightFixes::default();
     for node in file.doc.nodes() {
         let Some(mesh) = node.mesh() else {
             continue;
@@ -31,51 +31,7 @@ pub(super) fn parts(
         // Skinned: each skin joint's matrix from the bind pose to the rest
         // pose; rigid: the node's own transform, carried by its joint.
         let (matrices, skin_joints): (Vec<DMat4>, Vec<usize>) = match node.skin() {
-            Some(skin) => {
-                let joints: Vec<gltf::Node<'_>> = skin.joints().collect();
-                let ibms: Vec<DMat4> = match skin.inverse_bind_matrices() {
-                    Some(a) => {
-                        file.check(&a, "inverse bind matrices", Kind::Matrices, &mut budget)?;
-                        if a.count() < joints.len() {
-                            return Err(file.data_error(format!(
-                                "skin {}: {} inverse bind matrices for {} joints",
-                                skin.index(),
-                                a.count(),
-                                joints.len()
-                            )));
-                        }
-                        skin.reader(|b| file.buffer(b))
-                            .read_inverse_bind_matrices()
-                            .ok_or_else(|| {
-                                file.data_error("unreadable inverse bind matrices".to_owned())
-                            })?
-                            .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
-                            .collect()
-                    }
-                    None => vec![DMat4::IDENTITY; joints.len()],
-                };
-                for (k, m) in ibms.iter().enumerate().take(joints.len()) {
-                    if !m.is_finite() || m.determinant().abs() < 1e-12 {
-                        return Err(file.data_error(format!(
-                            "skin {}: the inverse bind matrix of joint {k} is {}",
-                            skin.index(),
-                            if m.is_finite() {
-                                "singular"
-                            } else {
-                                "not finite"
-                            }
-                        )));
-                    }
-                }
-                (
-                    joints
-                        .iter()
-                        .zip(&ibms)
-                        .map(|(j, ibm)| world[j.index()] * *ibm)
-                        .collect(),
-                    joints.iter().map(|j| joint_of[j.index()]).collect(),
-                )
-            }
+            Some(skin) => skin_matrices(file, &skin, world, joint_of, &mut budget)?,
             None => {
                 let Some(j) = carrier(node.index()) else {
                     warnings.push(format!(
@@ -97,65 +53,17 @@ pub(super) fn parts(
                 continue;
             }
             let what = |s: &str| format!("mesh `{}` {s}", mesh.name().unwrap_or(""));
-            let pos = prim
-                .get(&gltf::Semantic::Positions)
-                .ok_or_else(|| file.data_error(what("has no positions")))?;
-            file.check(&pos, &what("positions"), Kind::Points, &mut budget)?;
-            let n = pos.count();
-            let reader = prim.reader(|b| file.buffer(b));
-            let positions: Vec<[f32; 3]> = reader
-                .read_positions()
-                .ok_or_else(|| file.data_error(what("positions unreadable")))?
-                .collect();
-            if positions.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(file.data_error(what("has positions that are not finite")));
-            }
+            let positions = positions(file, &prim, &what, &mut budget)?;
+            let n = positions.len();
             let skinned = node.skin().is_some()
                 && prim.get(&gltf::Semantic::Joints(0)).is_some()
                 && prim.get(&gltf::Semantic::Weights(0)).is_some();
-            let (joints, weights): (Vec<[u16; 4]>, Vec<[f32; 4]>) = if skinned {
-                for (sem, kind) in [
-                    (gltf::Semantic::Joints(0), Kind::Joints),
-                    (gltf::Semantic::Weights(0), Kind::Weights),
-                ] {
-                    let a = prim
-                        .get(&sem)
-                        .ok_or_else(|| file.data_error(what("lacks skin data")))?;
-                    file.check(&a, &what("skin data"), kind, &mut budget)?;
-                    if a.count() != n {
-                        return Err(file.data_error(what("has skin data for another vertex count")));
-                    }
-                }
-                let j: Vec<[u16; 4]> = reader
-                    .read_joints(0)
-                    .ok_or_else(|| file.data_error(what("joints unreadable")))?
-                    .into_u16()
-                    .collect();
-                let w: Vec<[f32; 4]> = reader
-                    .read_weights(0)
-                    .ok_or_else(|| file.data_error(what("weights unreadable")))?
-                    .into_f32()
-                    .collect();
-                (j, w)
+            let (joints, weights) = if skinned {
+                skin_data(file, &prim, n, &what, &mut budget)?
             } else {
                 (vec![[0; 4]; n], vec![[1.0, 0.0, 0.0, 0.0]; n])
             };
-            let indices: Vec<u32> = match prim.indices() {
-                Some(a) => {
-                    file.check(&a, &what("indices"), Kind::Indices, &mut budget)?;
-                    reader
-                        .read_indices()
-                        .ok_or_else(|| file.data_error(what("indices unreadable")))?
-                        .into_u32()
-                        .collect()
-                }
-                None => (0..n as u32).collect(),
-            };
-            if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
-                return Err(
-                    file.data_error(what(&format!("has index {bad}, past its {n} vertices")))
-                );
-            }
+            let indices = indices(file, &prim, n, &what, &mut budget)?;
             // Rest-pose positions and the skeleton's joints.
             let mut part = Part {
                 positions: Vec::with_capacity(n),
@@ -169,20 +77,7 @@ pub(super) fn parts(
             part.colours = colours(file, &prim, n, &mut budget, &mut textures, &mut warnings)?;
             for ((p, j), w) in positions.iter().zip(&joints).zip(&weights) {
                 let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
-                let mut w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
-                let sum: f32 = w.iter().sum();
-                if sum <= 1e-6 {
-                    unweighted += 1;
-                    w = [1.0, 0.0, 0.0, 0.0];
-                } else if (sum - 1.0).abs() > 1e-3 {
-                    renormalised += 1;
-                    worst_sum = if (f64::from(sum) - 1.0).abs() > (worst_sum - 1.0).abs() {
-                        f64::from(sum)
-                    } else {
-                        worst_sum
-                    };
-                    w = w.map(|x| x / sum);
-                }
+                let w = fixes.weights(*w);
                 let mut q = DVec3::ZERO;
                 let mut ours = [0u16; 4];
                 for k in 0..4 {
@@ -206,20 +101,201 @@ pub(super) fn parts(
             out.push(part);
         }
     }
-    if renormalised > 0 {
-        warnings.push(format!(
-            "{renormalised} vertices' skin weights did not sum to 1 (up to {worst_sum:.3}): normalised"
-        ));
-    }
-    if unweighted > 0 {
-        warnings.push(format!(
-            "{unweighted} vertices had no skin weight: carried by their first joint"
-        ));
-    }
+    fixes.say(&mut warnings);
     if out.is_empty() {
         return Err(file.data_error("no triangles to draw".to_owned()));
     }
     Ok((out, warnings))
+}
+
+/// A primitive's vertex positions, checked: every one finite (`what`
+/// names the mesh in errors).
+fn positions(
+    file: &File,
+    prim: &gltf::Primitive<'_>,
+    what: &dyn Fn(&str) -> String,
+    budget: &mut u64,
+) -> Result<Vec<[f32; 3]>, GltfError> {
+    let reader = prim.reader(|b| file.buffer(b));
+    let pos = prim
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| file.data_error(what("has no positions")))?;
+    file.check(&pos, &what("positions"), Kind::Points, budget)?;
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| file.data_error(what("positions unreadable")))?
+        .collect();
+    if positions.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(file.data_error(what("has positions that are not finite")));
+    }
+    Ok(positions)
+}
+
+/// A primitive's vertex indices (its `n` vertices in order where it has
+/// none), checked: none past its vertices.
+fn indices(
+    file: &File,
+    prim: &gltf::Primitive<'_>,
+    n: usize,
+    what: &dyn Fn(&str) -> String,
+    budget: &mut u64,
+) -> Result<Vec<u32>, GltfError> {
+    let reader = prim.reader(|b| file.buffer(b));
+    let indices: Vec<u32> = match prim.indices() {
+        Some(a) => {
+            file.check(&a, &what("indices"), Kind::Indices, budget)?;
+            reader
+                .read_indices()
+                .ok_or_else(|| file.data_error(what("indices unreadable")))?
+                .into_u32()
+                .collect()
+        }
+        None => (0..n as u32).collect(),
+    };
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+        return Err(file.data_error(what(&format!("has index {bad}, past its {n} vertices"))));
+    }
+    Ok(indices)
+}
+
+/// What was fixed in the skin weights: vertices with none, vertices
+/// whose weights did not sum to one, and the sum farthest from it.
+#[derive(Default)]
+struct WeightFixes {
+    unweighted: usize,
+    renormalised: usize,
+    worst_sum: Option<f64>,
+}
+
+impl WeightFixes {
+    /// A vertex's weights, usable: no negative or not-finite weight, a
+    /// vertex with none carried by its first joint, the rest summing to
+    /// one.
+    fn weights(&mut self, w: [f32; 4]) -> [f32; 4] {
+        let w = w.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
+        let sum: f32 = w.iter().sum();
+        if sum <= 1e-6 {
+            self.unweighted += 1;
+            return [1.0, 0.0, 0.0, 0.0];
+        }
+        if (sum - 1.0).abs() > 1e-3 {
+            self.renormalised += 1;
+            let worst = self.worst_sum.unwrap_or(1.0);
+            if (f64::from(sum) - 1.0).abs() > (worst - 1.0).abs() {
+                self.worst_sum = Some(f64::from(sum));
+            }
+            return w.map(|x| x / sum);
+        }
+        w
+    }
+
+    /// What was fixed, in `warnings`.
+    fn say(&self, warnings: &mut Vec<String>) {
+        if self.renormalised > 0 {
+            warnings.push(format!(
+                "{} vertices' skin weights did not sum to 1 (up to {:.3}): normalised",
+                self.renormalised,
+                self.worst_sum.unwrap_or(1.0)
+            ));
+        }
+        if self.unweighted > 0 {
+            warnings.push(format!(
+                "{} vertices had no skin weight: carried by their first joint",
+                self.unweighted
+            ));
+        }
+    }
+}
+
+/// A skin's joints: each one's matrix from the bind pose to the rest
+/// pose (its node's `world` matrix times its inverse bind matrix, checked),
+/// and its skeleton index (`joint_of`).
+fn skin_matrices(
+    file: &File,
+    skin: &gltf::Skin<'_>,
+    world: &[DMat4],
+    joint_of: &[usize],
+    budget: &mut u64,
+) -> Result<(Vec<DMat4>, Vec<usize>), GltfError> {
+    let joints: Vec<gltf::Node<'_>> = skin.joints().collect();
+    let ibms: Vec<DMat4> = match skin.inverse_bind_matrices() {
+        Some(a) => {
+            file.check(&a, "inverse bind matrices", Kind::Matrices, budget)?;
+            if a.count() < joints.len() {
+                return Err(file.data_error(format!(
+                    "skin {}: {} inverse bind matrices for {} joints",
+                    skin.index(),
+                    a.count(),
+                    joints.len()
+                )));
+            }
+            skin.reader(|b| file.buffer(b))
+                .read_inverse_bind_matrices()
+                .ok_or_else(|| file.data_error("unreadable inverse bind matrices".to_owned()))?
+                .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
+                .collect()
+        }
+        None => vec![DMat4::IDENTITY; joints.len()],
+    };
+    for (k, m) in ibms.iter().enumerate().take(joints.len()) {
+        if !m.is_finite() || m.determinant().abs() < 1e-12 {
+            return Err(file.data_error(format!(
+                "skin {}: the inverse bind matrix of joint {k} is {}",
+                skin.index(),
+                if m.is_finite() {
+                    "singular"
+                } else {
+                    "not finite"
+                }
+            )));
+        }
+    }
+    Ok((
+        joints
+            .iter()
+            .zip(&ibms)
+            .map(|(j, ibm)| world[j.index()] * *ibm)
+            .collect(),
+        joints.iter().map(|j| joint_of[j.index()]).collect(),
+    ))
+}
+
+/// Each vertex's four joints and their weights.
+type SkinData = (Vec<[u16; 4]>, Vec<[f32; 4]>);
+
+/// A skinned primitive's joints and weights, one of each for each of its
+/// `n` vertices, checked (`what` names the mesh in errors).
+fn skin_data(
+    file: &File,
+    prim: &gltf::Primitive<'_>,
+    n: usize,
+    what: &dyn Fn(&str) -> String,
+    budget: &mut u64,
+) -> Result<SkinData, GltfError> {
+    let reader = prim.reader(|b| file.buffer(b));
+    for (sem, kind) in [
+        (gltf::Semantic::Joints(0), Kind::Joints),
+        (gltf::Semantic::Weights(0), Kind::Weights),
+    ] {
+        let a = prim
+            .get(&sem)
+            .ok_or_else(|| file.data_error(what("lacks skin data")))?;
+        file.check(&a, &what("skin data"), kind, budget)?;
+        if a.count() != n {
+            return Err(file.data_error(what("has skin data for another vertex count")));
+        }
+    }
+    let j: Vec<[u16; 4]> = reader
+        .read_joints(0)
+        .ok_or_else(|| file.data_error(what("joints unreadable")))?
+        .into_u16()
+        .collect();
+    let w: Vec<[f32; 4]> = reader
+        .read_weights(0)
+        .ok_or_else(|| file.data_error(what("weights unreadable")))?
+        .into_f32()
+        .collect();
+    Ok((j, w))
 }
 
 /// Each vertex's colour from the primitive's base colour texture (times
