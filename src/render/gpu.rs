@@ -145,6 +145,23 @@ impl Gpu {
         })
     }
 
+    /// A buffer for `usage` (and copying into) holding `bytes`.
+    pub(crate) fn filled_buffer(
+        &self,
+        label: &str,
+        usage: wgpu::BufferUsages,
+        bytes: &[u8],
+    ) -> wgpu::Buffer {
+        let b = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (bytes.len() as u64).next_multiple_of(4).max(4),
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.queue.write_buffer(&b, 0, bytes);
+        b
+    }
+
     /// Whether the adapter renders on the CPU.
     #[must_use]
     pub fn is_cpu(&self) -> bool {

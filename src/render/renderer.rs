@@ -576,25 +576,18 @@ fn globals(device: &wgpu::Device) -> (wgpu::Buffer, wgpu::BindGroupLayout, wgpu:
 
 /// The floor's vertices and indices on the GPU, and how many indices.
 fn floor_mesh(gpu: &Gpu) -> (wgpu::Buffer, wgpu::Buffer, u32) {
-    let device = &gpu.device;
     let mut ground = Mesh::default();
     ground.ground(FLOOR_HALF, 0.0, [0.62, 0.60, 0.56, 0.0]);
-    let floor_vb = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("floor vertices"),
-        size: std::mem::size_of_val(ground.vertices.as_slice()) as u64,
-        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    gpu.queue
-        .write_buffer(&floor_vb, 0, bytemuck::cast_slice(&ground.vertices));
-    let floor_ib = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("floor indices"),
-        size: std::mem::size_of_val(ground.indices.as_slice()) as u64,
-        usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    gpu.queue
-        .write_buffer(&floor_ib, 0, bytemuck::cast_slice(&ground.indices));
+    let floor_vb = gpu.filled_buffer(
+        "floor vertices",
+        wgpu::BufferUsages::VERTEX,
+        bytemuck::cast_slice(&ground.vertices),
+    );
+    let floor_ib = gpu.filled_buffer(
+        "floor indices",
+        wgpu::BufferUsages::INDEX,
+        bytemuck::cast_slice(&ground.indices),
+    );
     (floor_vb, floor_ib, ground.indices.len() as u32)
 }
 

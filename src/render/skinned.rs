@@ -27,16 +27,7 @@ impl Uploaded {
     /// The buffers of `geometry` (the project's own body when `own`), its
     /// vertices on the GPU when skinned there (`on_gpu`), else kept here.
     fn new(gpu: &Gpu, geometry: &Arc<Geometry>, own: bool, on_gpu: bool) -> Self {
-        let buffer = |label, usage, bytes: &[u8]| {
-            let b = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: (bytes.len() as u64).next_multiple_of(4).max(4),
-                usage: usage | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            gpu.queue.write_buffer(&b, 0, bytes);
-            b
-        };
+        let buffer = |label, usage, bytes: &[u8]| gpu.filled_buffer(label, usage, bytes);
         let v = vertices(geometry, own);
         Self {
             geometry: Arc::clone(geometry),
