@@ -212,10 +212,6 @@ impl Stage {
         &self.actors[0].ctl
     }
 
-    pub fn ctl_mut(&mut self) -> &mut Controller {
-        &mut self.actors[0].ctl
-    }
-
     /// The first character's posture (a lone character's digest).
     #[must_use]
     pub fn pose(&self) -> &Pose {
