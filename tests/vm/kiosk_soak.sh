@@ -9,8 +9,8 @@
 # unplugged). The host checks that after a two-minute warm-up resident
 # memory grew by at most 4 MB, that once the plays stop the kiosk holds no
 # more descriptors than the fewest it held after warm-up (a sample taken
-# while a panel is plugged counts that panel's), and that it stopped
-# cleanly.
+# while a panel is plugged counts that panel's; after the plays, the fewest
+# of ten counts), and that it stopped cleanly.
 #
 # usage: tests/vm/kiosk_soak.sh
 # env:   MARIONETTE_BIN (default target/debug/marionette; a release build
@@ -93,7 +93,15 @@ done
 touch /tmp/stop; wait $player; sleep 2
 # Descriptors with no panel plugged: the host compares them with the
 # fewest seen after warm-up (a sample taken mid-play counts the panel's).
-fds=$(ls /proc/$pid/fd 2>/dev/null | wc -l)
+# The fewest of ten counts half a second apart: a descriptor open for a
+# moment (a rescan reading /dev/input, the last unplug not yet read by a
+# kiosk slowed by emulation) is not a leak, and a leaked one is in all ten.
+fds=
+for i in 1 2 3 4 5 6 7 8 9 10; do
+    n=$(ls /proc/$pid/fd 2>/dev/null | wc -l)
+    if [ -z "$fds" ] || [ "$n" -lt "$fds" ]; then fds=$n; fi
+    sleep 0.5
+done
 echo "final $fds" >> /tmp/rss
 read up0 rest < /proc/uptime
 kill -TERM $pid
