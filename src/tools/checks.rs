@@ -67,6 +67,29 @@ pub fn check(
         .map(|p| forward_kinematics(skeleton, p))
         .collect();
     let mut r = ClipReport::default();
+    slides(skeleton, roles, &worlds, &mut r);
+    for w in &worlds {
+        for i in 0..skeleton.len() {
+            let y = w
+                .end_site(skeleton, i)
+                .map_or(w.positions[i].y, |e| e.y.min(w.positions[i].y));
+            r.max_penetration_mm = r.max_penetration_mm.max((floor_y - y) * 1e3);
+        }
+    }
+    for (n, w) in worlds.iter().enumerate() {
+        let violations = &mut r.violations;
+        beyond_limits(roles, w, limits, &mut |what| {
+            if violations.len() < 8 {
+                violations.push(format!("frame {n}: {what}"));
+            }
+        });
+    }
+    r
+}
+
+/// The planted feet's slides into `r`: the largest, where, and the frames
+/// with a foot planted.
+fn slides(skeleton: &Skeleton, roles: &RoleMap, worlds: &[WorldPose], r: &mut ClipReport) {
     let feet = [Role::LeftFoot, Role::RightFoot].map(|f| {
         let ankle = roles.get(f);
         // The foot's lowest descendant (toe or End Site) is its sole.
@@ -122,123 +145,123 @@ pub fn check(
         }
         r.planted_frames += usize::from(any);
     }
-    for w in &worlds {
-        for i in 0..skeleton.len() {
-            let y = w
-                .end_site(skeleton, i)
-                .map_or(w.positions[i].y, |e| e.y.min(w.positions[i].y));
-            r.max_penetration_mm = r.max_penetration_mm.max((floor_y - y) * 1e3);
-        }
+}
+
+/// Say each joint of one posture past its human limit.
+fn beyond_limits(roles: &RoleMap, w: &WorldPose, limits: &Limits, bad: &mut dyn FnMut(String)) {
+    let g = |role: Role| w.positions[roles.get(role)];
+    let pelvis_rot = w.rotations[roles.get(Role::Pelvis)];
+    // The pelvis's frame from where the body is, not from its joint's
+    // axes (a rig whose rest pose lies along X has other axes): its
+    // side from hip to hip, up towards the chest, forward across both.
+    let (up, forward) = frame(
+        g(Role::LeftHip) - g(Role::RightHip),
+        g(Role::Chest) - g(Role::Pelvis),
+    )
+    .unwrap_or((pelvis_rot * DVec3::Y, pelvis_rot * DVec3::Z));
+    for (hip, knee, foot) in [
+        (Role::LeftHip, Role::LeftKnee, Role::LeftFoot),
+        (Role::RightHip, Role::RightKnee, Role::RightFoot),
+    ] {
+        let leg = [(hip, g(hip)), (knee, g(knee)), (foot, g(foot))];
+        leg_beyond_limits(leg, (up, forward), limits, bad);
     }
-    let g = |w: &WorldPose, role: Role| w.positions[roles.get(role)];
-    for (n, w) in worlds.iter().enumerate() {
-        let mut bad = |what: String| {
-            if r.violations.len() < 8 {
-                r.violations.push(format!("frame {n}: {what}"));
-            }
-        };
-        let pelvis_rot = w.rotations[roles.get(Role::Pelvis)];
-        // The pelvis's frame from where the body is, not from its joint's
-        // axes (a rig whose rest pose lies along X has other axes): its
-        // side from hip to hip, up towards the chest, forward across both.
-        let (up, forward) = frame(
-            g(w, Role::LeftHip) - g(w, Role::RightHip),
-            g(w, Role::Chest) - g(w, Role::Pelvis),
-        )
-        .unwrap_or((pelvis_rot * DVec3::Y, pelvis_rot * DVec3::Z));
-        for (hip, knee, foot) in [
-            (Role::LeftHip, Role::LeftKnee, Role::LeftFoot),
-            (Role::RightHip, Role::RightKnee, Role::RightFoot),
-        ] {
-            let (h, k, f) = (g(w, hip), g(w, knee), g(w, foot));
-            let flex = angle(k - h, f - k);
-            if flex > limits.knee_flexion {
-                bad(format!(
-                    "{knee} bent {flex:.0}° (limit {})",
-                    limits.knee_flexion
-                ));
-            }
-            // The knee may not bend backwards: it lies in front of the
-            // hip–ankle line whenever it is bent.
-            let line = (f - h).normalize();
-            let bulge = (k - h) - line * (k - h).dot(line);
-            if flex > 10.0 && bulge.dot(forward) < -0.01 {
-                bad(format!("{knee} bends backwards"));
-            }
-            // Flexion and extension in the pelvis's sagittal plane,
-            // abduction across it.
-            let thigh = (k - h).normalize();
-            let side = up.cross(forward);
-            let sagittal = thigh.dot(-up).atan2(thigh.dot(forward));
-            let pitch_from_down = 90.0 - sagittal.to_degrees();
-            let abduction = thigh.dot(side).abs().asin().to_degrees();
-            if pitch_from_down > limits.hip_flexion {
-                bad(format!(
-                    "{hip} flexed {pitch_from_down:.0}° (limit {})",
-                    limits.hip_flexion
-                ));
-            }
-            if -pitch_from_down > limits.hip_extension {
-                bad(format!(
-                    "{hip} extended {:.0}° backwards (limit {})",
-                    -pitch_from_down, limits.hip_extension
-                ));
-            }
-            if abduction > limits.hip_abduction {
-                bad(format!(
-                    "{hip} spread {abduction:.0}° sideways (limit {})",
-                    limits.hip_abduction
-                ));
-            }
-        }
-        for (shoulder, elbow, hand) in [
-            (Role::LeftShoulder, Role::LeftElbow, Role::LeftHand),
-            (Role::RightShoulder, Role::RightElbow, Role::RightHand),
-        ] {
-            let flex = angle(g(w, elbow) - g(w, shoulder), g(w, hand) - g(w, elbow));
-            if flex > limits.elbow_flexion {
-                bad(format!(
-                    "{elbow} bent {flex:.0}° (limit {})",
-                    limits.elbow_flexion
-                ));
-            }
-        }
-        let chest_rot = w.rotations[roles.get(Role::Chest)];
-        let head_rot = w.rotations[roles.get(Role::Head)];
-        let head = (chest_rot.inverse() * head_rot)
-            .angle_between(glam::DQuat::IDENTITY)
-            .to_degrees();
-        if head > limits.head_turn {
+    for (shoulder, elbow, hand) in [
+        (Role::LeftShoulder, Role::LeftElbow, Role::LeftHand),
+        (Role::RightShoulder, Role::RightElbow, Role::RightHand),
+    ] {
+        let flex = angle(g(elbow) - g(shoulder), g(hand) - g(elbow));
+        if flex > limits.elbow_flexion {
             bad(format!(
-                "head turned {head:.0}° from the chest (limit {})",
-                limits.head_turn
+                "{elbow} bent {flex:.0}° (limit {})",
+                limits.elbow_flexion
             ));
         }
-        // The chest's frame against the pelvis's, both from positions
-        // (shoulder to shoulder, up the neck), where the rig has them.
-        let chest_frame = frame(
-            g(w, Role::LeftShoulder) - g(w, Role::RightShoulder),
-            g(w, Role::Neck) - g(w, Role::Chest),
-        );
-        let spine = match chest_frame {
-            Some((c_up, c_forward)) => {
-                let m = |u: DVec3, f: DVec3| glam::DMat3::from_cols(u.cross(f), u, f);
-                glam::DQuat::from_mat3(&(m(up, forward).transpose() * m(c_up, c_forward)))
-                    .angle_between(glam::DQuat::IDENTITY)
-                    .to_degrees()
-            }
-            None => (pelvis_rot.inverse() * chest_rot)
+    }
+    let chest_rot = w.rotations[roles.get(Role::Chest)];
+    let head_rot = w.rotations[roles.get(Role::Head)];
+    let head = (chest_rot.inverse() * head_rot)
+        .angle_between(glam::DQuat::IDENTITY)
+        .to_degrees();
+    if head > limits.head_turn {
+        bad(format!(
+            "head turned {head:.0}° from the chest (limit {})",
+            limits.head_turn
+        ));
+    }
+    // The chest's frame against the pelvis's, both from positions
+    // (shoulder to shoulder, up the neck), where the rig has them.
+    let chest_frame = frame(
+        g(Role::LeftShoulder) - g(Role::RightShoulder),
+        g(Role::Neck) - g(Role::Chest),
+    );
+    let spine = match chest_frame {
+        Some((c_up, c_forward)) => {
+            let m = |u: DVec3, f: DVec3| glam::DMat3::from_cols(u.cross(f), u, f);
+            glam::DQuat::from_mat3(&(m(up, forward).transpose() * m(c_up, c_forward)))
                 .angle_between(glam::DQuat::IDENTITY)
-                .to_degrees(),
-        };
-        if spine > limits.spine_turn {
-            bad(format!(
-                "chest turned {spine:.0}° from the pelvis (limit {})",
-                limits.spine_turn
-            ));
+                .to_degrees()
         }
+        None => (pelvis_rot.inverse() * chest_rot)
+            .angle_between(glam::DQuat::IDENTITY)
+            .to_degrees(),
+    };
+    if spine > limits.spine_turn {
+        bad(format!(
+            "chest turned {spine:.0}° from the pelvis (limit {})",
+            limits.spine_turn
+        ));
     }
-    r
+}
+
+/// Say a leg's knee and hip past their limits: the knee bent too far or
+/// backwards, the thigh flexed, extended or spread too far in the pelvis's
+/// frame (`up`, `forward`).
+fn leg_beyond_limits(
+    [(hip, h), (knee, k), (_, f)]: [(Role, DVec3); 3],
+    (up, forward): (DVec3, DVec3),
+    limits: &Limits,
+    bad: &mut dyn FnMut(String),
+) {
+    let flex = angle(k - h, f - k);
+    if flex > limits.knee_flexion {
+        bad(format!(
+            "{knee} bent {flex:.0}° (limit {})",
+            limits.knee_flexion
+        ));
+    }
+    // The knee may not bend backwards: it lies in front of the
+    // hip–ankle line whenever it is bent.
+    let line = (f - h).normalize();
+    let bulge = (k - h) - line * (k - h).dot(line);
+    if flex > 10.0 && bulge.dot(forward) < -0.01 {
+        bad(format!("{knee} bends backwards"));
+    }
+    // Flexion and extension in the pelvis's sagittal plane,
+    // abduction across it.
+    let thigh = (k - h).normalize();
+    let side = up.cross(forward);
+    let sagittal = thigh.dot(-up).atan2(thigh.dot(forward));
+    let pitch_from_down = 90.0 - sagittal.to_degrees();
+    let abduction = thigh.dot(side).abs().asin().to_degrees();
+    if pitch_from_down > limits.hip_flexion {
+        bad(format!(
+            "{hip} flexed {pitch_from_down:.0}° (limit {})",
+            limits.hip_flexion
+        ));
+    }
+    if -pitch_from_down > limits.hip_extension {
+        bad(format!(
+            "{hip} extended {:.0}° backwards (limit {})",
+            -pitch_from_down, limits.hip_extension
+        ));
+    }
+    if abduction > limits.hip_abduction {
+        bad(format!(
+            "{hip} spread {abduction:.0}° sideways (limit {})",
+            limits.hip_abduction
+        ));
+    }
 }
 
 /// A body frame from a side-to-side vector (right to left) and one

@@ -24,11 +24,12 @@ use super::kiosk::InputThread;
 use super::message::{screen, to_output};
 use crate::display::present::{OutputChoice, PresentError, PresenterKind};
 use crate::display::screen::Screen;
-use crate::input::calibration::{CalibrationError, RawPoint, Solution, SolveOptions, solve};
+use crate::input::calibration::{
+    Calibration, CalibrationError, RawPoint, Solution, SolveOptions, solve,
+};
 use crate::input::hub::LiveError;
 use crate::platform::clock::{Clock, Monotonic};
-use crate::render::headless::Image;
-use crate::screen::ScreenPoint;
+use crate::screen::{Rotation, ScreenPoint};
 
 /// Why calibration stopped without writing.
 #[derive(Debug, Error)]
@@ -163,49 +164,137 @@ fn write_config(path: &Path, text: &str) -> Result<Option<PathBuf>, CalibrateErr
     Ok(backup)
 }
 
+/// The display the calibration draws on, its pictures turned for the
+/// output's rotation.
+struct Board {
+    presenter: Screen,
+    rotation: Rotation,
+    size: (u32, u32),
+}
+
+impl Board {
+    /// A picture with `lines` (and a target), shown until the next.
+    fn show(
+        &mut self,
+        target: Option<ScreenPoint>,
+        lines: &[&str],
+        colour: [u8; 4],
+    ) -> Result<(), CalibrateError> {
+        let img = screen(self.size, target, lines, colour);
+        self.presenter.show_image(&to_output(&img, self.rotation))?;
+        self.presenter.wait_flip(Duration::from_millis(500))?;
+        Ok(())
+    }
+}
+
+/// What the touches gave: the panel, its calibration before, the targets
+/// and the raw point taken at each.
+struct Taken {
+    device: String,
+    base: Calibration,
+    targets: Vec<ScreenPoint>,
+    raw: Vec<RawPoint>,
+}
+
 /// Calibrate a touchscreen on the display; `config` is the configuration
 /// as loaded from `opts.config_path` (or the defaults if it is missing).
 pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated, CalibrateError> {
     crate::platform::signals::install_stop_handler();
     let choice = OutputChoice::from_config(&config.display);
     let kind = PresenterKind::parse(&config.display.presenter).unwrap_or_default();
-    let mut presenter = Screen::open_for_pictures(&opts.dri_dir, &choice, kind)?;
+    let presenter = Screen::open_for_pictures(&opts.dri_dir, &choice, kind)?;
     let (ow, oh) = presenter.size();
     let mut config = config.clone();
     config.display.width = ow;
     config.display.height = oh;
-    let size = config.display.size();
-    let rotation = config.display.rotation();
-    let mut show = |img: &Image| -> Result<(), CalibrateError> {
-        presenter.show_image(&to_output(img, rotation))?;
-        presenter.wait_flip(Duration::from_millis(500))?;
-        Ok(())
+    let mut board = Board {
+        presenter,
+        rotation: config.display.rotation(),
+        size: config.display.size(),
     };
-    show(&screen(
-        size,
-        None,
-        &["looking for touchscreens..."],
-        [200, 200, 200, 255],
-    ))?;
+    board.show(None, &["looking for touchscreens..."], [200, 200, 200, 255])?;
     let clock = Monotonic;
     let start_us = clock.now_us();
     let input = InputThread::start(config.clone(), start_us)?;
     let now = || (clock.now_us() - start_us) as f64 / 1e6;
+    let taken = take_touches(&mut board, &input, &config, opts, &now);
+    input.stop();
+    let taken = taken?;
+    let (targets, raw) = (&taken.targets, &taken.raw);
+    let pairs: Vec<(ScreenPoint, RawPoint)> = targets[..4]
+        .iter()
+        .copied()
+        .zip(raw[..4].iter().copied())
+        .collect();
+    let solved = solve(
+        &taken.base,
+        &pairs,
+        (targets[4], raw[4]),
+        SolveOptions::default(),
+    );
+    let solution = match solved {
+        Ok(s) => s,
+        Err(source) => {
+            let why = source.to_string();
+            board.show(
+                None,
+                &[
+                    "calibration refused, nothing written:",
+                    &why,
+                    "run `marionette calibrate` again",
+                ],
+                [255, 120, 100, 255],
+            )?;
+            std::thread::sleep(Duration::from_secs(3));
+            return Err(CalibrateError::Refused {
+                device: taken.device,
+                source,
+            });
+        }
+    };
+    let backup = store(&opts.config_path, &taken.device, &solution)?;
+    let done = format!(
+        "calibrated: the check point is off by {:.1} px (fit {:.1} px)",
+        solution.check_error_px, solution.rms_px
+    );
+    let wrote = format!("written to {}", opts.config_path.display());
+    board.show(Some(targets[4]), &[&done, &wrote], [140, 230, 140, 255])?;
+    tracing::info!(
+        device = %taken.device,
+        check_error_px = solution.check_error_px,
+        rms_px = solution.rms_px,
+        matrix = ?solution.matrix.0,
+        config = %opts.config_path.display(),
+        "calibration written"
+    );
+    std::thread::sleep(Duration::from_secs(2));
+    Ok(Calibrated {
+        device: taken.device,
+        solution,
+        written: opts.config_path.clone(),
+        backup,
+    })
+}
+
+/// Find the touchscreen (named, or the only one) and take a touch at each
+/// target, showing them one by one.
+fn take_touches(
+    board: &mut Board,
+    input: &InputThread,
+    config: &Config,
+    opts: &CalibrateOptions,
+    now: &dyn Fn() -> f64,
+) -> Result<Taken, CalibrateError> {
     let mut events = Vec::new();
-    // The touchscreen: named, or the only one.
     let mut find = FindDevice::new(opts.device.clone(), now());
     let found = loop {
         input.drain(&mut events);
         match find.step(now(), events.drain(..)) {
             Finding::Found(d) => break d,
-            Finding::Failed(why) => {
-                input.stop();
-                return Err(CalibrateError::Device(why));
-            }
+            Finding::Failed(why) => return Err(CalibrateError::Device(why)),
             Finding::Waiting => {}
         }
         if crate::platform::signals::stop_requested() {
-            input.stop();
             return Err(CalibrateError::Stopped);
         }
         std::thread::sleep(Duration::from_millis(50));
@@ -228,6 +317,7 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         f64::from(xa.maximum) - f64::from(xa.minimum),
         f64::from(ya.maximum) - f64::from(ya.minimum),
     );
+    let size = board.size;
     let targets: Vec<ScreenPoint> = TARGETS
         .iter()
         .map(|(fx, fy)| ScreenPoint::new(fx * f64::from(size.0), fy * f64::from(size.1)))
@@ -240,7 +330,7 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
         now(),
     );
     let mut next = touches.first();
-    let taken = loop {
+    loop {
         match next {
             Collecting::Show { target, hint } => {
                 let title = format!(
@@ -248,109 +338,59 @@ pub fn calibrate(config: &Config, opts: &CalibrateOptions) -> Result<Calibrated,
                     target + 1,
                     targets.len()
                 );
-                show(&screen(
-                    size,
-                    Some(targets[target]),
-                    &[&dev_name, &title, hint.unwrap_or("")],
-                    [230, 230, 230, 255],
-                ))?;
+                let lines = [dev_name.as_str(), &title, hint.unwrap_or("")];
+                board.show(Some(targets[target]), &lines, [230, 230, 230, 255])?;
             }
             Collecting::TimedOut { target } => {
-                input.stop();
                 return Err(CalibrateError::NoTouch {
                     target: target + 1,
                     seconds: opts.touch_timeout.as_secs(),
                 });
             }
-            Collecting::Done(taken) => break taken,
+            Collecting::Done(raw) => {
+                return Ok(Taken {
+                    device: dev_name,
+                    base,
+                    targets,
+                    raw,
+                });
+            }
             Collecting::Waiting => {}
         }
         if crate::platform::signals::stop_requested() {
-            input.stop();
             return Err(CalibrateError::Stopped);
         }
         std::thread::sleep(Duration::from_millis(10));
         input.drain(&mut events);
         next = touches.step(now(), events.drain(..));
-    };
-    input.stop();
-    let pairs: Vec<(ScreenPoint, RawPoint)> = targets[..4]
-        .iter()
-        .copied()
-        .zip(taken[..4].iter().copied())
-        .collect();
-    let solved = solve(
-        &base,
-        &pairs,
-        (targets[4], taken[4]),
-        SolveOptions::default(),
-    );
-    let solution = match solved {
-        Ok(s) => s,
-        Err(source) => {
-            let why = source.to_string();
-            show(&screen(
-                size,
-                None,
-                &[
-                    "calibration refused, nothing written:",
-                    &why,
-                    "run `marionette calibrate` again",
-                ],
-                [255, 120, 100, 255],
-            ))?;
-            std::thread::sleep(Duration::from_secs(3));
-            return Err(CalibrateError::Refused {
-                device: dev_name,
-                source,
-            });
-        }
-    };
-    let text = match std::fs::read_to_string(&opts.config_path) {
+    }
+}
+
+/// Write `solution` as `device`'s calibration into the configuration file
+/// at `path` (kept as `.bak`), never a file the kiosk would refuse.
+fn store(
+    path: &Path,
+    device: &str,
+    solution: &Solution,
+) -> Result<Option<PathBuf>, CalibrateError> {
+    let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
         Err(source) => {
             return Err(CalibrateError::Write {
-                path: opts.config_path.clone(),
+                path: path.to_owned(),
                 source,
             });
         }
     };
     let cerr = |message: String| CalibrateError::ConfigText {
-        path: opts.config_path.clone(),
+        path: path.to_owned(),
         message,
     };
     let new_text =
-        with_calibration(&text, &dev_name, solution.matrix.0).map_err(|e| cerr(e.to_string()))?;
-    // Never write a file the kiosk would refuse.
-    Config::parse(&new_text, &opts.config_path).map_err(|e| cerr(e.to_string()))?;
-    let backup = write_config(&opts.config_path, &new_text)?;
-    let done = format!(
-        "calibrated: the check point is off by {:.1} px (fit {:.1} px)",
-        solution.check_error_px, solution.rms_px
-    );
-    let wrote = format!("written to {}", opts.config_path.display());
-    show(&screen(
-        size,
-        Some(targets[4]),
-        &[&done, &wrote],
-        [140, 230, 140, 255],
-    ))?;
-    tracing::info!(
-        device = %dev_name,
-        check_error_px = solution.check_error_px,
-        rms_px = solution.rms_px,
-        matrix = ?solution.matrix.0,
-        config = %opts.config_path.display(),
-        "calibration written"
-    );
-    std::thread::sleep(Duration::from_secs(2));
-    Ok(Calibrated {
-        device: dev_name,
-        solution,
-        written: opts.config_path.clone(),
-        backup,
-    })
+        with_calibration(&text, device, solution.matrix.0).map_err(|e| cerr(e.to_string()))?;
+    Config::parse(&new_text, path).map_err(|e| cerr(e.to_string()))?;
+    write_config(path, &new_text)
 }
 
 #[cfg(test)]

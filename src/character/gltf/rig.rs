@@ -166,18 +166,9 @@ impl Joints {
     }
 }
 
-/// Each node's world transform with the skinned joints in their bind
-/// pose (from the skins' inverse bind matrices), where the nodes hold
-/// another pose (an idle pose stored on the nodes): the nodes a joint
-/// carries go with it. `None` where the nodes already stand in the bind
-/// pose (within half a percent of the skeleton's size).
-fn bind_pose(
-    file: &File,
-    world: &[DMat4],
-    joints: &Joints,
-) -> Result<Option<Vec<DMat4>>, GltfError> {
-    // A figure built of rigid meshes hung on its joints looks as it should
-    // in the nodes' pose, wherever its few skinned parts were bound.
+/// Whether the file's meshes are mostly skinned: not a figure of rigid
+/// meshes hung on its joints with a few skinned parts.
+fn mostly_skinned(file: &File) -> bool {
     let (mut skinned, mut rigid) = (0usize, 0usize);
     for node in file.doc.nodes() {
         if let Some(mesh) = node.mesh() {
@@ -192,9 +183,16 @@ fn bind_pose(
             }
         }
     }
-    if rigid * 10 > skinned {
-        return Ok(None);
-    }
+    rigid * 10 <= skinned
+}
+
+/// Each node's bind pose as its skin (the first that has it) binds it, in
+/// the nodes' world; `None` for nodes no skin binds.
+fn skin_binds(
+    file: &File,
+    world: &[DMat4],
+    joints: &Joints,
+) -> Result<Vec<Option<DMat4>>, GltfError> {
     let mut bind: Vec<Option<DMat4>> = vec![None; world.len()];
     let mut budget = 0u64;
     for skin in file.doc.skins() {
@@ -219,52 +217,83 @@ fn bind_pose(
             // Said by the parts' reader, which refuses them.
             continue;
         }
-        // The model's place: the skinning matrix most joints share at the
-        // nodes' pose (every joint shares it where that is the bind pose).
-        let skinning: Vec<DMat4> = nodes
-            .iter()
-            .zip(&ibms)
-            .map(|(&n, m)| world[n] * *m)
-            .collect();
-        let close = |a: &DMat4, b: &DMat4| {
-            a.to_cols_array()
-                .iter()
-                .zip(b.to_cols_array())
-                .all(|(x, y)| (x - y).abs() < 1e-4 * (1.0 + x.abs().max(y.abs())))
-        };
-        // The armature's own place where a joint (its root, unmoved)
-        // agrees with it, else the one most joints agree on.
-        let armature = nodes
-            .iter()
-            .find_map(|&n| {
-                joints
-                    .joint_parent(n)
-                    .is_none()
-                    .then(|| joints.parent_node[n])
-            })
-            .map_or(DMat4::IDENTITY, |p| p.map_or(DMat4::IDENTITY, |p| world[p]));
-        let model = if skinning.iter().any(|b| close(&armature, b)) {
-            armature
-        } else {
-            skinning
-                .iter()
-                .take(64)
-                .max_by_key(|a| skinning.iter().filter(|b| close(a, b)).count())
-                .copied()
-                .unwrap_or(DMat4::IDENTITY)
-        };
-        tracing::debug!(
-            skin = skin.index(),
-            joints = nodes.len(),
-            agree = skinning.iter().filter(|b| close(&model, b)).count(),
-            "joints whose skinning matrix at the nodes' pose is the model's"
-        );
+        let model = model_place(world, joints, skin.index(), &nodes, &ibms);
         for (k, &n) in nodes.iter().enumerate() {
             if bind[n].is_none() {
                 bind[n] = Some(model * ibms[k].inverse());
             }
         }
     }
+    Ok(bind)
+}
+
+/// The model's place for skin `skin` (its joint `nodes`, their inverse bind
+/// matrices `ibms`): the skinning matrix most joints share at the nodes'
+/// pose (every joint shares it where that is the bind pose); the
+/// armature's own place where a joint (its root, unmoved) agrees with it,
+/// else the one most joints agree on.
+fn model_place(
+    world: &[DMat4],
+    joints: &Joints,
+    skin: usize,
+    nodes: &[usize],
+    ibms: &[DMat4],
+) -> DMat4 {
+    let skinning: Vec<DMat4> = nodes
+        .iter()
+        .zip(ibms)
+        .map(|(&n, m)| world[n] * *m)
+        .collect();
+    let close = |a: &DMat4, b: &DMat4| {
+        a.to_cols_array()
+            .iter()
+            .zip(b.to_cols_array())
+            .all(|(x, y)| (x - y).abs() < 1e-4 * (1.0 + x.abs().max(y.abs())))
+    };
+    let armature = nodes
+        .iter()
+        .find_map(|&n| {
+            joints
+                .joint_parent(n)
+                .is_none()
+                .then(|| joints.parent_node[n])
+        })
+        .map_or(DMat4::IDENTITY, |p| p.map_or(DMat4::IDENTITY, |p| world[p]));
+    let model = if skinning.iter().any(|b| close(&armature, b)) {
+        armature
+    } else {
+        skinning
+            .iter()
+            .take(64)
+            .max_by_key(|a| skinning.iter().filter(|b| close(a, b)).count())
+            .copied()
+            .unwrap_or(DMat4::IDENTITY)
+    };
+    tracing::debug!(
+        skin,
+        joints = nodes.len(),
+        agree = skinning.iter().filter(|b| close(&model, b)).count(),
+        "joints whose skinning matrix at the nodes' pose is the model's"
+    );
+    model
+}
+
+/// Each node's world transform with the skinned joints in their bind
+/// pose (from the skins' inverse bind matrices), where the nodes hold
+/// another pose (an idle pose stored on the nodes): the nodes a joint
+/// carries go with it. `None` where the nodes already stand in the bind
+/// pose (within half a percent of the skeleton's size).
+fn bind_pose(
+    file: &File,
+    world: &[DMat4],
+    joints: &Joints,
+) -> Result<Option<Vec<DMat4>>, GltfError> {
+    // A figure built of rigid meshes hung on its joints looks as it should
+    // in the nodes' pose, wherever its few skinned parts were bound.
+    if !mostly_skinned(file) {
+        return Ok(None);
+    }
+    let bind = skin_binds(file, world, joints)?;
     let places: Vec<DVec3> = joints
         .order
         .iter()
@@ -328,37 +357,10 @@ pub(super) fn figure(
             joints: order.len(),
         });
     }
-    let extra_root = joints.extra_root;
-    let index_of = &joints.index_of;
-    let nodes: Vec<gltf::Node<'_>> = file.doc.nodes().collect();
     let raw: Vec<DVec3> = order.iter().map(|&n| world[n].w_axis.truncate()).collect();
     let (parts_raw, warnings) =
         super::parts::parts(file, &world, &joints.joint_of, &|n| joints.carrier(n))?;
-
-    // The joints as the roles see them: names, parents, places (the
-    // made-up root first where there is one).
-    let mut names = Vec::with_capacity(order.len() + extra_root);
-    let mut parents = Vec::with_capacity(order.len() + extra_root);
-    let mut places = Vec::with_capacity(order.len() + extra_root);
-    if extra_root == 1 {
-        names.push("(root)".to_owned());
-        parents.push(None);
-        places.push(raw[0]);
-    }
-    for (k, &n) in order.iter().enumerate() {
-        names.push(
-            nodes[n]
-                .name()
-                .map_or_else(|| format!("joint {n}"), str::to_owned),
-        );
-        parents.push(
-            joints
-                .joint_parent(n)
-                .map(|q| index_of[q] + extra_root)
-                .or((extra_root == 1).then_some(0)),
-        );
-        places.push(raw[k]);
-    }
+    let (names, parents, places) = joint_table(file, &joints, &raw);
     let mut found = given_roles(file, &names, &joints, overrides)?;
     {
         let rig = humanoid::Rig::new(&names, &parents, &places);
@@ -373,23 +375,13 @@ pub(super) fn figure(
                 .map(|v| DVec3::new(v[0].into(), v[1].into(), v[2].into()))
         })
         .collect();
-    let body = frame::body_frame(&found, &places, &parents, &parts_raw, &names);
-    let (turn, up_name, facing_name) = match &body {
-        Some(b) => {
-            if b.crossed {
-                notes.push("its joints' names put left and right the other way round from where its toes point: their sides are swapped".to_owned());
-                frame::swap_sides(&mut found);
-            }
-            (b.turn, b.up.clone(), b.facing.clone())
-        }
-        None => {
-            let (turn, up_name) = upright(&raw);
-            let upright_joints: Vec<DVec3> = places.iter().map(|p| turn * *p).collect();
-            let height_units = extent_along_y(&verts, &raw, turn);
-            let (yaw, facing_name) = facing(&upright_joints, &parents, height_units, turn);
-            (DQuat::from_rotation_y(yaw) * turn, up_name, facing_name)
-        }
-    };
+    let (turn, up_name, facing_name) = body_turn(
+        &mut found,
+        (&names, &parents, &places),
+        &parts_raw,
+        (&raw, &verts),
+        &mut notes,
+    );
     let height_units = extent_along_y(&verts, &raw, turn);
     if !(height_units.is_finite() && height_units > 0.0) {
         return Err(file.data_error("the figure has no height".to_owned()));
@@ -411,30 +403,10 @@ pub(super) fn figure(
         * DMat4::from_quat(turn);
     let at = |p: DVec3| normal.transform_point3(p);
 
-    // The skeleton: rest offsets in the world axes, identity rotations.
-    let mut skel_joints = Vec::with_capacity(names.len());
-    let mut rest: Vec<DMat4> = Vec::with_capacity(names.len());
-    for (k, name) in names.iter().enumerate() {
-        let p = at(places[k]);
-        let offset = match parents[k] {
-            Some(q) => p - rest[q].w_axis.truncate(),
-            None => p,
-        };
-        skel_joints.push(Joint {
-            name: name.clone(),
-            parent: parents[k],
-            offset,
-            end_site: None,
-        });
-        rest.push(if k < extra_root {
-            DMat4::from_translation(p)
-        } else {
-            rigid(normal * world[order[k - extra_root]])
-        });
-    }
-    let mut skeleton = Skeleton {
-        joints: skel_joints,
-    };
+    let extra_root = joints.extra_root;
+    let (mut skeleton, mut rest) = rest_skeleton(&names, &parents, &places, &normal, |k| {
+        (k >= extra_root).then(|| world[order[k - extra_root]])
+    });
     let parts: Vec<Part> = parts_raw
         .into_iter()
         .map(|mut p| {
@@ -479,6 +451,106 @@ pub(super) fn figure(
         made_up,
         credit: file.extensions.as_ref().and_then(humanoid::vrm_credit),
     })
+}
+
+/// The joints as the roles see them: names, parents, places (the made-up
+/// root first where there is one); `raw` holds the joints' places in
+/// `joints.order`.
+fn joint_table(
+    file: &File,
+    joints: &Joints,
+    raw: &[DVec3],
+) -> (Vec<String>, Vec<Option<usize>>, Vec<DVec3>) {
+    let (order, extra_root) = (&joints.order, joints.extra_root);
+    let nodes: Vec<gltf::Node<'_>> = file.doc.nodes().collect();
+    let mut names = Vec::with_capacity(order.len() + extra_root);
+    let mut parents = Vec::with_capacity(order.len() + extra_root);
+    let mut places = Vec::with_capacity(order.len() + extra_root);
+    if extra_root == 1 {
+        names.push("(root)".to_owned());
+        parents.push(None);
+        places.push(raw[0]);
+    }
+    for (k, &n) in order.iter().enumerate() {
+        names.push(
+            nodes[n]
+                .name()
+                .map_or_else(|| format!("joint {n}"), str::to_owned),
+        );
+        parents.push(
+            joints
+                .joint_parent(n)
+                .map(|q| joints.index_of[q] + extra_root)
+                .or((extra_root == 1).then_some(0)),
+        );
+        places.push(raw[k]);
+    }
+    (names, parents, places)
+}
+
+/// The turn that stands the figure up facing +Z, and what said which way
+/// is up and which way it faces: its body's frame (its sides swapped where
+/// its names put them the other way round), else its joints' spread.
+fn body_turn(
+    found: &mut BTreeMap<Role, (usize, humanoid::Evidence)>,
+    (names, parents, places): (&[String], &[Option<usize>], &[DVec3]),
+    parts_raw: &[Part],
+    (raw, verts): (&[DVec3], &[DVec3]),
+    notes: &mut Vec<String>,
+) -> (DQuat, String, String) {
+    match frame::body_frame(found, places, parents, parts_raw, names) {
+        Some(b) => {
+            if b.crossed {
+                notes.push("its joints' names put left and right the other way round from where its toes point: their sides are swapped".to_owned());
+                frame::swap_sides(found);
+            }
+            (b.turn, b.up, b.facing)
+        }
+        None => {
+            let (turn, up_name) = upright(raw);
+            let upright_joints: Vec<DVec3> = places.iter().map(|p| turn * *p).collect();
+            let height_units = extent_along_y(verts, raw, turn);
+            let (yaw, facing_name) = facing(&upright_joints, parents, height_units, turn);
+            (DQuat::from_rotation_y(yaw) * turn, up_name, facing_name)
+        }
+    }
+}
+
+/// The skeleton at rest through `normal`: offsets in the world axes,
+/// identity rotations; each joint's rest transform its node's (`node(k)`,
+/// made rigid) or, for a made-up joint, its place.
+fn rest_skeleton(
+    names: &[String],
+    parents: &[Option<usize>],
+    places: &[DVec3],
+    normal: &DMat4,
+    node: impl Fn(usize) -> Option<DMat4>,
+) -> (Skeleton, Vec<DMat4>) {
+    let mut skel_joints = Vec::with_capacity(names.len());
+    let mut rest: Vec<DMat4> = Vec::with_capacity(names.len());
+    for (k, name) in names.iter().enumerate() {
+        let p = normal.transform_point3(places[k]);
+        let offset = match parents[k] {
+            Some(q) => p - rest[q].w_axis.truncate(),
+            None => p,
+        };
+        skel_joints.push(Joint {
+            name: name.clone(),
+            parent: parents[k],
+            offset,
+            end_site: None,
+        });
+        rest.push(match node(k) {
+            Some(m) => rigid(*normal * m),
+            None => DMat4::from_translation(p),
+        });
+    }
+    (
+        Skeleton {
+            joints: skel_joints,
+        },
+        rest,
+    )
 }
 
 /// The fewest joints a character can have: a pelvis, a head, and two
