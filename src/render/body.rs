@@ -12,7 +12,7 @@ use super::mesh::Mesh;
 use super::scene::segments;
 use crate::character::gltf::{Figure, Part, Skin};
 use crate::character::library::Library;
-use crate::character::roles::RoleMap;
+use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose, forward_kinematics};
 
 /// How far from each end of a segment its vertices start to blend with
@@ -77,21 +77,7 @@ pub fn own_body(lib: &Library, roles: &RoleMap) -> Skin {
 #[must_use]
 pub fn own_figure(lib: &Library, roles: &RoleMap) -> Figure {
     let sk = &lib.skeleton;
-    // The rest pose standing on the floor: its lowest joint or End Site
-    // as high as a shoe's sole puts it (the shoes rest on the floor).
-    let mut pose = sk.rest_pose();
-    let low = {
-        let w = forward_kinematics(sk, &pose);
-        (0..sk.len())
-            .flat_map(|j| [Some(w.positions[j]), w.end_site(sk, j)])
-            .flatten()
-            .map(|p| p.y)
-            .fold(f64::INFINITY, f64::min)
-    };
-    if low.is_finite() {
-        pose.translations[0].y += SOLE_M - low;
-    }
-    let rest = forward_kinematics(sk, &pose);
+    let rest = standing_rest(sk);
     // Each segment meshed whole (a bent joint shows what the capsules'
     // union would have left out), its vertices carried by its joints.
     let mut mesh = Mesh::default();
@@ -118,34 +104,102 @@ pub fn own_figure(lib: &Library, roles: &RoleMap) -> Figure {
             } else {
                 0.5
             };
-            // Up to half the turn of the joint beyond an end, at that end.
-            let beyond = |s: f64| 0.5 * (1.0 - s / BLEND).clamp(0.0, 1.0).powi(2);
-            let mut ws = [0.0; 4];
-            let mut js = [0u16; 4];
-            let mut add = |j: usize, w: f64| {
-                let k = js[..3]
-                    .iter()
-                    .zip(&ws)
-                    .position(|(&x, &wx)| wx == 0.0 || usize::from(x) == j)
-                    .unwrap_or(3);
-                js[k] = u16::try_from(j).unwrap_or(0);
-                ws[k] += w as f32;
-            };
-            let (wa, wb) = (beyond(t), beyond(1.0 - t));
-            add(carrier, 1.0 - wa - wb);
-            if wa > 0.0 {
-                add(at_a, wa);
-            }
-            if wb > 0.0 {
-                add(at_b, wb);
-            }
+            let (js, ws) = skin_at(t, (carrier, at_a, at_b));
             joints.push(js);
             weights.push(ws);
             roles_of.push(seg.part);
         }
     }
-    // One part per colour and body part (the clothes are tinted per
-    // character; a held part glows).
+    let parts = parts_by_colour(&mesh, &roles_of, &joints, &weights);
+    let height_m = mesh
+        .vertices
+        .iter()
+        .map(|v| f64::from(v.pos[1]))
+        .fold(0.0, f64::max);
+    Figure {
+        skeleton: sk.clone(),
+        rest: (0..sk.len())
+            .map(|j| DMat4::from_rotation_translation(rest.rotations[j], rest.positions[j]))
+            .collect(),
+        roles: roles.clone(),
+        evidence: roles
+            .0
+            .keys()
+            .map(|r| {
+                (
+                    *r,
+                    crate::character::gltf::humanoid::Evidence::Configuration,
+                )
+            })
+            .collect(),
+        roles_by: "the library",
+        parts,
+        skins: 1,
+        height_m,
+        scale_to_m: 1.0,
+        facing: "+Z".to_owned(),
+        up: "+Y".to_owned(),
+        warnings: Vec::new(),
+        own: true,
+        made_up: vec![false; sk.len()],
+        credit: None,
+    }
+}
+
+/// The rest pose standing on the floor: its lowest joint or End Site as
+/// high as a shoe's sole puts it (the shoes rest on the floor).
+fn standing_rest(sk: &Skeleton) -> WorldPose {
+    let mut pose = sk.rest_pose();
+    let low = {
+        let w = forward_kinematics(sk, &pose);
+        (0..sk.len())
+            .flat_map(|j| [Some(w.positions[j]), w.end_site(sk, j)])
+            .flatten()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min)
+    };
+    if low.is_finite() {
+        pose.translations[0].y += SOLE_M - low;
+    }
+    forward_kinematics(sk, &pose)
+}
+
+/// The joints and weights of a segment's vertex at `t` along it (0 at its
+/// start, 1 at its end): its carrier, and up to half the turn of the joint
+/// beyond an end, at that end.
+fn skin_at(t: f64, (carrier, at_a, at_b): (usize, usize, usize)) -> ([u16; 4], [f32; 4]) {
+    let beyond = |s: f64| 0.5 * (1.0 - s / BLEND).clamp(0.0, 1.0).powi(2);
+    let mut ws = [0.0; 4];
+    let mut js = [0u16; 4];
+    let mut add = |j: usize, w: f64| {
+        let k = js[..3]
+            .iter()
+            .zip(&ws)
+            .position(|(&x, &wx)| wx == 0.0 || usize::from(x) == j)
+            .unwrap_or(3);
+        js[k] = u16::try_from(j).unwrap_or(0);
+        ws[k] += w as f32;
+    };
+    let (wa, wb) = (beyond(t), beyond(1.0 - t));
+    add(carrier, 1.0 - wa - wb);
+    if wa > 0.0 {
+        add(at_a, wa);
+    }
+    if wb > 0.0 {
+        add(at_b, wb);
+    }
+    (js, ws)
+}
+
+/// The mesh as one part per colour and body part (the clothes are tinted
+/// per character; a held part glows), each vertex with its joints and
+/// weights.
+fn parts_by_colour(
+    mesh: &Mesh,
+    roles_of: &[Role],
+    joints: &[[u16; 4]],
+    weights: &[[f32; 4]],
+) -> Vec<Part> {
     let mut parts: Vec<Part> = Vec::new();
     let mut index_in: Vec<Option<(usize, u32)>> = vec![None; mesh.vertices.len()];
     for t in mesh.indices.chunks_exact(3) {
@@ -187,39 +241,7 @@ pub fn own_figure(lib: &Library, roles: &RoleMap) -> Figure {
             parts[k].indices.push(local);
         }
     }
-    let height_m = mesh
-        .vertices
-        .iter()
-        .map(|v| f64::from(v.pos[1]))
-        .fold(0.0, f64::max);
-    Figure {
-        skeleton: sk.clone(),
-        rest: (0..sk.len())
-            .map(|j| DMat4::from_rotation_translation(rest.rotations[j], rest.positions[j]))
-            .collect(),
-        roles: roles.clone(),
-        evidence: roles
-            .0
-            .keys()
-            .map(|r| {
-                (
-                    *r,
-                    crate::character::gltf::humanoid::Evidence::Configuration,
-                )
-            })
-            .collect(),
-        roles_by: "the library",
-        parts,
-        skins: 1,
-        height_m,
-        scale_to_m: 1.0,
-        facing: "+Z".to_owned(),
-        up: "+Y".to_owned(),
-        warnings: Vec::new(),
-        own: true,
-        made_up: vec![false; sk.len()],
-        credit: None,
-    }
+    parts
 }
 
 #[cfg(test)]

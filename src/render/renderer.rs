@@ -145,98 +145,13 @@ impl Renderer {
             source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/scene.wgsl").into()),
         });
         let (globals, layout, bind_group) = globals(device);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scene"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let v3 = wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<Vertex3>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4],
-        };
-        let v2 = wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<Vertex2>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x2, 1 => Float32x4],
-        };
-        let depth = |write: bool, compare, stencil: wgpu::StencilState| wgpu::DepthStencilState {
-            format: DEPTH,
-            depth_write_enabled: Some(write),
-            depth_compare: Some(compare),
-            stencil,
-            bias: wgpu::DepthBiasState::default(),
-        };
-        let blend = Some(wgpu::BlendState::ALPHA_BLENDING);
         let maker = Maker {
             device,
             shader: &shader,
             format,
             samples,
         };
-        let make = |label: &str,
-                    pipeline_layout: &wgpu::PipelineLayout,
-                    vs: &str,
-                    fs: &str,
-                    layout: wgpu::VertexBufferLayout<'_>,
-                    cull: Option<wgpu::Face>,
-                    ds: wgpu::DepthStencilState,
-                    blend: Option<wgpu::BlendState>| {
-            maker.make(label, pipeline_layout, (vs, fs), layout, cull, ds, blend)
-        };
-        let once = wgpu::StencilFaceState {
-            compare: wgpu::CompareFunction::Equal,
-            fail_op: wgpu::StencilOperation::Keep,
-            depth_fail_op: wgpu::StencilOperation::Keep,
-            pass_op: wgpu::StencilOperation::IncrementClamp,
-        };
-        let shadow_stencil = wgpu::StencilState {
-            front: once,
-            back: once,
-            read_mask: 0xff,
-            write_mask: 0xff,
-        };
-        let none = wgpu::StencilState::default();
-        let lit = make(
-            "lit",
-            &pipeline_layout,
-            "vs_lit",
-            "fs_lit",
-            v3.clone(),
-            Some(wgpu::Face::Back),
-            depth(true, wgpu::CompareFunction::Less, none.clone()),
-            None,
-        );
-        let floor = make(
-            "floor",
-            &pipeline_layout,
-            "vs_lit",
-            "fs_floor",
-            v3.clone(),
-            None,
-            depth(true, wgpu::CompareFunction::Less, none.clone()),
-            None,
-        );
-        let shadow = make(
-            "shadow",
-            &pipeline_layout,
-            "vs_shadow",
-            "fs_shadow",
-            v3,
-            Some(wgpu::Face::Back),
-            depth(false, wgpu::CompareFunction::LessEqual, shadow_stencil),
-            blend,
-        );
-        let overlay = make(
-            "overlay",
-            &pipeline_layout,
-            "vs_overlay",
-            "fs_overlay",
-            v2,
-            None,
-            depth(false, wgpu::CompareFunction::Always, none.clone()),
-            blend,
-        );
+        let [lit, floor, shadow, overlay] = maker.scene(&layout);
         // Skinning in the vertex shader needs storage buffers read there
         // (every Vulkan GPU does); the default where the adapter is a GPU.
         let vertex_storage = gpu
@@ -245,22 +160,7 @@ impl Renderer {
             .flags
             .contains(wgpu::DownlevelFlags::VERTEX_STORAGE);
         let figures = Figures::new(device, !gpu.is_cpu() && vertex_storage);
-        let skinned = vertex_storage.then(|| {
-            make(
-                "skinned",
-                &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("skinned"),
-                    bind_group_layouts: &[Some(&layout), Some(figures.layout())],
-                    immediate_size: 0,
-                }),
-                "vs_skinned",
-                "fs_lit",
-                skinned::VERTEX,
-                Some(wgpu::Face::Back),
-                depth(true, wgpu::CompareFunction::Less, none),
-                None,
-            )
-        });
+        let skinned = vertex_storage.then(|| maker.skinned(&layout, figures.layout()));
         Self {
             format,
             samples,
@@ -591,6 +491,21 @@ fn floor_mesh(gpu: &Gpu) -> (wgpu::Buffer, wgpu::Buffer, u32) {
     (floor_vb, floor_ib, ground.indices.len() as u32)
 }
 
+/// The depth test (and stencil) of a pipeline.
+fn depth(
+    write: bool,
+    compare: wgpu::CompareFunction,
+    stencil: wgpu::StencilState,
+) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil,
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
 /// Makes the scene's render pipelines: one shader, one colour target.
 struct Maker<'a> {
     device: &'a wgpu::Device,
@@ -600,6 +515,108 @@ struct Maker<'a> {
 }
 
 impl Maker<'_> {
+    /// The scene's pipelines on the globals' `layout`: lit bodies, the
+    /// floor, the shadows (each pixel darkened once, by the stencil) and
+    /// the overlay.
+    fn scene(&self, layout: &wgpu::BindGroupLayout) -> [wgpu::RenderPipeline; 4] {
+        let pipeline_layout = self
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("scene"),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            });
+        let v3 = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Vertex3>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4],
+        };
+        let v2 = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Vertex2>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x2, 1 => Float32x4],
+        };
+        let blend = Some(wgpu::BlendState::ALPHA_BLENDING);
+        let once = wgpu::StencilFaceState {
+            compare: wgpu::CompareFunction::Equal,
+            fail_op: wgpu::StencilOperation::Keep,
+            depth_fail_op: wgpu::StencilOperation::Keep,
+            pass_op: wgpu::StencilOperation::IncrementClamp,
+        };
+        let shadow_stencil = wgpu::StencilState {
+            front: once,
+            back: once,
+            read_mask: 0xff,
+            write_mask: 0xff,
+        };
+        let none = wgpu::StencilState::default();
+        let lit = self.make(
+            "lit",
+            &pipeline_layout,
+            ("vs_lit", "fs_lit"),
+            v3.clone(),
+            Some(wgpu::Face::Back),
+            depth(true, wgpu::CompareFunction::Less, none.clone()),
+            None,
+        );
+        let floor = self.make(
+            "floor",
+            &pipeline_layout,
+            ("vs_lit", "fs_floor"),
+            v3.clone(),
+            None,
+            depth(true, wgpu::CompareFunction::Less, none.clone()),
+            None,
+        );
+        let shadow = self.make(
+            "shadow",
+            &pipeline_layout,
+            ("vs_shadow", "fs_shadow"),
+            v3,
+            Some(wgpu::Face::Back),
+            depth(false, wgpu::CompareFunction::LessEqual, shadow_stencil),
+            blend,
+        );
+        let overlay = self.make(
+            "overlay",
+            &pipeline_layout,
+            ("vs_overlay", "fs_overlay"),
+            v2,
+            None,
+            depth(false, wgpu::CompareFunction::Always, none),
+            blend,
+        );
+        [lit, floor, shadow, overlay]
+    }
+
+    /// The pipeline of skinned figures, skinning in the vertex shader from
+    /// the figures' buffers (`figures`).
+    fn skinned(
+        &self,
+        layout: &wgpu::BindGroupLayout,
+        figures: &wgpu::BindGroupLayout,
+    ) -> wgpu::RenderPipeline {
+        self.make(
+            "skinned",
+            &self
+                .device
+                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("skinned"),
+                    bind_group_layouts: &[Some(layout), Some(figures)],
+                    immediate_size: 0,
+                }),
+            ("vs_skinned", "fs_lit"),
+            skinned::VERTEX,
+            Some(wgpu::Face::Back),
+            depth(
+                true,
+                wgpu::CompareFunction::Less,
+                wgpu::StencilState::default(),
+            ),
+            None,
+        )
+    }
+
     /// A pipeline of the shader's entry points `(vs, fs)`.
     #[allow(clippy::too_many_arguments)]
     fn make(

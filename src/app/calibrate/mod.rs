@@ -18,7 +18,7 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-use self::procedure::{Collecting, FindDevice, Finding, TARGETS, Touches};
+use self::procedure::{Collecting, FindDevice, Finding, Found, TARGETS, Touches};
 use super::config::Config;
 use super::kiosk::InputThread;
 use super::message::{screen, to_output};
@@ -27,7 +27,7 @@ use crate::display::screen::Screen;
 use crate::input::calibration::{
     Calibration, CalibrationError, RawPoint, Solution, SolveOptions, solve,
 };
-use crate::input::hub::LiveError;
+use crate::input::hub::{HubEvent, LiveError};
 use crate::platform::clock::{Clock, Monotonic};
 use crate::screen::{Rotation, ScreenPoint};
 
@@ -286,19 +286,7 @@ fn take_touches(
     now: &dyn Fn() -> f64,
 ) -> Result<Taken, CalibrateError> {
     let mut events = Vec::new();
-    let mut find = FindDevice::new(opts.device.clone(), now());
-    let found = loop {
-        input.drain(&mut events);
-        match find.step(now(), events.drain(..)) {
-            Finding::Found(d) => break d,
-            Finding::Failed(why) => return Err(CalibrateError::Device(why)),
-            Finding::Waiting => {}
-        }
-        if crate::platform::signals::stop_requested() {
-            return Err(CalibrateError::Stopped);
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let found = find_panel(input, opts.device.clone(), now, &mut events)?;
     let dev_name = found.name;
     tracing::info!(device = %dev_name, path = %found.path.display(), "calibrating");
     let desc = crate::platform::evdev::EvdevDevice::open(&found.path)
@@ -363,6 +351,28 @@ fn take_touches(
         std::thread::sleep(Duration::from_millis(10));
         input.drain(&mut events);
         next = touches.step(now(), events.drain(..));
+    }
+}
+
+/// The touchscreen to calibrate: `wanted`, or the only one there is.
+fn find_panel(
+    input: &InputThread,
+    wanted: Option<String>,
+    now: &dyn Fn() -> f64,
+    events: &mut Vec<HubEvent>,
+) -> Result<Found, CalibrateError> {
+    let mut find = FindDevice::new(wanted, now());
+    loop {
+        input.drain(events);
+        match find.step(now(), events.drain(..)) {
+            Finding::Found(d) => return Ok(d),
+            Finding::Failed(why) => return Err(CalibrateError::Device(why)),
+            Finding::Waiting => {}
+        }
+        if crate::platform::signals::stop_requested() {
+            return Err(CalibrateError::Stopped);
+        }
+        std::thread::sleep(Duration::from_millis(50));
     }
 }
 

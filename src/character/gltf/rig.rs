@@ -339,24 +339,16 @@ pub(super) fn figure(
     if file.doc.skins().len() == 0 {
         return Err(GltfError::NoSkin { path });
     }
-    let node_pose = world_transforms(file)?;
     let joints = Joints::new(file);
-    let bound = bind_pose(file, &node_pose, &joints)?;
     let mut notes = Vec::new();
-    if bound.is_some() {
-        notes.push(
-            "its nodes hold another pose than the skin's bind pose: the bind pose is used"
-                .to_owned(),
-        );
-    }
-    let world = bound.unwrap_or(node_pose);
-    let order = &joints.order;
-    if order.len() < MIN_JOINTS {
+    let world = bind_or_node_pose(file, &joints, &mut notes)?;
+    if joints.order.len() < MIN_JOINTS {
         return Err(GltfError::TooFewJoints {
             path,
-            joints: order.len(),
+            joints: joints.order.len(),
         });
     }
+    let order = &joints.order;
     let raw: Vec<DVec3> = order.iter().map(|&n| world[n].w_axis.truncate()).collect();
     let (parts_raw, warnings) =
         super::parts::parts(file, &world, &joints.joint_of, &|n| joints.carrier(n))?;
@@ -382,41 +374,14 @@ pub(super) fn figure(
         (&raw, &verts),
         &mut notes,
     );
-    let height_units = extent_along_y(&verts, &raw, turn);
-    if !(height_units.is_finite() && height_units > 0.0) {
-        return Err(file.data_error("the figure has no height".to_owned()));
-    }
-    let lowest = verts
-        .iter()
-        .chain(&raw)
-        .map(|p| (turn * *p).y)
-        .fold(f64::INFINITY, f64::min);
-    let scale = detect_scale(height_units);
-    let centre = {
-        let c = order
-            .first()
-            .map_or(DVec3::ZERO, |&n| turn * world[n].w_axis.truncate());
-        DVec3::new(c.x, lowest, c.z)
-    };
-    let normal = DMat4::from_scale(DVec3::splat(scale))
-        * DMat4::from_translation(-centre)
-        * DMat4::from_quat(turn);
-    let at = |p: DVec3| normal.transform_point3(p);
+    let root_at = order.first().map(|&n| world[n].w_axis.truncate());
+    let (normal, height_units, scale) = standing(file, turn, root_at, &verts, &raw)?;
 
     let extra_root = joints.extra_root;
     let (mut skeleton, mut rest) = rest_skeleton(&names, &parents, &places, &normal, |k| {
         (k >= extra_root).then(|| world[order[k - extra_root]])
     });
-    let parts: Vec<Part> = parts_raw
-        .into_iter()
-        .map(|mut p| {
-            for v in &mut p.positions {
-                let q = at(DVec3::new(v[0].into(), v[1].into(), v[2].into()));
-                *v = [q.x as f32, q.y as f32, q.z as f32];
-            }
-            p
-        })
-        .collect();
+    let parts = placed(parts_raw, &normal);
     let height_m = height_units * scale;
     let mut made_up = vec![false; skeleton.len()];
     let roles = places::settle(
@@ -451,6 +416,70 @@ pub(super) fn figure(
         made_up,
         credit: file.extensions.as_ref().and_then(humanoid::vrm_credit),
     })
+}
+
+/// Each node's world transform in the skin's bind pose (said in `notes`
+/// where the nodes hold another), else as the nodes stand.
+fn bind_or_node_pose(
+    file: &File,
+    joints: &Joints,
+    notes: &mut Vec<String>,
+) -> Result<Vec<DMat4>, GltfError> {
+    let node_pose = world_transforms(file)?;
+    Ok(match bind_pose(file, &node_pose, joints)? {
+        Some(bound) => {
+            notes.push(
+                "its nodes hold another pose than the skin's bind pose: the bind pose is used"
+                    .to_owned(),
+            );
+            bound
+        }
+        None => node_pose,
+    })
+}
+
+/// The transform that stands the figure (turned by `turn`) in metres on
+/// the floor, its root joint (at `root_at`) over the origin; with its
+/// height in the file's units and the scale to metres.
+fn standing(
+    file: &File,
+    turn: DQuat,
+    root_at: Option<DVec3>,
+    verts: &[DVec3],
+    raw: &[DVec3],
+) -> Result<(DMat4, f64, f64), GltfError> {
+    let height_units = extent_along_y(verts, raw, turn);
+    if !(height_units.is_finite() && height_units > 0.0) {
+        return Err(file.data_error("the figure has no height".to_owned()));
+    }
+    let lowest = verts
+        .iter()
+        .chain(raw)
+        .map(|p| (turn * *p).y)
+        .fold(f64::INFINITY, f64::min);
+    let scale = detect_scale(height_units);
+    let centre = {
+        let c = root_at.map_or(DVec3::ZERO, |p| turn * p);
+        DVec3::new(c.x, lowest, c.z)
+    };
+    let normal = DMat4::from_scale(DVec3::splat(scale))
+        * DMat4::from_translation(-centre)
+        * DMat4::from_quat(turn);
+    Ok((normal, height_units, scale))
+}
+
+/// The parts with their points moved through `normal`.
+fn placed(parts: Vec<Part>, normal: &DMat4) -> Vec<Part> {
+    parts
+        .into_iter()
+        .map(|mut p| {
+            for v in &mut p.positions {
+                let q = normal.transform_point3(DVec3::new(v[0].into(), v[1].into(), v[2].into()));
+                *v = [q.x as f32, q.y as f32, q.z as f32];
+            }
+            p
+        })
+        .collect()
 }
 
 /// The joints as the roles see them: names, parents, places (the made-up

@@ -4,13 +4,13 @@
 //! against the library's own, and frames whose skinned mesh goes
 //! non-finite.
 
-use glam::DVec3;
+use glam::{DMat4, DVec3};
 use serde::Serialize;
 
 use crate::character::gltf::{Drive, Figure};
 use crate::character::library::Library;
-use crate::character::roles::Role;
-use crate::character::skeleton::forward_kinematics;
+use crate::character::roles::{Role, RoleMap};
+use crate::character::skeleton::{WorldPose, forward_kinematics};
 
 /// The parts judged (those a figure's fit is asked for), each measured
 /// from the root of its limb: hands and elbows from the shoulder, feet and
@@ -135,7 +135,7 @@ fn segments(fig: &Figure) -> Vec<(Role, Role)> {
 fn proportions(
     fig: &Figure,
     lib: &Library,
-    lib_roles: &crate::character::roles::RoleMap,
+    lib_roles: &RoleMap,
 ) -> (bool, std::collections::BTreeMap<String, f64>) {
     let lib_rest = forward_kinematics(&lib.skeleton, &lib.skeleton.rest_pose());
     let lib_h = 1.0;
@@ -167,8 +167,47 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     let Some(lib_roles) = lib.clips.values().next().map(|c| c.roles.clone()) else {
         return CharacterEval::default();
     };
-    let drive = Drive::new(fig, lib, &lib_roles);
-    // Each part's limb length at rest: the figure's and the library's.
+    let against = Against {
+        fig,
+        drive: Drive::new(fig, lib, &lib_roles),
+        lengths: limb_lengths(fig, lib, &lib_roles),
+        segs: segments(fig),
+        ankles: (
+            fig.rest[fig.roles.get(Role::LeftFoot)].w_axis.y,
+            standing_ankle(lib, &lib_roles),
+        ),
+        lib_roles,
+    };
+    let mut t = Tally {
+        by_seg: vec![(0.0, 0); against.segs.len()],
+        ..Tally::default()
+    };
+    (t.out.human_proportions, t.out.proportions) = proportions(fig, lib, &against.lib_roles);
+    for (name, clip) in &lib.clips {
+        t.out.clips += 1;
+        let mut last = None;
+        for pose in clip.frames.iter().step_by(step.max(1)) {
+            t.out.frames += 1;
+            let lw = forward_kinematics(&lib.skeleton, pose);
+            let w = against.drive.pose(fig, &lw);
+            let skinned = against.drive.skin(fig, &w);
+            if skinned.iter().flatten().any(|v| !v.is_finite()) {
+                t.out.bad_frames += 1;
+                last = None;
+                continue;
+            }
+            t.penetration(fig, &skinned, name);
+            t.directions(&against, &w, &lw);
+            t.floats(&against, &w, &lw);
+            t.parts(&against, &w, &lw, name);
+            last = Some(t.skates(&against, &w, &lw, last));
+        }
+    }
+    t.finish(&against.segs)
+}
+
+/// Each part's limb length at rest: the figure's and the library's.
+fn limb_lengths(fig: &Figure, lib: &Library, lib_roles: &RoleMap) -> [(f64, f64); Role::ALL.len()] {
     let lib_rest = forward_kinematics(&lib.skeleton, &lib.skeleton.rest_pose());
     let fig_rest: Vec<DVec3> = fig.rest.iter().map(|m| m.w_axis.truncate()).collect();
     let mut lengths = [(1.0, 1.0); Role::ALL.len()];
@@ -182,18 +221,12 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
             len(&lib_rest.positions, &|q| lib_roles.get(q)).max(1e-6),
         );
     }
-    let mut out = CharacterEval::default();
-    let segs = segments(fig);
-    let mut angles: Vec<f64> = Vec::new();
-    let mut by_seg = vec![(0.0f64, 0usize); segs.len()];
-    let mut floats: Vec<f64> = Vec::new();
-    (out.human_proportions, out.proportions) = proportions(fig, lib, &lib_roles);
-    let (mut sum, mut n) = (0.0, 0usize);
-    let (mut skate, mut skate_n, mut lib_skate, mut lib_skate_n) = (0.0, 0usize, 0.0, 0usize);
-    let feet = [Role::LeftFoot, Role::RightFoot];
-    let fig_rest_ankle = fig.rest[fig.roles.get(Role::LeftFoot)].w_axis.y;
-    // The library's ankles standing: the lower one's median over its
-    // clips (as the figure follows it).
+    lengths
+}
+
+/// The library's ankles standing: the lower one's median over its clips
+/// (as the figure follows it).
+fn standing_ankle(lib: &Library, lib_roles: &RoleMap) -> f64 {
     let mut lows: Vec<f64> = lib
         .clips
         .values()
@@ -206,125 +239,175 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
         })
         .collect();
     lows.sort_by(f64::total_cmp);
-    let lib_rest_ankle = lows.get(lows.len() / 2).copied().unwrap_or(0.0);
-    for (name, clip) in &lib.clips {
-        out.clips += 1;
-        let mut last: Option<([DVec3; 2], [DVec3; 2])> = None;
-        for pose in clip.frames.iter().step_by(step.max(1)) {
-            out.frames += 1;
-            let lw = forward_kinematics(&lib.skeleton, pose);
-            let w = drive.pose(fig, &lw);
-            let skinned = drive.skin(fig, &w);
-            if skinned.iter().flatten().any(|v| !v.is_finite()) {
-                out.bad_frames += 1;
-                last = None;
-                continue;
-            }
-            let (lowest, at) = skinned
-                .iter()
-                .enumerate()
-                .flat_map(|(k, p)| p.iter().enumerate().map(move |(i, v)| (v.y, (k, i))))
-                .fold(
-                    (f64::INFINITY, (0, 0)),
-                    |a, b| if b.0 < a.0 { b } else { a },
-                );
-            if -lowest * 1e3 > out.penetration_mm {
-                out.penetration_mm = -lowest * 1e3;
-                let part = &fig.parts[at.0];
-                let (j, w) = (part.joints[at.1], part.weights[at.1]);
-                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                out.penetration_at =
-                    format!("{} in {name}", fig.skeleton.joints[usize::from(j[k])].name);
-            }
-            let floor_at = |p: DVec3| DVec3::new(p.x, 0.0, p.z);
-            for (si, &(a, b)) in segs.iter().enumerate() {
-                let f =
-                    w[fig.roles.get(b)].w_axis.truncate() - w[fig.roles.get(a)].w_axis.truncate();
-                let l = lw.positions[lib_roles.get(b)] - lw.positions[lib_roles.get(a)];
-                if f.length() > 1e-9 && l.length() > 1e-9 {
-                    let deg = f.angle_between(l).to_degrees();
-                    angles.push(deg);
-                    by_seg[si].0 += deg;
-                    by_seg[si].1 += 1;
-                }
-            }
-            for (k, r) in feet.iter().enumerate() {
-                if lw.positions[lib_roles.get(*r)].y < lib_rest_ankle + PLANTED_M {
-                    if let Some(low) = drive.foot_lowest(&w, k) {
-                        floats.push(low.max(0.0) * 1e3);
-                    }
-                }
-            }
-            for (r, root) in PARTS {
-                let f = w[fig.roles.get(r)].w_axis.truncate();
-                let l = lw.positions[lib_roles.get(r)];
-                let (f0, l0) = match root {
-                    Some(q) => (
-                        w[fig.roles.get(q)].w_axis.truncate(),
-                        lw.positions[lib_roles.get(q)],
-                    ),
-                    None => (floor_at(f), floor_at(l)),
-                };
-                let (fl, ll) = lengths[r.index()];
-                let miss = (f - f0) - (l - l0) * (fl / ll);
-                let pct = miss.length() / fig.height_m * 100.0;
-                sum += pct;
-                n += 1;
-                if pct > out.max_pct {
-                    out.max_pct = pct;
-                    out.worst = format!("{} in {name}", r.name());
-                }
-            }
-            let now = (
-                feet.map(|r| w[fig.roles.get(r)].w_axis.truncate()),
-                feet.map(|r| lw.positions[lib_roles.get(r)]),
+    lows.get(lows.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// What a figure is judged against: how it follows the library, each
+/// part's limb lengths (figure's, library's), its segments, and the ankles
+/// standing (figure's at rest, library's).
+struct Against<'a> {
+    fig: &'a Figure,
+    drive: Drive,
+    lib_roles: RoleMap,
+    lengths: [(f64, f64); Role::ALL.len()],
+    segs: Vec<(Role, Role)>,
+    ankles: (f64, f64),
+}
+
+/// Where the feet are, the figure's and the library's.
+type FeetAt = ([DVec3; 2], [DVec3; 2]);
+
+const FEET: [Role; 2] = [Role::LeftFoot, Role::RightFoot];
+
+/// The frames' measurements before the means are taken.
+#[derive(Default)]
+struct Tally {
+    out: CharacterEval,
+    angles: Vec<f64>,
+    by_seg: Vec<(f64, usize)>,
+    floats: Vec<f64>,
+    miss: (f64, usize),
+    skate: (f64, usize),
+    lib_skate: (f64, usize),
+}
+
+impl Tally {
+    /// The skinned mesh's deepest point under the floor, and the joint
+    /// that carries it most.
+    fn penetration(&mut self, fig: &Figure, skinned: &[Vec<DVec3>], clip: &str) {
+        let (lowest, at) = skinned
+            .iter()
+            .enumerate()
+            .flat_map(|(k, p)| p.iter().enumerate().map(move |(i, v)| (v.y, (k, i))))
+            .fold(
+                (f64::INFINITY, (0, 0)),
+                |a, b| if b.0 < a.0 { b } else { a },
             );
-            if let Some((pf, pl)) = last {
-                for k in 0..2 {
-                    if pf[k].y < fig_rest_ankle + PLANTED_M * drive.scale
-                        && now.0[k].y < fig_rest_ankle + PLANTED_M * drive.scale
-                    {
-                        skate += (now.0[k] - pf[k]).with_y(0.0).length() * 1e3;
-                        skate_n += 1;
-                    }
-                    if pl[k].y < lib_rest_ankle + PLANTED_M
-                        && now.1[k].y < lib_rest_ankle + PLANTED_M
-                    {
-                        lib_skate += (now.1[k] - pl[k]).with_y(0.0).length() * 1e3;
-                        lib_skate_n += 1;
-                    }
-                }
-            }
-            last = Some(now);
+        if -lowest * 1e3 > self.out.penetration_mm {
+            self.out.penetration_mm = -lowest * 1e3;
+            let part = &fig.parts[at.0];
+            let (j, w) = (part.joints[at.1], part.weights[at.1]);
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            self.out.penetration_at =
+                format!("{} in {clip}", fig.skeleton.joints[usize::from(j[k])].name);
         }
     }
-    let r3 = |v: f64| (v * 1e3).round() / 1e3;
-    out.mean_pct = r3(sum / n.max(1) as f64);
-    out.max_pct = r3(out.max_pct);
-    out.penetration_mm = r3(out.penetration_mm.max(0.0));
-    out.skate_mm = r3(skate / skate_n.max(1) as f64);
-    out.library_skate_mm = r3(lib_skate / lib_skate_n.max(1) as f64);
-    let p95 = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get((v.len() * 95 / 100).min(v.len().saturating_sub(1)))
-            .copied()
-            .unwrap_or(0.0)
-    };
-    out.dir_mean_deg = r3(angles.iter().sum::<f64>() / angles.len().max(1) as f64);
-    out.dir_p95_deg = r3(p95(&mut angles));
-    out.float_mm = r3(p95(&mut floats));
-    if let Some((k, (sum, n))) = by_seg
-        .iter()
-        .enumerate()
-        .max_by(|a, b| (a.1.0 / a.1.1.max(1) as f64).total_cmp(&(b.1.0 / b.1.1.max(1) as f64)))
-    {
-        let (a, b) = segs[k];
-        out.dir_worst = format!(
-            "{}-{}: {:.1} deg",
-            a.name(),
-            b.name(),
-            sum / (*n).max(1) as f64
-        );
+
+    /// Each segment's direction against the library's.
+    fn directions(&mut self, a: &Against<'_>, w: &[DMat4], lw: &WorldPose) {
+        for (si, &(s, e)) in a.segs.iter().enumerate() {
+            let f =
+                w[a.fig.roles.get(e)].w_axis.truncate() - w[a.fig.roles.get(s)].w_axis.truncate();
+            let l = lw.positions[a.lib_roles.get(e)] - lw.positions[a.lib_roles.get(s)];
+            if f.length() > 1e-9 && l.length() > 1e-9 {
+                let deg = f.angle_between(l).to_degrees();
+                self.angles.push(deg);
+                self.by_seg[si].0 += deg;
+                self.by_seg[si].1 += 1;
+            }
+        }
     }
-    out
+
+    /// How high the figure's sole is over the floor where the library's
+    /// foot is planted.
+    fn floats(&mut self, a: &Against<'_>, w: &[DMat4], lw: &WorldPose) {
+        for (k, r) in FEET.iter().enumerate() {
+            if lw.positions[a.lib_roles.get(*r)].y < a.ankles.1 + PLANTED_M {
+                if let Some(low) = a.drive.foot_lowest(w, k) {
+                    self.floats.push(low.max(0.0) * 1e3);
+                }
+            }
+        }
+    }
+
+    /// Each part's offset from its limb's root against the library's,
+    /// scaled to the figure's limb.
+    fn parts(&mut self, a: &Against<'_>, w: &[DMat4], lw: &WorldPose, clip: &str) {
+        let floor_at = |p: DVec3| DVec3::new(p.x, 0.0, p.z);
+        for (r, root) in PARTS {
+            let f = w[a.fig.roles.get(r)].w_axis.truncate();
+            let l = lw.positions[a.lib_roles.get(r)];
+            let (f0, l0) = match root {
+                Some(q) => (
+                    w[a.fig.roles.get(q)].w_axis.truncate(),
+                    lw.positions[a.lib_roles.get(q)],
+                ),
+                None => (floor_at(f), floor_at(l)),
+            };
+            let (fl, ll) = a.lengths[r.index()];
+            let miss = (f - f0) - (l - l0) * (fl / ll);
+            let pct = miss.length() / a.fig.height_m * 100.0;
+            self.miss.0 += pct;
+            self.miss.1 += 1;
+            if pct > self.out.max_pct {
+                self.out.max_pct = pct;
+                self.out.worst = format!("{} in {clip}", r.name());
+            }
+        }
+    }
+
+    /// The planted feet's slides since `last`, the figure's and the
+    /// library's; where the feet are now.
+    fn skates(
+        &mut self,
+        a: &Against<'_>,
+        w: &[DMat4],
+        lw: &WorldPose,
+        last: Option<FeetAt>,
+    ) -> FeetAt {
+        let (fig_ankle, lib_ankle) = a.ankles;
+        let now = (
+            FEET.map(|r| w[a.fig.roles.get(r)].w_axis.truncate()),
+            FEET.map(|r| lw.positions[a.lib_roles.get(r)]),
+        );
+        if let Some((pf, pl)) = last {
+            for k in 0..2 {
+                if pf[k].y < fig_ankle + PLANTED_M * a.drive.scale
+                    && now.0[k].y < fig_ankle + PLANTED_M * a.drive.scale
+                {
+                    self.skate.0 += (now.0[k] - pf[k]).with_y(0.0).length() * 1e3;
+                    self.skate.1 += 1;
+                }
+                if pl[k].y < lib_ankle + PLANTED_M && now.1[k].y < lib_ankle + PLANTED_M {
+                    self.lib_skate.0 += (now.1[k] - pl[k]).with_y(0.0).length() * 1e3;
+                    self.lib_skate.1 += 1;
+                }
+            }
+        }
+        now
+    }
+
+    /// The means, the 95th percentiles and the worst segment.
+    fn finish(mut self, segs: &[(Role, Role)]) -> CharacterEval {
+        let mut out = self.out;
+        let r3 = |v: f64| (v * 1e3).round() / 1e3;
+        out.mean_pct = r3(self.miss.0 / self.miss.1.max(1) as f64);
+        out.max_pct = r3(out.max_pct);
+        out.penetration_mm = r3(out.penetration_mm.max(0.0));
+        out.skate_mm = r3(self.skate.0 / self.skate.1.max(1) as f64);
+        out.library_skate_mm = r3(self.lib_skate.0 / self.lib_skate.1.max(1) as f64);
+        let p95 = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v.get((v.len() * 95 / 100).min(v.len().saturating_sub(1)))
+                .copied()
+                .unwrap_or(0.0)
+        };
+        out.dir_mean_deg = r3(self.angles.iter().sum::<f64>() / self.angles.len().max(1) as f64);
+        out.dir_p95_deg = r3(p95(&mut self.angles));
+        out.float_mm = r3(p95(&mut self.floats));
+        if let Some((k, (sum, n))) =
+            self.by_seg.iter().enumerate().max_by(|a, b| {
+                (a.1.0 / a.1.1.max(1) as f64).total_cmp(&(b.1.0 / b.1.1.max(1) as f64))
+            })
+        {
+            let (a, b) = segs[k];
+            out.dir_worst = format!(
+                "{}-{}: {:.1} deg",
+                a.name(),
+                b.name(),
+                sum / (*n).max(1) as f64
+            );
+        }
+        out
+    }
 }

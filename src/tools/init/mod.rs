@@ -268,9 +268,60 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
             path: src.to_owned(),
         });
     }
+    let (takes, skipped) = read_takes(&files);
+    let Some(first) = takes.first() else {
+        return Err(InitError::NothingUsable {
+            path: src.to_owned(),
+            reasons: skipped.iter().map(|(f, w)| format!("{f}: {w}")).collect(),
+        });
+    };
+    let unit = KNOWN_UNITS
+        .iter()
+        .find(|(s, _)| (s - first.clip.scale_to_m).abs() < 1e-12)
+        .map_or_else(
+            || format!("{} m per unit", first.clip.scale_to_m),
+            |(_, name)| (*name).to_owned(),
+        );
+    let roles = first.clip.roles.names(&first.clip.skeleton);
+    let (by_action, not_actions) = by_action(&takes);
+    let mut actions: Vec<PlannedAction> = by_action
+        .into_iter()
+        .map(|(name, takes)| plan_action(name, &takes))
+        .collect();
+    // An action led by one side's part is offered with the other side's
+    // too, unless the folder has that action already.
+    let names: Vec<String> = actions.iter().map(|a| a.name.clone()).collect();
+    for a in &mut actions {
+        offer_mirror(a, &names);
+    }
+    let locomotion = takes
+        .iter()
+        .filter_map(|t| {
+            let m = travel_m(&t.clip);
+            (m >= MIN_TRAVEL_M).then(|| (t.file.clone(), m))
+        })
+        .collect();
+    Ok(Plan {
+        src: src.to_owned(),
+        locomotion,
+        posing: takes.iter().map(|t| t.file.clone()).collect(),
+        actions,
+        roles,
+        unit,
+        skipped,
+        not_actions,
+    })
+}
+
+/// A file left out, and why.
+type Skipped = (String, String);
+
+/// The takes read from `files`, each on the first one's skeleton, and the
+/// files skipped with why.
+fn read_takes(files: &[PathBuf]) -> (Vec<Take>, Vec<Skipped>) {
     let mut takes: Vec<Take> = Vec::new();
     let mut skipped = Vec::new();
-    for path in &files {
+    for path in files {
         let file = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -305,23 +356,16 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
             clip,
         });
     }
-    let Some(first) = takes.first() else {
-        return Err(InitError::NothingUsable {
-            path: src.to_owned(),
-            reasons: skipped.iter().map(|(f, w)| format!("{f}: {w}")).collect(),
-        });
-    };
-    let unit = KNOWN_UNITS
-        .iter()
-        .find(|(s, _)| (s - first.clip.scale_to_m).abs() < 1e-12)
-        .map_or_else(
-            || format!("{} m per unit", first.clip.scale_to_m),
-            |(_, name)| (*name).to_owned(),
-        );
-    let roles = first.clip.roles.names(&first.clip.skeleton);
+    (takes, skipped)
+}
+
+/// The takes of each action (by the file's name, `ACTION_...`; `pose_...`
+/// takes are none), and those named as actions that show no action, with
+/// why.
+fn by_action(takes: &[Take]) -> (BTreeMap<String, Vec<&Take>>, Vec<Skipped>) {
     let mut by_action: BTreeMap<String, Vec<&Take>> = BTreeMap::new();
     let mut not_actions = Vec::new();
-    for t in &takes {
+    for t in takes {
         let stem = t.file.rsplit_once('.').map_or(t.file.as_str(), |(s, _)| s);
         match stem.split_once('_') {
             Some(("pose", _)) => {}
@@ -335,81 +379,62 @@ pub fn plan(src: &Path) -> Result<Plan, InitError> {
             _ => {}
         }
     }
-    let mut actions: Vec<PlannedAction> = by_action
-        .into_iter()
-        .map(|(name, takes)| plan_action(name, &takes))
-        .collect();
-    // An action led by one side's part is offered with the other side's
-    // too, unless the folder has that action already.
-    let names: Vec<String> = actions.iter().map(|a| a.name.clone()).collect();
-    for a in &mut actions {
-        if a.primary.mirrored() == a.primary {
-            continue;
-        }
-        // A name that says no side gets its takes' side, so that the
-        // mirror image's name says the other (`punch` taught with the left
-        // hand: `punch_left` and `punch_right`).
-        let sided = if crate::character::library::mirrored_name(&a.name).ends_with("_mirror") {
-            let side = a.primary.name().split('_').next().unwrap_or_default();
-            format!("{}_{side}", a.name)
-        } else {
-            a.name.clone()
-        };
-        let other = crate::character::library::mirrored_name(&sided);
-        if names.contains(&other) {
-            a.notes
-                .push(format!("no mirror image: the takes have `{other}` already"));
-            continue;
-        }
-        // Both sides move alike (bye-bye with both hands): the action is
-        // its own mirror image, and a mirrored copy would only compete
-        // with it.
-        let (best, other_side) = (
-            a.ranges[0].1,
-            a.ranges
-                .iter()
-                .find(|(r, _)| *r == a.primary.mirrored())
-                .map_or(0.0, |(_, m)| *m),
-        );
-        if other_side >= ALSO_MOVES * best {
-            a.notes.push(format!(
-                "no mirror image: the {} moves as much as the {} ({:.0}%), so the action is its own mirror image",
-                a.primary.mirrored().name(),
-                a.primary.name(),
-                100.0 * other_side / best
-            ));
-            continue;
-        }
-        if sided != a.name {
-            a.notes.push(format!(
-                "named `{sided}` after the side of its takes ({}), its mirror image `{other}`",
-                a.primary.name()
-            ));
-            a.name = sided;
-        }
-        a.mirror = true;
-        a.notes.push(format!(
-            "mirror = true: also `{other}`, led by the {}, from these clips mirrored",
-            a.primary.mirrored().name()
-        ));
+    (by_action, not_actions)
+}
+
+/// Offer an action led by one side's part with the other side's too
+/// (`mirror = true`), unless the takes have that action already or both
+/// sides move alike; the notes say which.
+fn offer_mirror(a: &mut PlannedAction, names: &[String]) {
+    if a.primary.mirrored() == a.primary {
+        return;
     }
-    let locomotion = takes
-        .iter()
-        .filter_map(|t| {
-            let m = travel_m(&t.clip);
-            (m >= MIN_TRAVEL_M).then(|| (t.file.clone(), m))
-        })
-        .collect();
-    Ok(Plan {
-        src: src.to_owned(),
-        locomotion,
-        posing: takes.iter().map(|t| t.file.clone()).collect(),
-        actions,
-        roles,
-        unit,
-        skipped,
-        not_actions,
-    })
+    // A name that says no side gets its takes' side, so that the
+    // mirror image's name says the other (`punch` taught with the left
+    // hand: `punch_left` and `punch_right`).
+    let sided = if crate::character::library::mirrored_name(&a.name).ends_with("_mirror") {
+        let side = a.primary.name().split('_').next().unwrap_or_default();
+        format!("{}_{side}", a.name)
+    } else {
+        a.name.clone()
+    };
+    let other = crate::character::library::mirrored_name(&sided);
+    if names.contains(&other) {
+        a.notes
+            .push(format!("no mirror image: the takes have `{other}` already"));
+        return;
+    }
+    // Both sides move alike (bye-bye with both hands): the action is
+    // its own mirror image, and a mirrored copy would only compete
+    // with it.
+    let (best, other_side) = (
+        a.ranges[0].1,
+        a.ranges
+            .iter()
+            .find(|(r, _)| *r == a.primary.mirrored())
+            .map_or(0.0, |(_, m)| *m),
+    );
+    if other_side >= ALSO_MOVES * best {
+        a.notes.push(format!(
+            "no mirror image: the {} moves as much as the {} ({:.0}%), so the action is its own mirror image",
+            a.primary.mirrored().name(),
+            a.primary.name(),
+            100.0 * other_side / best
+        ));
+        return;
+    }
+    if sided != a.name {
+        a.notes.push(format!(
+            "named `{sided}` after the side of its takes ({}), its mirror image `{other}`",
+            a.primary.name()
+        ));
+        a.name = sided;
+    }
+    a.mirror = true;
+    a.notes.push(format!(
+        "mirror = true: also `{other}`, led by the {}, from these clips mirrored",
+        a.primary.mirrored().name()
+    ));
 }
 
 fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
@@ -451,63 +476,9 @@ fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
     let mut starts = Vec::new();
     let mut ends = Vec::new();
     for (take, motion) in takes.iter().zip(&motions) {
-        let part = &motion[index];
-        let speed = &part.speed;
-        let found = bursts(speed, take.clip.frame_time);
-        let cut_at = cuts(part, &found);
-        let mut edges = vec![0];
-        edges.extend(&cut_at);
-        edges.push(speed.len() - 1);
-        // A piece in which the part hardly moves (a hand brought to the
-        // chest before a bow) is no action of its own: posing only.
-        let ranges: Vec<f64> = edges
-            .windows(2)
-            .map(|w| box_diagonal(&part.path[w[0]..=w[1]]))
-            .collect();
-        let largest = ranges.iter().copied().fold(0.0, f64::max);
-        let kept: Vec<bool> = ranges
-            .iter()
-            .map(|r| *r >= largest || *r >= (MIN_PIECE_SHARE * largest).max(MIN_ACTION_RANGE_M))
-            .collect();
-        if cut_at.is_empty() {
-            clips.push(take.file.clone());
-        } else {
-            notes.push(format!(
-                "{}: {} movements of the {}, cut where it is back and slowest between them (frames {})",
-                take.file,
-                cut_at.len() + 1,
-                primary.name(),
-                cut_at
-                    .iter()
-                    .map(|c| (c + take.skipped).to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-            for ((w, range), keep) in edges.windows(2).zip(&ranges).zip(&kept) {
-                let name = format!(
-                    "{}#{}-{}",
-                    take.file,
-                    w[0] + take.skipped,
-                    w[1] + take.skipped
-                );
-                if *keep {
-                    clips.push(name);
-                } else {
-                    notes.push(format!(
-                        "{name}: the {} moves {range:.2} m in it ({:.0}% of the take's largest movement): no action of its own, it feeds posing only",
-                        primary.name(),
-                        100.0 * range / largest.max(1e-9)
-                    ));
-                }
-            }
-        }
-        for (w, _) in edges.windows(2).zip(&kept).filter(|(_, k)| **k) {
-            let piece = &speed[w[0]..=w[1]];
-            if let Some((a, b)) = active_span(piece) {
-                let last = (piece.len() - 1).max(1) as f64;
-                starts.push(a as f64 / last);
-                ends.push(b as f64 / last);
-            }
+        for (a, b) in pieces(take, &motion[index], primary, &mut clips, &mut notes) {
+            starts.push(a);
+            ends.push(b);
         }
     }
     let segments = segments(median(&mut starts), median(&mut ends));
@@ -526,6 +497,77 @@ fn plan_action(name: String, takes: &[&Take]) -> PlannedAction {
         mirror: false,
         notes,
     }
+}
+
+/// One take of an action cut into its movements of `part` (the primary's
+/// motion): the clips named into `clips` (a piece in which the part
+/// hardly moves feeds posing only, said in `notes`), and each kept
+/// piece's active span as shares of its length.
+fn pieces(
+    take: &Take,
+    part: &PartMotion,
+    primary: Role,
+    clips: &mut Vec<String>,
+    notes: &mut Vec<String>,
+) -> Vec<(f64, f64)> {
+    let speed = &part.speed;
+    let found = bursts(speed, take.clip.frame_time);
+    let cut_at = cuts(part, &found);
+    let mut edges = vec![0];
+    edges.extend(&cut_at);
+    edges.push(speed.len() - 1);
+    // A piece in which the part hardly moves (a hand brought to the
+    // chest before a bow) is no action of its own: posing only.
+    let ranges: Vec<f64> = edges
+        .windows(2)
+        .map(|w| box_diagonal(&part.path[w[0]..=w[1]]))
+        .collect();
+    let largest = ranges.iter().copied().fold(0.0, f64::max);
+    let kept: Vec<bool> = ranges
+        .iter()
+        .map(|r| *r >= largest || *r >= (MIN_PIECE_SHARE * largest).max(MIN_ACTION_RANGE_M))
+        .collect();
+    if cut_at.is_empty() {
+        clips.push(take.file.clone());
+    } else {
+        notes.push(format!(
+            "{}: {} movements of the {}, cut where it is back and slowest between them (frames {})",
+            take.file,
+            cut_at.len() + 1,
+            primary.name(),
+            cut_at
+                .iter()
+                .map(|c| (c + take.skipped).to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        for ((w, range), keep) in edges.windows(2).zip(&ranges).zip(&kept) {
+            let name = format!(
+                "{}#{}-{}",
+                take.file,
+                w[0] + take.skipped,
+                w[1] + take.skipped
+            );
+            if *keep {
+                clips.push(name);
+            } else {
+                notes.push(format!(
+                    "{name}: the {} moves {range:.2} m in it ({:.0}% of the take's largest movement): no action of its own, it feeds posing only",
+                    primary.name(),
+                    100.0 * range / largest.max(1e-9)
+                ));
+            }
+        }
+    }
+    let mut spans = Vec::new();
+    for (w, _) in edges.windows(2).zip(&kept).filter(|(_, k)| **k) {
+        let piece = &speed[w[0]..=w[1]];
+        if let Some((a, b)) = active_span(piece) {
+            let last = (piece.len() - 1).max(1) as f64;
+            spans.push((a as f64 / last, b as f64 / last));
+        }
+    }
+    spans
 }
 
 /// The first and last frames where a piece's speed is over
