@@ -50,6 +50,51 @@ struct Finger {
     left: f64,
 }
 
+impl Finger {
+    /// A finger going down near `aim` on a picture of `size`: a flick
+    /// (fast and short), a curving drag or a hold.
+    fn new(rng: &mut Lcg, id: u64, aim: ScreenPoint, (w, h): (f64, f64)) -> Self {
+        let at = (
+            (aim.x + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, w),
+            (aim.y + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, h),
+        );
+        let dir = rng.unit() * std::f64::consts::TAU;
+        let kind = rng.unit();
+        let (speed, left, turn) = if kind < 0.6 {
+            // A flick: fast and short.
+            (rng.range(800.0, 4000.0), rng.range(0.05, 0.35), 0.0)
+        } else if kind < 0.9 {
+            // A drag, curving.
+            (
+                rng.range(100.0, 700.0),
+                rng.range(0.4, 3.0),
+                rng.range(-3.0, 3.0),
+            )
+        } else {
+            // A hold.
+            (0.0, rng.range(0.3, 4.0), 0.0)
+        };
+        Self {
+            id,
+            at,
+            v: (speed * dir.cos(), speed * dir.sin()),
+            turn,
+            left,
+        }
+    }
+
+    /// One step on: the velocity turned, the finger moved, kept on the
+    /// picture (`size`).
+    fn advance(&mut self, (w, h): (f64, f64)) {
+        let (c, s) = (self.turn * DT).sin_cos();
+        self.v = (self.v.0 * s - self.v.1 * c, self.v.0 * c + self.v.1 * s);
+        self.at = (
+            (self.at.0 + self.v.0 * DT).clamp(0.0, w),
+            (self.at.1 + self.v.1 * DT).clamp(0.0, h),
+        );
+    }
+}
+
 /// A recording of `seconds` of abuse of `ch` over a picture `picture`.
 #[must_use]
 pub fn author_abuse(
@@ -60,120 +105,118 @@ pub fn author_abuse(
     seed: u64,
 ) -> Synth {
     let (w, h) = picture.size();
-    let (w, h) = (f64::from(w), f64::from(h));
-    let mut rng = Lcg(seed.wrapping_mul(0x2545_f491_4f6c_dd1d) ^ 0x6a09_e667_f3bc_c909);
-    let mut synth = Synth::new(panel("marionette abuse panel", SLOTS, MAX));
-    let raw = |p: (f64, f64)| {
-        let f = |v: f64, size: f64| ((v / size).clamp(0.0, 1.0) * f64::from(MAX)).round() as i32;
-        (f(p.0, w), f(p.1, h))
+    let size = (f64::from(w), f64::from(h));
+    let mut abuse = Abuse {
+        rng: Lcg(seed.wrapping_mul(0x2545_f491_4f6c_dd1d) ^ 0x6a09_e667_f3bc_c909),
+        synth: Synth::new(panel("marionette abuse panel", SLOTS, MAX)),
+        fingers: vec![None; SLOTS as usize],
+        next_id: 1,
+        size,
     };
     // Where the parts are: a controller fed the same touches.
-    let mut table = Stage::single(Controller::new(Arc::clone(ch), settings, 0.0), w, h);
-    let contact = |id: u64, phase: Phase, p: (f64, f64)| {
-        let (x, y) = raw(p);
-        ScreenContact {
-            id,
-            phase,
-            tool: Tool::Finger,
-            raw: RawPoint { x, y },
-            screen: ScreenPoint::new(p.0, p.1),
-        }
-    };
-    let mut fingers: Vec<Option<Finger>> = vec![None; SLOTS as usize];
-    let mut next_id = 1u64;
-    synth.frame(DT_US);
+    let mut table = Stage::single(
+        Controller::new(Arc::clone(ch), settings, 0.0),
+        size.0,
+        size.1,
+    );
+    abuse.synth.frame(DT_US);
     let mut t = 0.0;
     while t < seconds {
         t += DT;
-        let dropping = rng.unit() < DROPPED_PER_S * DT;
+        let contacts = abuse.frame(ch, &table);
+        table.step(&[ScreenFrame { t, contacts }], t);
+    }
+    for (slot, f) in abuse.fingers.iter().enumerate() {
+        if f.is_some() {
+            abuse.synth.up(slot as i32);
+        }
+    }
+    abuse.synth.frame(DT_US);
+    abuse.synth
+}
+
+/// The abuse being written: its random numbers, the recording, the finger
+/// in each slot, the next contact id, and the picture's size.
+struct Abuse {
+    rng: Lcg,
+    synth: Synth,
+    fingers: Vec<Option<Finger>>,
+    next_id: u64,
+    size: (f64, f64),
+}
+
+impl Abuse {
+    /// One frame of every slot: a finger lifts when its time is up (the
+    /// lift lost in an overflow now and then), moves, or goes down on a
+    /// part of `table`'s character; the touches as the controller sees
+    /// them.
+    fn frame(&mut self, ch: &Character, table: &Stage) -> Vec<ScreenContact> {
+        let (w, h) = self.size;
+        let dropping = self.rng.unit() < DROPPED_PER_S * DT;
         let mut touches = Vec::new();
-        for (slot, f) in fingers.iter_mut().enumerate() {
+        for (slot, f) in self.fingers.iter_mut().enumerate() {
             let slot = slot as i32;
             match f {
                 Some(g) => {
                     g.left -= DT;
                     if g.left <= 0.0 {
-                        if dropping && rng.unit() < 0.5 {
+                        if dropping && self.rng.unit() < 0.5 {
                             // The lift is lost in the overflow.
-                            synth.forget(slot);
+                            self.synth.forget(slot);
                         } else {
-                            synth.up(slot);
+                            self.synth.up(slot);
                         }
-                        touches.push(contact(g.id, Phase::Up, g.at));
+                        touches.push(contact(self.size, g.id, Phase::Up, g.at));
                         *f = None;
                         continue;
                     }
-                    let (c, s) = (g.turn * DT).sin_cos();
-                    g.v = (g.v.0 * s - g.v.1 * c, g.v.0 * c + g.v.1 * s);
-                    g.at = (
-                        (g.at.0 + g.v.0 * DT).clamp(0.0, w),
-                        (g.at.1 + g.v.1 * DT).clamp(0.0, h),
-                    );
+                    g.advance((w, h));
                     if !dropping {
-                        let (x, y) = raw(g.at);
-                        synth.to(slot, x, y);
+                        let (x, y) = raw(self.size, g.at);
+                        self.synth.to(slot, x, y);
                     }
-                    touches.push(contact(g.id, Phase::Move, g.at));
+                    touches.push(contact(self.size, g.id, Phase::Move, g.at));
                 }
-                None if !dropping && rng.unit() < DOWN_PER_S * DT => {
-                    let role = Role::ALL[(rng.unit() * 16.0) as usize % 16];
+                None if !dropping && self.rng.unit() < DOWN_PER_S * DT => {
+                    let role = Role::ALL[(self.rng.unit() * 16.0) as usize % 16];
                     let aim = table
                         .rig()
                         .camera()
                         .project(table.ctl().world().positions[ch.roles.get(role)])
                         .unwrap_or(ScreenPoint::new(w / 2.0, h / 2.0));
-                    let at = (
-                        (aim.x + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, w),
-                        (aim.y + (rng.unit() * 2.0 - 1.0) * 25.0).clamp(0.0, h),
-                    );
-                    let dir = rng.unit() * std::f64::consts::TAU;
-                    let kind = rng.unit();
-                    let (speed, left, turn) = if kind < 0.6 {
-                        // A flick: fast and short.
-                        (rng.range(800.0, 4000.0), rng.range(0.05, 0.35), 0.0)
-                    } else if kind < 0.9 {
-                        // A drag, curving.
-                        (
-                            rng.range(100.0, 700.0),
-                            rng.range(0.4, 3.0),
-                            rng.range(-3.0, 3.0),
-                        )
-                    } else {
-                        // A hold.
-                        (0.0, rng.range(0.3, 4.0), 0.0)
-                    };
-                    *f = Some(Finger {
-                        id: next_id,
-                        at,
-                        v: (speed * dir.cos(), speed * dir.sin()),
-                        turn,
-                        left,
-                    });
-                    touches.push(contact(next_id, Phase::Down, at));
-                    next_id += 1;
-                    let (x, y) = raw(at);
-                    synth.down(slot, x, y);
+                    let g = Finger::new(&mut self.rng, self.next_id, aim, (w, h));
+                    let at = g.at;
+                    *f = Some(g);
+                    touches.push(contact(self.size, self.next_id, Phase::Down, at));
+                    self.next_id += 1;
+                    let (x, y) = raw(self.size, at);
+                    self.synth.down(slot, x, y);
                 }
                 None => {}
             }
         }
         if dropping {
-            synth.dropped();
+            self.synth.dropped();
         }
-        synth.frame(DT_US);
-        table.step(
-            &[ScreenFrame {
-                t,
-                contacts: touches,
-            }],
-            t,
-        );
+        self.synth.frame(DT_US);
+        touches
     }
-    for (slot, f) in fingers.iter().enumerate() {
-        if f.is_some() {
-            synth.up(slot as i32);
-        }
+}
+
+/// A point on a picture of `size` as the panel's raw axes read it.
+fn raw((w, h): (f64, f64), p: (f64, f64)) -> (i32, i32) {
+    let f = |v: f64, size: f64| ((v / size).clamp(0.0, 1.0) * f64::from(MAX)).round() as i32;
+    (f(p.0, w), f(p.1, h))
+}
+
+/// A finger's touch as the controller sees it.
+fn contact(size: (f64, f64), id: u64, phase: Phase, p: (f64, f64)) -> ScreenContact {
+    let (x, y) = raw(size, p);
+    ScreenContact {
+        id,
+        phase,
+        tool: Tool::Finger,
+        raw: RawPoint { x, y },
+        screen: ScreenPoint::new(p.0, p.1),
     }
-    synth.frame(DT_US);
-    synth
 }

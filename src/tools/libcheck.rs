@@ -105,104 +105,10 @@ pub fn check(lib: &Library, actions: &[ActionModel], camera: &Camera) -> Library
 }
 
 fn report(actions: &[ActionModel], c: &Calibration, camera: &Camera) -> LibraryReport {
-    let origin = Placement {
-        position: glam::DVec3::ZERO,
-        yaw: 0.0,
-        anchor: Anchor::ClipStart,
-    };
-    let mut rows = Vec::new();
     let mut advice = Vec::new();
-    for (ai, a) in actions.iter().enumerate() {
-        let name = &a.def.name;
-        let mine: Vec<_> = c.outcomes.iter().filter(|o| &o.action == name).collect();
-        let mut views: BTreeMap<i64, (usize, usize, usize, BTreeMap<String, usize>)> =
-            BTreeMap::new();
-        let (mut slow, mut slow_n) = (0, 0);
-        for o in &mine {
-            if o.slow {
-                slow_n += 1;
-                slow += usize::from(o.started.is_some());
-                continue;
-            }
-            let v = views.entry(o.view_deg.round() as i64).or_default();
-            v.0 += 1;
-            match &o.started {
-                Some(s) if s == name => v.1 += 1,
-                Some(s) => *v.3.entry(s.clone()).or_default() += 1,
-                None => v.2 += 1,
-            }
-        }
-        let takes: std::collections::BTreeSet<&str> =
-            a.templates.iter().map(|t| take_of(&t.clip)).collect();
-        let drawable = DragMatch::new(
-            &Recogniser::default(),
-            actions,
-            a.def.primary,
-            camera,
-            &origin,
-            None,
-        )
-        .drawable(ai);
-        if takes.len() == 1 {
-            advice.push(format!(
-                "`{name}` has one take ({}): a drag by another performer is judged against that one alone; record two or three more takes",
-                takes.iter().next().copied().unwrap_or("")
-            ));
-        }
-        let home = home_view(actions, ai, &c.recogniser, camera, &origin);
-        match (&home.started, &home.nearest_other) {
-            (Some(s), _) if s == name => {}
-            (Some(other), _) => advice.push(format!(
-                "`{name}` dragged from the default camera as its take was recorded starts `{other}`: from there the two are drawn alike; merge them, or give one another primary part"
-            )),
-            (None, Some(other)) if drawable > 0 => advice.push(format!(
-                "`{name}` dragged from the default camera as its take was recorded starts nothing: `{other}` is drawn as near to it from there; merge them, give one another primary part, or record takes that differ more"
-            )),
-            _ => {}
-        }
-        if drawable == 0 {
-            advice.push(format!(
-                "`{name}`: from the default camera its {} moves too little on the screen (or straight towards the camera) to be drawn; a visitor must turn the view, or lead it with another part",
-                a.def.primary.name()
-            ));
-        }
-        let views: Vec<ViewReport> = views
-            .into_iter()
-            .map(|(deg, (n, right, missed, confused))| {
-                for (other, k) in &confused {
-                    if share(*k, n) >= CONFUSED_SHARE {
-                        advice.push(format!(
-                            "`{name}` drags from the {deg}° view start `{other}` ({k} of {n}): from there the two start alike; merge them, or give one another primary part"
-                        ));
-                    }
-                }
-                ViewReport {
-                    view_deg: deg as f64,
-                    drags: n,
-                    correct: share(right, n),
-                    missed: share(missed, n),
-                    wrong_action: share(n - right - missed, n),
-                    confused_with: confused,
-                }
-            })
-            .collect();
-        if slow > 1 && share(slow, slow_n) > 2.0 * SLOW_BUDGET {
-            advice.push(format!(
-                "slow posing drags of the {} start `{name}` ({slow} of {slow_n}): its start is slow and small, so posing that part can start it",
-                a.def.primary.name()
-            ));
-        }
-        rows.push(ActionReport {
-            action: name.clone(),
-            primary: a.def.primary.name().to_owned(),
-            takes: takes.len(),
-            clips: a.templates.len(),
-            views,
-            false_trigger_slow: share(slow, slow_n),
-            drawable_from_default_camera: drawable,
-            home_view: home,
-        });
-    }
+    let rows = (0..actions.len())
+        .map(|ai| action_row(actions, ai, c, camera, &mut advice))
+        .collect();
     if !c.within_budget {
         advice.push(format!(
             "no threshold keeps slow posing drags under {:.0}% of trials: the strictest is used, and fewer drags start their action",
@@ -240,6 +146,125 @@ fn report(actions: &[ActionModel], c: &Calibration, camera: &Camera) -> LibraryR
         actions: rows,
         advice,
     }
+}
+
+/// Drags of one action by the view they were made from: how many, how
+/// many started it, how many started nothing, and what else they started.
+type ByView = BTreeMap<i64, (usize, usize, usize, BTreeMap<String, usize>)>;
+
+/// Action `ai`'s row of the report, its advice added to `advice`.
+fn action_row(
+    actions: &[ActionModel],
+    ai: usize,
+    c: &Calibration,
+    camera: &Camera,
+    advice: &mut Vec<String>,
+) -> ActionReport {
+    let origin = Placement {
+        position: glam::DVec3::ZERO,
+        yaw: 0.0,
+        anchor: Anchor::ClipStart,
+    };
+    let a = &actions[ai];
+    let name = &a.def.name;
+    let mut views = ByView::new();
+    let (mut slow, mut slow_n) = (0, 0);
+    for o in c.outcomes.iter().filter(|o| &o.action == name) {
+        if o.slow {
+            slow_n += 1;
+            slow += usize::from(o.started.is_some());
+            continue;
+        }
+        let v = views.entry(o.view_deg.round() as i64).or_default();
+        v.0 += 1;
+        match &o.started {
+            Some(s) if s == name => v.1 += 1,
+            Some(s) => *v.3.entry(s.clone()).or_default() += 1,
+            None => v.2 += 1,
+        }
+    }
+    let takes: std::collections::BTreeSet<&str> =
+        a.templates.iter().map(|t| take_of(&t.clip)).collect();
+    let drawable = DragMatch::new(
+        &Recogniser::default(),
+        actions,
+        a.def.primary,
+        camera,
+        &origin,
+        None,
+    )
+    .drawable(ai);
+    if takes.len() == 1 {
+        advice.push(format!(
+            "`{name}` has one take ({}): a drag by another performer is judged against that one alone; record two or three more takes",
+            takes.iter().next().copied().unwrap_or("")
+        ));
+    }
+    let home = home_view(actions, ai, &c.recogniser, camera, &origin);
+    home_advice(a, &home, drawable, advice);
+    let views = view_reports(name, views, advice);
+    if slow > 1 && share(slow, slow_n) > 2.0 * SLOW_BUDGET {
+        advice.push(format!(
+            "slow posing drags of the {} start `{name}` ({slow} of {slow_n}): its start is slow and small, so posing that part can start it",
+            a.def.primary.name()
+        ));
+    }
+    ActionReport {
+        action: name.clone(),
+        primary: a.def.primary.name().to_owned(),
+        takes: takes.len(),
+        clips: a.templates.len(),
+        views,
+        false_trigger_slow: share(slow, slow_n),
+        drawable_from_default_camera: drawable,
+        home_view: home,
+    }
+}
+
+/// What to do where an action dragged from the default camera starts
+/// another or nothing, or cannot be drawn from there.
+fn home_advice(a: &ActionModel, home: &HomeView, drawable: usize, advice: &mut Vec<String>) {
+    let name = &a.def.name;
+    match (&home.started, &home.nearest_other) {
+        (Some(s), _) if s == name => {}
+        (Some(other), _) => advice.push(format!(
+            "`{name}` dragged from the default camera as its take was recorded starts `{other}`: from there the two are drawn alike; merge them, or give one another primary part"
+        )),
+        (None, Some(other)) if drawable > 0 => advice.push(format!(
+            "`{name}` dragged from the default camera as its take was recorded starts nothing: `{other}` is drawn as near to it from there; merge them, give one another primary part, or record takes that differ more"
+        )),
+        _ => {}
+    }
+    if drawable == 0 {
+        advice.push(format!(
+            "`{name}`: from the default camera its {} moves too little on the screen (or straight towards the camera) to be drawn; a visitor must turn the view, or lead it with another part",
+            a.def.primary.name()
+        ));
+    }
+}
+
+/// Each view's shares, with advice where its drags start another action.
+fn view_reports(name: &str, views: ByView, advice: &mut Vec<String>) -> Vec<ViewReport> {
+    views
+        .into_iter()
+        .map(|(deg, (n, right, missed, confused))| {
+            for (other, k) in &confused {
+                if share(*k, n) >= CONFUSED_SHARE {
+                    advice.push(format!(
+                        "`{name}` drags from the {deg}° view start `{other}` ({k} of {n}): from there the two start alike; merge them, or give one another primary part"
+                    ));
+                }
+            }
+            ViewReport {
+                view_deg: deg as f64,
+                drags: n,
+                correct: share(right, n),
+                missed: share(missed, n),
+                wrong_action: share(n - right - missed, n),
+                confused_with: confused,
+            }
+        })
+        .collect()
 }
 
 /// Action `ai`'s take drawn longest from `camera`, dragged as recorded

@@ -28,7 +28,7 @@ pub(super) struct Body<'a> {
 /// overruled.
 pub(super) fn settle(
     file: &File,
-    body: Body<'_>,
+    mut body: Body<'_>,
     parts: &[Part],
     h: f64,
     mut found: Found,
@@ -86,6 +86,18 @@ pub(super) fn settle(
     if !lacking.is_empty() {
         return Err(refusal(file, body.skeleton, &found, &lacking));
     }
+    make_up_ends(&mut body, parts, h, &mut found);
+    let head = found[&Role::Head];
+    found.entry(Role::Neck).or_insert(head);
+    let map: BTreeMap<Role, usize> = found.iter().map(|(r, (j, _))| (*r, *j)).collect();
+    let evidence: BTreeMap<Role, Evidence> = found.iter().map(|(r, (_, e))| (*r, *e)).collect();
+    Ok((RoleMap(map), evidence))
+}
+
+/// Each limb without an end (a hand or foot the rig lacks) given one made
+/// up along its last bone, as far as the mesh it carries reaches (and a
+/// middle where the limb is one bone), added to the skeleton.
+fn make_up_ends(body: &mut Body<'_>, parts: &[Part], h: f64, found: &mut Found) {
     for (side, arm) in LIMBS {
         let [u, m, e] = limb_roles(side, arm);
         let upper = found[&u].0;
@@ -93,7 +105,7 @@ pub(super) fn settle(
         if found.contains_key(&e) {
             continue;
         }
-        let (mid, end) = made_up_end(&body, parts, upper, middle, h);
+        let (mid, end) = made_up_end(body, parts, upper, middle, h);
         let last = body.skeleton.joints[middle.unwrap_or(upper)].name.clone();
         let (mid, end) = add_ends(
             body.skeleton,
@@ -110,11 +122,6 @@ pub(super) fn settle(
         }
         found.insert(e, (end, Evidence::MadeUp));
     }
-    let head = found[&Role::Head];
-    found.entry(Role::Neck).or_insert(head);
-    let map: BTreeMap<Role, usize> = found.iter().map(|(r, (j, _))| (*r, *j)).collect();
-    let evidence: BTreeMap<Role, Evidence> = found.iter().map(|(r, (_, e))| (*r, *e)).collect();
-    Ok((RoleMap(map), evidence))
 }
 
 /// The refusal: what is missing, and every role that was found.
@@ -306,16 +313,21 @@ pub(super) fn by_places(skeleton: &Skeleton, h: f64) -> BTreeMap<Role, usize> {
     let p: Vec<DVec3> = forward_kinematics(skeleton, &skeleton.rest_pose()).positions;
     let n = skeleton.len();
     let floor = p.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
-    let y = |j: usize| p[j].y - floor;
-    let parent = |j: usize| skeleton.joints[j].parent;
-    let middle = |j: usize| p[j].x.abs() < 0.03 * h;
+    let rest = AtRest {
+        skeleton,
+        p,
+        floor,
+        h,
+    };
+    let (y, parent) = (|j: usize| rest.y(j), |j: usize| skeleton.joints[j].parent);
+    let middle = |j: usize| rest.p[j].x.abs() < 0.03 * h;
     let mut size = vec![1usize; n];
     for j in (0..n).rev() {
         if let Some(q) = parent(j) {
             size[q] += size[j];
         }
     }
-    for (joint, at) in skeleton.joints.iter().zip(&p) {
+    for (joint, at) in skeleton.joints.iter().zip(&rest.p) {
         tracing::debug!(
             joint = %joint.name,
             x = at.x / h,
@@ -331,7 +343,7 @@ pub(super) fn by_places(skeleton: &Skeleton, h: f64) -> BTreeMap<Role, usize> {
     {
         map.insert(Role::Head, head);
     }
-    for (sign, [foot_r, knee_r, hip_r, hand_r, elbow_r, shoulder_r]) in [
+    for (sign, roles) in [
         (
             1.0,
             [
@@ -355,13 +367,60 @@ pub(super) fn by_places(skeleton: &Skeleton, h: f64) -> BTreeMap<Role, usize> {
             ],
         ),
     ] {
-        let side = |j: usize| p[j].x * sign > 0.03 * h;
+        let side = |j: usize| rest.side(j, sign);
         // The arm: the largest chain leaving the trunk sideways, high.
         let arm_root = (0..n)
             .filter(|&j| side(j) && y(j) > 0.5 * h && parent(j).is_some_and(|q| !side(q)))
             .max_by_key(|&j| size[j]);
         let in_arm = |j: usize| arm_root.is_some_and(|a| skeleton.is_ancestor(a, j));
-        // The foot: up from the side's lowest joint while still low.
+        let [foot, knee, hip] = rest.leg(sign, &in_arm);
+        let [hand, elbow, shoulder] = arm_root.map_or([None; 3], |root| rest.arm(root));
+        for (role, j) in roles
+            .into_iter()
+            .zip([foot, knee, hip, hand, elbow, shoulder])
+        {
+            if let Some(j) = j {
+                map.insert(role, j);
+            }
+        }
+    }
+    map
+}
+
+/// A skeleton standing at rest: its joints' places, its floor (the lowest
+/// joint) and its height.
+struct AtRest<'a> {
+    skeleton: &'a Skeleton,
+    p: Vec<DVec3>,
+    floor: f64,
+    h: f64,
+}
+
+impl AtRest<'_> {
+    /// How high joint `j` stands over the floor.
+    fn y(&self, j: usize) -> f64 {
+        self.p[j].y - self.floor
+    }
+
+    fn parent(&self, j: usize) -> Option<usize> {
+        self.skeleton.joints[j].parent
+    }
+
+    /// Whether joint `j` stands out to the side `sign` (+1 left, -1 right).
+    fn side(&self, j: usize, sign: f64) -> bool {
+        self.p[j].x * sign > 0.03 * self.h
+    }
+
+    /// The leg on side `sign` (not in the arm): foot, knee, hip. The foot
+    /// is up from the side's lowest joint while still low; the knee is
+    /// its parent, knee-high.
+    fn leg(&self, sign: f64, in_arm: &dyn Fn(usize) -> bool) -> [Option<usize>; 3] {
+        let (p, h, n) = (&self.p, self.h, self.p.len());
+        let (y, parent, side) = (
+            |j: usize| self.y(j),
+            |j: usize| self.parent(j),
+            |j: usize| self.side(j, sign),
+        );
         let lowest = (0..n)
             .filter(|&j| side(j) && !in_arm(j))
             .min_by(|&a, &b| y(a).total_cmp(&y(b)))
@@ -386,44 +445,36 @@ pub(super) fn by_places(skeleton: &Skeleton, h: f64) -> BTreeMap<Role, usize> {
             })
         });
         let hip = knee.and_then(parent).filter(|&q| parent(q).is_some());
-        let (mut hand, mut elbow, mut shoulder) = (None, None, None);
-        if let Some(root) = arm_root {
-            let mut chain = vec![root];
-            loop {
-                let last = *chain.last().unwrap_or(&root);
-                let kids: Vec<usize> = skeleton.children(last).collect();
-                if kids.len() != 1 {
-                    break;
-                }
-                chain.push(kids[0]);
-            }
-            if let Some(i) = (0..chain.len().saturating_sub(1))
-                .find(|&i| (p[chain[i + 1]] - p[chain[i]]).length() >= 0.1 * h)
-            {
-                shoulder = Some(chain[i]);
-                elbow = Some(chain[i + 1]);
-                hand = chain.get(i + 2).copied().or_else(|| {
-                    // The forearm ends in several fingers or palms: the
-                    // one nearest their middle.
-                    let kids: Vec<usize> = skeleton.children(chain[i + 1]).collect();
-                    let mid = kids.iter().map(|&k| p[k]).sum::<DVec3>() / kids.len().max(1) as f64;
-                    kids.into_iter()
-                        .min_by(|&a, &b| (p[a] - mid).length().total_cmp(&(p[b] - mid).length()))
-                });
-            }
-        }
-        for (role, j) in [
-            (foot_r, foot),
-            (knee_r, knee),
-            (hip_r, hip),
-            (hand_r, hand),
-            (elbow_r, elbow),
-            (shoulder_r, shoulder),
-        ] {
-            if let Some(j) = j {
-                map.insert(role, j);
-            }
-        }
+        [foot, knee, hip]
     }
-    map
+
+    /// The arm from its `root`: hand, elbow, shoulder. Down its chain of
+    /// single children, the shoulder starts the first bone a tenth of the
+    /// height long.
+    fn arm(&self, root: usize) -> [Option<usize>; 3] {
+        let (p, skeleton) = (&self.p, self.skeleton);
+        let mut chain = vec![root];
+        loop {
+            let last = *chain.last().unwrap_or(&root);
+            let kids: Vec<usize> = skeleton.children(last).collect();
+            if kids.len() != 1 {
+                break;
+            }
+            chain.push(kids[0]);
+        }
+        let Some(i) = (0..chain.len().saturating_sub(1))
+            .find(|&i| (p[chain[i + 1]] - p[chain[i]]).length() >= 0.1 * self.h)
+        else {
+            return [None; 3];
+        };
+        let hand = chain.get(i + 2).copied().or_else(|| {
+            // The forearm ends in several fingers or palms: the one
+            // nearest their middle.
+            let kids: Vec<usize> = skeleton.children(chain[i + 1]).collect();
+            let mid = kids.iter().map(|&k| p[k]).sum::<DVec3>() / kids.len().max(1) as f64;
+            kids.into_iter()
+                .min_by(|&a, &b| (p[a] - mid).length().total_cmp(&(p[b] - mid).length()))
+        });
+        [hand, Some(chain[i + 1]), Some(chain[i])]
+    }
 }

@@ -12,7 +12,7 @@ use super::rig::{self, ANKLE_HEIGHT, FOREARM, SHIN, THIGH, UPPER_ARM, body_rotat
 use super::score::{Kind, Score, ScoreError, Variant, sample};
 use crate::character::bvh;
 use crate::character::library::Release;
-use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
+use crate::character::skeleton::{Pose, Skeleton, WorldPose, forward_kinematics};
 
 /// Frames per second of the authored library.
 pub const FPS: f64 = 30.0;
@@ -120,10 +120,9 @@ fn solve(skel: &Skeleton, c: &Channels) -> Pose {
     // clavicle lifts a little as the hand rises above the shoulder, then the
     // arm reaches for the hand target.
     let w = forward_kinematics(skel, &pose);
-    let chest = w.rotations[j::CHEST];
     let body = c.v3("pelvis") * DVec3::new(1.0, 0.0, 1.0);
     let facing = DQuat::from_rotation_y(deg("pelvis_rot", 1).to_radians());
-    for (side, clav, arm, fore, hand, target, out) in [
+    for limb in [
         (
             1.0,
             j::L_CLAVICLE,
@@ -143,40 +142,13 @@ fn solve(skel: &Skeleton, c: &Channels) -> Pose {
             "right_elbow_out",
         ),
     ] {
-        let target = body + facing * c.v3(target);
-        let clav_pos = w.positions[clav];
-        let shoulder_rest = clav_pos + chest * skel.joints[arm].offset;
-        let rise = ((target.y - shoulder_rest.y) / 0.5).clamp(0.0, 1.0);
-        let clav_rot = DQuat::from_rotation_z(side * (14.0 * rise).to_radians());
-        pose.rotations[clav] = clav_rot;
-        let clav_world = chest * clav_rot;
-        let shoulder = clav_pos + clav_world * skel.joints[arm].offset;
-        let out = c.0[out][0].clamp(0.0, 1.0);
-        let pole = chest
-            * DVec3::new(
-                side * (0.2 + 0.8 * out),
-                -0.6 * (1.0 - out),
-                -0.8 * (1.0 - out) - 0.1,
-            )
-            .normalize();
-        let limb = two_bone(
-            shoulder,
-            UPPER_ARM,
-            FOREARM,
-            target,
-            pole,
-            DVec3::X * side,
-            DVec3::NEG_Z,
-        );
-        pose.rotations[arm] = clav_world.inverse() * limb.upper;
-        pose.rotations[fore] = limb.upper.inverse() * limb.lower;
-        pose.rotations[hand] = DQuat::IDENTITY;
+        reach_arm(skel, c, &w, (body, facing), limb, &mut pose);
     }
 
     // Legs: hips to ankle targets, knees forward (and a little out); the
     // foot's own orientation from its channel, so a planted foot stays put
     // whatever the body does above it.
-    for (side, thigh, shin, foot, toe, target, rot) in [
+    for limb in [
         (
             1.0,
             j::L_THIGH,
@@ -196,32 +168,92 @@ fn solve(skel: &Skeleton, c: &Channels) -> Pose {
             "right_foot_rot",
         ),
     ] {
-        let hip = w.positions[j::HIPS] + root * skel.joints[thigh].offset;
-        let pole = facing * DVec3::new(side * 0.15, 0.0, 1.0).normalize();
-        let yaw = DQuat::from_rotation_y(deg(rot, 1).to_radians());
-        let pitch = deg(rot, 0);
-        let foot_world = yaw * DQuat::from_rotation_x(pitch.to_radians());
-        // Toes down pivots the foot on the ball of the foot: the toe base
-        // stays where the flat foot put it, the heel and ankle rise, and the
-        // toes stay flat on the floor.
-        let toe_offset = skel.joints[toe].offset;
-        let flat_ankle = c.v3(target);
-        let ankle = if pitch > 0.0 {
-            flat_ankle + yaw * toe_offset - foot_world * toe_offset
-        } else {
-            flat_ankle
-        };
-        let limb = two_bone(hip, THIGH, SHIN, ankle, pole, DVec3::NEG_Y, DVec3::Z);
-        pose.rotations[thigh] = root.inverse() * limb.upper;
-        pose.rotations[shin] = limb.upper.inverse() * limb.lower;
-        pose.rotations[foot] = limb.lower.inverse() * foot_world;
-        pose.rotations[toe] = if pitch > 0.0 {
-            DQuat::from_rotation_x(-pitch.to_radians())
-        } else {
-            DQuat::IDENTITY
-        };
+        place_leg(skel, c, &w, (root, facing), limb, &mut pose);
     }
     pose
+}
+
+/// An arm reaching for its hand's target (channel `target`, moved with
+/// the pelvis's place along the floor, `body`, and its `facing`); its
+/// clavicle lifted a little as the hand rises above the shoulder, its
+/// elbow out as far as channel `out`. `w`: the posture with the trunk
+/// turned.
+fn reach_arm(
+    skel: &Skeleton,
+    c: &Channels,
+    w: &WorldPose,
+    (body, facing): (DVec3, DQuat),
+    (side, clav, arm, fore, hand, target, out): (f64, usize, usize, usize, usize, &str, &str),
+    pose: &mut Pose,
+) {
+    let chest = w.rotations[j::CHEST];
+    let target = body + facing * c.v3(target);
+    let clav_pos = w.positions[clav];
+    let shoulder_rest = clav_pos + chest * skel.joints[arm].offset;
+    let rise = ((target.y - shoulder_rest.y) / 0.5).clamp(0.0, 1.0);
+    let clav_rot = DQuat::from_rotation_z(side * (14.0 * rise).to_radians());
+    pose.rotations[clav] = clav_rot;
+    let clav_world = chest * clav_rot;
+    let shoulder = clav_pos + clav_world * skel.joints[arm].offset;
+    let out = c.0[out][0].clamp(0.0, 1.0);
+    let pole = chest
+        * DVec3::new(
+            side * (0.2 + 0.8 * out),
+            -0.6 * (1.0 - out),
+            -0.8 * (1.0 - out) - 0.1,
+        )
+        .normalize();
+    let limb = two_bone(
+        shoulder,
+        UPPER_ARM,
+        FOREARM,
+        target,
+        pole,
+        DVec3::X * side,
+        DVec3::NEG_Z,
+    );
+    pose.rotations[arm] = clav_world.inverse() * limb.upper;
+    pose.rotations[fore] = limb.upper.inverse() * limb.lower;
+    pose.rotations[hand] = DQuat::IDENTITY;
+}
+
+/// A leg from the hip to its ankle's target (channel `target`), the knee
+/// forward (and a little out), the foot turned by its channel `rot`, so a
+/// planted foot stays put whatever the body does above it. `w`: the
+/// posture with the trunk turned; `root`: the pelvis's turn.
+fn place_leg(
+    skel: &Skeleton,
+    c: &Channels,
+    w: &WorldPose,
+    (root, facing): (DQuat, DQuat),
+    (side, thigh, shin, foot, toe, target, rot): (f64, usize, usize, usize, usize, &str, &str),
+    pose: &mut Pose,
+) {
+    let deg = |name: &str, i: usize| c.0[name][i];
+    let hip = w.positions[j::HIPS] + root * skel.joints[thigh].offset;
+    let pole = facing * DVec3::new(side * 0.15, 0.0, 1.0).normalize();
+    let yaw = DQuat::from_rotation_y(deg(rot, 1).to_radians());
+    let pitch = deg(rot, 0);
+    let foot_world = yaw * DQuat::from_rotation_x(pitch.to_radians());
+    // Toes down pivots the foot on the ball of the foot: the toe base
+    // stays where the flat foot put it, the heel and ankle rise, and the
+    // toes stay flat on the floor.
+    let toe_offset = skel.joints[toe].offset;
+    let flat_ankle = c.v3(target);
+    let ankle = if pitch > 0.0 {
+        flat_ankle + yaw * toe_offset - foot_world * toe_offset
+    } else {
+        flat_ankle
+    };
+    let limb = two_bone(hip, THIGH, SHIN, ankle, pole, DVec3::NEG_Y, DVec3::Z);
+    pose.rotations[thigh] = root.inverse() * limb.upper;
+    pose.rotations[shin] = limb.upper.inverse() * limb.lower;
+    pose.rotations[foot] = limb.lower.inverse() * foot_world;
+    pose.rotations[toe] = if pitch > 0.0 {
+        DQuat::from_rotation_x(-pitch.to_radians())
+    } else {
+        DQuat::IDENTITY
+    };
 }
 
 /// The frames of one variant of a score, at [`FPS`].
@@ -282,10 +314,7 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
     let mut files = BTreeMap::new();
     let mut posing = Vec::new();
     let mut locomotion = Vec::new();
-    let mut actions: BTreeMap<
-        String,
-        (String, Vec<crate::character::library::Segment>, Vec<String>),
-    > = BTreeMap::new();
+    let mut actions = Actions::new();
     for path in &paths {
         let score = Score::load(path)?;
         for v in &score.variants {
@@ -321,21 +350,31 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
             }
         }
     }
+    let toml = library_toml(&posing, &locomotion, &actions);
+    files.insert("library.toml".to_owned(), toml);
+    Ok(Compiled { files })
+}
+
+/// Each action's primary part, segments and clips, by name.
+type Actions = BTreeMap<String, (String, Vec<crate::character::library::Segment>, Vec<String>)>;
+
+/// The library's `library.toml` naming its clips.
+fn library_toml(posing: &[String], locomotion: &[String], actions: &Actions) -> String {
     let mut toml = String::from(
         "# The default motion library. Generated by `marionette author-library` from the\n# scores in assets/library-src: edit those, not this file or the BVH files.\n\n[settings]\nscale_to_m = 1.0\naction_lead_in = 0.3\n\n[posing]\nclips = [\n",
     );
-    for p in &posing {
+    for p in posing {
         let _ = writeln!(toml, "  \"{p}\",");
     }
     toml.push_str("]\n");
     if !locomotion.is_empty() {
         toml.push_str("\n[locomotion]\nclips = [\n");
-        for p in &locomotion {
+        for p in locomotion {
             let _ = writeln!(toml, "  \"{p}\",");
         }
         toml.push_str("]\n");
     }
-    for (name, (primary, segments, clips)) in &actions {
+    for (name, (primary, segments, clips)) in actions {
         let _ = write!(
             toml,
             "\n[[action]]\nname = \"{name}\"\nprimary = \"{primary}\"\nclips = [{}]\nsegments = [\n",
@@ -358,8 +397,7 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
         }
         toml.push_str("]\n");
     }
-    files.insert("library.toml".to_owned(), toml);
-    Ok(Compiled { files })
+    toml
 }
 
 /// Compile `src` into `out`, replacing the BVH files and `library.toml`

@@ -192,106 +192,9 @@ impl Score {
         };
         let file: ScoreFile =
             toml::from_str(&text).map_err(|e| invalid(e.to_string().trim_end().to_owned()))?;
-        let kind = match file.kind.as_str() {
-            "posing" => Kind::Posing,
-            "locomotion" => Kind::Locomotion,
-            "action" => Kind::Action {
-                name: file
-                    .action
-                    .clone()
-                    .ok_or_else(|| invalid("an action score needs `action = \"name\"`".into()))?,
-                primary: file.primary.clone().ok_or_else(|| {
-                    invalid("an action score needs `primary = \"right_hand\"` (a role)".into())
-                })?,
-                segments: file.segments.clone(),
-            },
-            other => {
-                return Err(invalid(format!(
-                    "kind must be \"posing\", \"locomotion\" or \"action\", found \"{other}\""
-                )));
-            }
-        };
-        if !(file.duration > 0.0 && file.duration <= 60.0) {
-            return Err(invalid(format!(
-                "duration must be above 0 and at most 60 s, found {}",
-                file.duration
-            )));
-        }
-        if file.variant.is_empty() {
-            return Err(invalid(
-                "needs at least one [[variant]] (its `file` names the output)".into(),
-            ));
-        }
-        for v in &file.variant {
-            let sane = v.speed > 0.1
-                && v.speed < 10.0
-                && v.reach > 0.0
-                && v.reach < 5.0
-                && v.lift.is_finite();
-            if !sane {
-                return Err(invalid(format!(
-                    "variant {}: speed must be in 0.1..10, reach in 0..5, lift finite",
-                    v.file
-                )));
-            }
-            if v.file.is_empty()
-                || !v
-                    .file
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-            {
-                return Err(invalid(format!(
-                    "variant file name `{}` must be letters, digits, _ and -",
-                    v.file
-                )));
-            }
-        }
-        let mut channels: BTreeMap<String, Vec<ChannelKey>> = BTreeMap::new();
-        let mut last_t = -1.0;
-        for (i, k) in file.key.iter().enumerate() {
-            if !(k.t >= 0.0 && k.t <= file.duration) {
-                return Err(invalid(format!(
-                    "key {} (t = {}): times run from 0 to the duration {}",
-                    i + 1,
-                    k.t,
-                    file.duration
-                )));
-            }
-            if k.t <= last_t {
-                return Err(invalid(format!(
-                    "key {} (t = {}): keys must be in increasing time",
-                    i + 1,
-                    k.t
-                )));
-            }
-            last_t = k.t;
-            for (name, value) in &k.channels {
-                let Some((_, arity)) = CHANNELS.iter().find(|(n, _)| n == name) else {
-                    return Err(invalid(format!(
-                        "key {} (t = {}): unknown channel `{name}`; channels are {}",
-                        i + 1,
-                        k.t,
-                        CHANNELS
-                            .iter()
-                            .map(|(n, _)| *n)
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )));
-                };
-                if value.len() != *arity || value.iter().any(|v| !v.is_finite()) {
-                    return Err(invalid(format!(
-                        "key {} (t = {}): `{name}` takes {arity} finite numbers, found {value:?}",
-                        i + 1,
-                        k.t
-                    )));
-                }
-                channels.entry(name.clone()).or_default().push(ChannelKey {
-                    t: k.t,
-                    ease: k.ease,
-                    value: value.clone(),
-                });
-            }
-        }
+        let kind = file.kind().map_err(invalid)?;
+        file.check().map_err(invalid)?;
+        let channels = file.channels().map_err(invalid)?;
         Ok(Self {
             name: path
                 .file_stem()
@@ -302,6 +205,124 @@ impl Score {
             variants: file.variant,
             channels,
         })
+    }
+}
+
+impl ScoreFile {
+    /// What the score makes, from `kind` and what that kind needs.
+    fn kind(&self) -> Result<Kind, String> {
+        let file = self;
+        Ok(match file.kind.as_str() {
+            "posing" => Kind::Posing,
+            "locomotion" => Kind::Locomotion,
+            "action" => Kind::Action {
+                name: file
+                    .action
+                    .clone()
+                    .ok_or_else(|| "an action score needs `action = \"name\"`".to_owned())?,
+                primary: file.primary.clone().ok_or_else(|| {
+                    "an action score needs `primary = \"right_hand\"` (a role)".to_owned()
+                })?,
+                segments: file.segments.clone(),
+            },
+            other => {
+                return Err(format!(
+                    "kind must be \"posing\", \"locomotion\" or \"action\", found \"{other}\""
+                ));
+            }
+        })
+    }
+
+    /// The duration and each variant within bounds.
+    fn check(&self) -> Result<(), String> {
+        let file = self;
+        if !(file.duration > 0.0 && file.duration <= 60.0) {
+            return Err(format!(
+                "duration must be above 0 and at most 60 s, found {}",
+                file.duration
+            ));
+        }
+        if file.variant.is_empty() {
+            return Err("needs at least one [[variant]] (its `file` names the output)".into());
+        }
+        for v in &file.variant {
+            let sane = v.speed > 0.1
+                && v.speed < 10.0
+                && v.reach > 0.0
+                && v.reach < 5.0
+                && v.lift.is_finite();
+            if !sane {
+                return Err(format!(
+                    "variant {}: speed must be in 0.1..10, reach in 0..5, lift finite",
+                    v.file
+                ));
+            }
+            if v.file.is_empty()
+                || !v
+                    .file
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            {
+                return Err(format!(
+                    "variant file name `{}` must be letters, digits, _ and -",
+                    v.file
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Each channel's keys, checked: in time order within the duration,
+    /// known channels of the right number of finite values.
+    fn channels(&self) -> Result<BTreeMap<String, Vec<ChannelKey>>, String> {
+        let file = self;
+        let mut channels: BTreeMap<String, Vec<ChannelKey>> = BTreeMap::new();
+        let mut last_t = -1.0;
+        for (i, k) in file.key.iter().enumerate() {
+            if !(k.t >= 0.0 && k.t <= file.duration) {
+                return Err(format!(
+                    "key {} (t = {}): times run from 0 to the duration {}",
+                    i + 1,
+                    k.t,
+                    file.duration
+                ));
+            }
+            if k.t <= last_t {
+                return Err(format!(
+                    "key {} (t = {}): keys must be in increasing time",
+                    i + 1,
+                    k.t
+                ));
+            }
+            last_t = k.t;
+            for (name, value) in &k.channels {
+                let Some((_, arity)) = CHANNELS.iter().find(|(n, _)| n == name) else {
+                    return Err(format!(
+                        "key {} (t = {}): unknown channel `{name}`; channels are {}",
+                        i + 1,
+                        k.t,
+                        CHANNELS
+                            .iter()
+                            .map(|(n, _)| *n)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ));
+                };
+                if value.len() != *arity || value.iter().any(|v| !v.is_finite()) {
+                    return Err(format!(
+                        "key {} (t = {}): `{name}` takes {arity} finite numbers, found {value:?}",
+                        i + 1,
+                        k.t
+                    ));
+                }
+                channels.entry(name.clone()).or_default().push(ChannelKey {
+                    t: k.t,
+                    ease: k.ease,
+                    value: value.clone(),
+                });
+            }
+        }
+        Ok(channels)
     }
 }
 

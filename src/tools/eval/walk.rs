@@ -279,7 +279,6 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
     );
     let dt = 1.0 / HZ;
     let pelvis_j = ch.roles.get(Role::Pelvis);
-    let feet = [Role::LeftFoot, Role::RightFoot].map(|r| ch.roles.get(r));
     let mut k = 0u32;
     let step = |table: &mut Stage, frames: &[ScreenFrame], k: &mut u32| {
         *k += 1;
@@ -289,31 +288,25 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
     for _ in 0..15 {
         step(&mut table, &[], &mut k);
     }
+    // The path from under the pelvis, drawn at its height.
     let pelvis = table.ctl().world().positions[pelvis_j];
-    let height = pelvis.y;
     let pts: Vec<DVec3> = world_points(path)
         .into_iter()
         .map(|p| p + pelvis.with_y(0.0))
         .collect();
-    let feet_rest = feet.map(|f| table.ctl().world().positions[f]);
+    let mut watch = Watch::new(ch, table.ctl(), dt);
     let total = path_length(&pts);
-    let screen = |table: &Stage, p: DVec3| {
-        table
-            .rig()
-            .camera()
-            .project(p.with_y(height))
-            .unwrap_or_default()
-    };
+    let screen = |table: &Stage, p: DVec3| table.rig().camera().project(p.with_y(pelvis.y));
     let t0 = step(&mut table, &[], &mut k);
     let down = ScreenFrame {
         t: t0,
-        contacts: vec![contact(1, Phase::Down, screen(&table, pts[0]))],
+        contacts: vec![contact(
+            1,
+            Phase::Down,
+            screen(&table, pts[0]).unwrap_or_default(),
+        )],
     };
     step(&mut table, &[down], &mut k);
-    let mut meter = Meter::new(&ch.lib.skeleton, &ch.roles, dt);
-    let (mut dev_sum, mut dev_n) = (0.0, 0usize);
-    let mut left_reach: Option<f64> = None;
-    let mut first_step: Option<f64> = None;
     let start = f64::from(k) * dt;
     let mut lifted = false;
     let mut after_lift = 0.0;
@@ -330,39 +323,25 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         if !lifted {
             let p = point_along(&pts, s);
             let phase = if s >= total { Phase::Up } else { Phase::Move };
-            contacts.push(contact(1, phase, screen(&table, p)));
-            if left_reach.is_none()
+            contacts.push(contact(1, phase, screen(&table, p).unwrap_or_default()));
+            if watch.left_reach.is_none()
                 && (p - table.ctl().world().positions[pelvis_j].with_y(0.0)).length()
                     > crate::control::controller::WALK_REACH_M
             {
-                left_reach = Some(t);
+                watch.left_reach = Some(t);
             }
             lifted = s >= total;
         }
-        let frames: Vec<ScreenFrame> = if contacts.is_empty() {
-            Vec::new()
+        let frames = if contacts.is_empty() {
+            None
         } else {
-            vec![ScreenFrame { t, contacts }]
+            Some(ScreenFrame { t, contacts })
         };
-        step(&mut table, &frames, &mut k);
+        step(&mut table, frames.as_slice(), &mut k);
         if let Some(f) = second.as_mut() {
             f.measure(ch, table.ctl());
         }
-        let held = if lifted { vec![] } else { vec![Role::Pelvis] };
-        meter.push(table.ctl().pose(), &held);
-        let w = table.ctl().world();
-        if first_step.is_none()
-            && feet.iter().zip(&feet_rest).any(|(f, r)| {
-                let p = w.positions[*f];
-                p.y > r.y + 0.02 || (p - *r).with_y(0.0).length() > 0.03
-            })
-        {
-            first_step = Some(t);
-        }
-        if matches!(table.ctl().mode(), Mode::Walk(_)) {
-            dev_sum += off_path(&pts, w.positions[pelvis_j].with_y(0.0));
-            dev_n += 1;
-        }
+        watch.observe(table.ctl(), t, lifted, &pts);
         if lifted {
             after_lift += dt;
             let busy =
@@ -374,26 +353,86 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
     }
     let end = *pts.last().expect("a path has points");
     let arrival = (table.ctl().world().positions[pelvis_j].with_y(0.0) - end).length();
-    let m = meter.finish();
     WalkRow {
         length_m: (total * 1000.0).round() / 1000.0,
         speed_mps: path.speed_mps,
-        followed: arrival <= FOLLOWED_M,
-        arrival_cm: arrival * 100.0,
-        deviation_cm: if dev_n > 0 {
-            dev_sum / dev_n as f64 * 100.0
-        } else {
-            0.0
-        },
-        skate_mm: m.foot_skate_mm_per_frame,
-        skate_max_mm: m.foot_skate_max_mm,
-        pops: m.pops,
-        pop_list: m.pop_list.into_iter().take(5).collect(),
-        worst_skate: m.worst_skate,
-        start_s: match (left_reach, first_step) {
-            (Some(a), Some(b)) => (b - a).max(0.0),
-            _ => -1.0,
-        },
         layered: second.map(SecondFinger::finish),
+        ..watch.row(arrival)
+    }
+}
+
+/// What a walk's frames show: the motion's meter, the pelvis's way off
+/// the path, when the finger left the walk's reach and when a foot first
+/// stepped.
+struct Watch<'a> {
+    meter: Meter<'a>,
+    pelvis: usize,
+    feet: [usize; 2],
+    feet_rest: [DVec3; 2],
+    dev: (f64, usize),
+    left_reach: Option<f64>,
+    first_step: Option<f64>,
+}
+
+impl<'a> Watch<'a> {
+    fn new(ch: &'a Character, ctl: &Controller, dt: f64) -> Self {
+        let feet = [Role::LeftFoot, Role::RightFoot].map(|r| ch.roles.get(r));
+        Self {
+            meter: Meter::new(&ch.lib.skeleton, &ch.roles, dt),
+            pelvis: ch.roles.get(Role::Pelvis),
+            feet,
+            feet_rest: feet.map(|f| ctl.world().positions[f]),
+            dev: (0.0, 0),
+            left_reach: None,
+            first_step: None,
+        }
+    }
+
+    /// One frame at time `t` along path `pts`, the pelvis held until
+    /// `lifted`.
+    fn observe(&mut self, ctl: &Controller, t: f64, lifted: bool, pts: &[DVec3]) {
+        let held = if lifted { vec![] } else { vec![Role::Pelvis] };
+        self.meter.push(ctl.pose(), &held);
+        let w = ctl.world();
+        if self.first_step.is_none()
+            && self.feet.iter().zip(&self.feet_rest).any(|(f, r)| {
+                let p = w.positions[*f];
+                p.y > r.y + 0.02 || (p - *r).with_y(0.0).length() > 0.03
+            })
+        {
+            self.first_step = Some(t);
+        }
+        if matches!(ctl.mode(), Mode::Walk(_)) {
+            self.dev.0 += off_path(pts, w.positions[self.pelvis].with_y(0.0));
+            self.dev.1 += 1;
+        }
+    }
+
+    /// The walk's row, the pelvis ending `arrival` from the path's end
+    /// (its length, speed and layer left to the caller).
+    fn row(self, arrival: f64) -> WalkRow {
+        let (dev_sum, dev_n) = self.dev;
+        let m = self.meter.finish();
+        WalkRow {
+            length_m: 0.0,
+            speed_mps: 0.0,
+            followed: arrival <= FOLLOWED_M,
+            arrival_cm: arrival * 100.0,
+            deviation_cm: if dev_n > 0 {
+                dev_sum / dev_n as f64 * 100.0
+            } else {
+                0.0
+            },
+            skate_mm: m.foot_skate_mm_per_frame,
+            skate_max_mm: m.foot_skate_max_mm,
+            pops: m.pops,
+            pop_list: m.pop_list.into_iter().take(5).collect(),
+            worst_skate: m.worst_skate,
+            start_s: match (self.left_reach, self.first_step) {
+                (Some(a), Some(b)) => (b - a).max(0.0),
+                _ => -1.0,
+            },
+            layered: None,
+        }
     }
 }
