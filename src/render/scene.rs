@@ -144,7 +144,6 @@ fn tip(skeleton: &Skeleton, world: &WorldPose, joint: usize, fallback: DVec3) ->
 }
 
 pub(super) fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> Vec<Segment> {
-    let p = |r: Role| world.positions[roles.get(r)];
     let mut out = Vec::new();
     let push_chain =
         |out: &mut Vec<Segment>, part: Role, from: Role, to: Role, r: f64, color: [f32; 3]| {
@@ -202,41 +201,48 @@ pub(super) fn segments(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) 
             [hip, knee, foot],
         ));
     }
-    // Chest across the shoulders and hips across the hip joints, so that
-    // the trunk reads as a body and not a stick.
-    out.push(Segment {
-        part: Role::Chest,
-        a: p(Role::LeftShoulder),
-        b: p(Role::RightShoulder),
-        r: 0.075,
-        color: SHIRT,
-    });
-    out.push(Segment {
-        part: Role::Chest,
-        a: (p(Role::Chest) * 0.7 + p(Role::Pelvis) * 0.3),
-        b: (p(Role::Chest) * 0.7 + p(Role::Pelvis) * 0.3),
-        r: 0.14,
-        color: SHIRT,
-    });
-    out.push(Segment {
-        part: Role::Pelvis,
-        a: p(Role::LeftHip),
-        b: p(Role::RightHip),
-        r: 0.1,
-        color: TROUSERS,
-    });
-    // The head: a sphere above the head joint, along the neck.
+    out.extend(volumes(skeleton, roles, world));
+    out
+}
+
+/// The trunk's volumes, so that it reads as a body and not a stick: the
+/// chest across the shoulders and as a mass, the hips across the hip
+/// joints, and the head as a sphere above the head joint, along the neck.
+fn volumes(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> [Segment; 4] {
+    let p = |r: Role| world.positions[roles.get(r)];
     let up = (p(Role::Head) - p(Role::Neck)).normalize_or(DVec3::Y);
     let head_tip = tip(skeleton, world, roles.get(Role::Head), up * 0.2);
     let centre = p(Role::Head) + (head_tip - p(Role::Head)) * 0.45;
-    out.push(Segment {
-        part: Role::Head,
-        a: centre,
-        b: centre,
-        r: 0.105,
-        color: SKIN,
-    });
-    out
+    [
+        Segment {
+            part: Role::Chest,
+            a: p(Role::LeftShoulder),
+            b: p(Role::RightShoulder),
+            r: 0.075,
+            color: SHIRT,
+        },
+        Segment {
+            part: Role::Chest,
+            a: (p(Role::Chest) * 0.7 + p(Role::Pelvis) * 0.3),
+            b: (p(Role::Chest) * 0.7 + p(Role::Pelvis) * 0.3),
+            r: 0.14,
+            color: SHIRT,
+        },
+        Segment {
+            part: Role::Pelvis,
+            a: p(Role::LeftHip),
+            b: p(Role::RightHip),
+            r: 0.1,
+            color: TROUSERS,
+        },
+        Segment {
+            part: Role::Head,
+            a: centre,
+            b: centre,
+            r: 0.105,
+            color: SKIN,
+        },
+    ]
 }
 
 /// A mitten past the wrist (along the forearm or the hand's bones) and a

@@ -83,7 +83,6 @@ impl<'a> Meter<'a> {
     /// The next posture, `held` the parts fingers hold: a foot a finger
     /// drags along the floor is the visitor's doing, not skating.
     pub fn push(&mut self, pose: &Pose, held: &[Role]) {
-        let (skeleton, dt) = (self.skeleton, self.dt);
         let k = self.m.frames;
         self.m.frames += 1;
         if !finite(pose) {
@@ -92,95 +91,98 @@ impl<'a> Meter<'a> {
             self.speeds = None;
             return;
         }
-        let world = forward_kinematics(skeleton, pose);
-        let m = &mut self.m;
-        if let Some((prev, prev_world)) = &self.last {
-            // Angular speed of every joint's local rotation, and its jump
-            // from the frame before.
-            let speeds: Vec<f64> = prev
-                .rotations
-                .iter()
-                .zip(&pose.rotations)
-                .map(|(a, b)| a.angle_between(*b) / dt)
-                .collect();
-            if let Some(before) = &self.speeds {
-                let mut frame_max = (0.0f64, 0usize);
-                for (j, (x, y)) in before.iter().zip(&speeds).enumerate() {
-                    let jump = (y - x).abs();
-                    if jump > frame_max.0 {
-                        frame_max = (jump, j);
-                    }
-                    if jump > m.max_joint_speed_jump_rad_s {
-                        m.max_joint_speed_jump_rad_s = jump;
-                        m.worst_jump = format!(
-                            "{} at {:.2} s",
-                            skeleton.joints[j].name,
-                            (k + 1) as f64 * dt
-                        );
-                    }
+        let world = forward_kinematics(self.skeleton, pose);
+        let time_s = (k + 1) as f64 * self.dt;
+        if let Some((prev, prev_world)) = self.last.take() {
+            self.jumps(&prev, pose, time_s);
+            self.skates(&prev_world, &world, held, time_s);
+        }
+        self.penetration(&world, time_s);
+        self.last = Some((pose.clone(), world));
+    }
+
+    /// Angular speed of every joint's local rotation since `prev`, and its
+    /// jump from the frame before: the largest, and the frames where one
+    /// pops.
+    fn jumps(&mut self, prev: &Pose, pose: &Pose, time_s: f64) {
+        let (skeleton, dt, m) = (self.skeleton, self.dt, &mut self.m);
+        let speeds: Vec<f64> = prev
+            .rotations
+            .iter()
+            .zip(&pose.rotations)
+            .map(|(a, b)| a.angle_between(*b) / dt)
+            .collect();
+        if let Some(before) = &self.speeds {
+            let mut frame_max = (0.0f64, 0usize);
+            for (j, (x, y)) in before.iter().zip(&speeds).enumerate() {
+                let jump = (y - x).abs();
+                if jump > frame_max.0 {
+                    frame_max = (jump, j);
                 }
-                if frame_max.0 > POP_RAD_S {
-                    m.pops += 1;
-                    if m.pop_list.len() < MAX_LISTED {
-                        m.pop_list.push(format!(
-                            "{:.2} s {} {:.1} rad/s",
-                            (k + 1) as f64 * dt,
-                            skeleton.joints[frame_max.1].name,
-                            frame_max.0
-                        ));
-                    }
+                if jump > m.max_joint_speed_jump_rad_s {
+                    m.max_joint_speed_jump_rad_s = jump;
+                    m.worst_jump = format!("{} at {time_s:.2} s", skeleton.joints[j].name);
                 }
             }
-            self.speeds = Some(speeds);
-            // Feet: a point of the foot (ankle, toes, their End Sites)
-            // within 2 cm of the floor in both frames is planted, and its
-            // horizontal slide is skating; a foot's slide in a step is its
-            // planted points' largest. The same point is followed from
-            // frame to frame: a foot that rolls from heel to toes does not
-            // skate, though its lowest point moves.
-            for (&f, role) in self.feet.iter().zip([Role::LeftFoot, Role::RightFoot]) {
-                if held.contains(&role) {
-                    continue;
-                }
-                let planted: Vec<f64> = foot_points(skeleton, prev_world, f)
-                    .zip(foot_points(skeleton, &world, f))
-                    .filter(|(a, b)| a.y < 0.02 && b.y < 0.02)
-                    .map(|(a, b)| (b - a).with_y(0.0).length() * 1e3)
-                    .collect();
-                if let Some(mm) = planted.into_iter().reduce(f64::max) {
-                    tracing::trace!(
-                        time_s = (k + 1) as f64 * dt,
-                        foot = %skeleton.joints[f].name,
-                        mm,
-                        "planted foot slid"
-                    );
-                    self.skate_sum += mm;
-                    self.skate_n += 1;
-                    if mm > m.foot_skate_max_mm {
-                        m.foot_skate_max_mm = mm;
-                        m.worst_skate = format!(
-                            "{} at {:.2} s",
-                            skeleton.joints[f].name,
-                            (k + 1) as f64 * dt
-                        );
-                    }
+            if frame_max.0 > POP_RAD_S {
+                m.pops += 1;
+                if m.pop_list.len() < MAX_LISTED {
+                    m.pop_list.push(format!(
+                        "{time_s:.2} s {} {:.1} rad/s",
+                        skeleton.joints[frame_max.1].name, frame_max.0
+                    ));
                 }
             }
         }
+        self.speeds = Some(speeds);
+    }
+
+    /// Feet: a point of the foot (ankle, toes, their End Sites) within 2 cm
+    /// of the floor in both frames is planted, and its horizontal slide is
+    /// skating; a foot's slide in a step is its planted points' largest.
+    /// The same point is followed from frame to frame: a foot that rolls
+    /// from heel to toes does not skate, though its lowest point moves. A
+    /// held foot is not counted.
+    fn skates(&mut self, prev_world: &WorldPose, world: &WorldPose, held: &[Role], time_s: f64) {
+        let skeleton = self.skeleton;
+        for (&f, role) in self.feet.iter().zip([Role::LeftFoot, Role::RightFoot]) {
+            if held.contains(&role) {
+                continue;
+            }
+            let planted: Vec<f64> = foot_points(skeleton, prev_world, f)
+                .zip(foot_points(skeleton, world, f))
+                .filter(|(a, b)| a.y < 0.02 && b.y < 0.02)
+                .map(|(a, b)| (b - a).with_y(0.0).length() * 1e3)
+                .collect();
+            if let Some(mm) = planted.into_iter().reduce(f64::max) {
+                tracing::trace!(
+                    time_s,
+                    foot = %skeleton.joints[f].name,
+                    mm,
+                    "planted foot slid"
+                );
+                self.skate_sum += mm;
+                self.skate_n += 1;
+                if mm > self.m.foot_skate_max_mm {
+                    self.m.foot_skate_max_mm = mm;
+                    self.m.worst_skate = format!("{} at {time_s:.2} s", skeleton.joints[f].name);
+                }
+            }
+        }
+    }
+
+    /// The deepest any joint or End Site goes under the floor.
+    fn penetration(&mut self, world: &WorldPose, time_s: f64) {
+        let (skeleton, m) = (self.skeleton, &mut self.m);
         for i in 0..skeleton.len() {
             let y = world
                 .end_site(skeleton, i)
                 .map_or(world.positions[i].y, |e| e.y.min(world.positions[i].y));
             if -y * 1e3 > m.ground_penetration_mm {
                 m.ground_penetration_mm = -y * 1e3;
-                m.worst_penetration = format!(
-                    "{} at {:.2} s",
-                    skeleton.joints[i].name,
-                    (k + 1) as f64 * dt
-                );
+                m.worst_penetration = format!("{} at {time_s:.2} s", skeleton.joints[i].name);
             }
         }
-        self.last = Some((pose.clone(), world));
     }
 
     /// The figures over every posture pushed.

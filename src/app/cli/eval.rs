@@ -18,7 +18,6 @@ pub(super) fn eval_actions(
     models_only: bool,
 ) -> Result<(), Failure> {
     use crate::character::library::Library;
-    use crate::control::action::model::ActionModel;
     use crate::tools::eval::actions as eval;
     let lib = Library::load(library).map_err(|e| Failure::new(exit::DATAERR, e))?;
     let actions = crate::control::character::Character::action_models(&lib);
@@ -34,28 +33,7 @@ pub(super) fn eval_actions(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let named = |n: &str| stem.starts_with(&format!("{n}_"));
-        // `bye_*.bvh` tests `bye`, or the action `library init` named by
-        // the side of its takes (`bye_right`; not its mirror image).
-        let sided = |a: &&ActionModel| {
-            !a.def.clips.iter().all(|c| c.ends_with("~mirror"))
-                && ["_left", "_right"]
-                    .iter()
-                    .any(|side| a.def.name.strip_suffix(side).is_some_and(named))
-        };
-        let Some(action) = actions
-            .iter()
-            .map(|a| a.def.name.clone())
-            .filter(|n| named(n))
-            .max_by_key(String::len)
-            .or_else(|| {
-                actions
-                    .iter()
-                    .filter(sided)
-                    .map(|a| a.def.name.clone())
-                    .max_by_key(String::len)
-            })
-        else {
+        let Some(action) = action_named_by(&stem, &actions) else {
             tracing::warn!(file = %f.display(), "not named after an action of the library (<action>_*.bvh); skipped");
             continue;
         };
@@ -105,6 +83,35 @@ pub(super) fn eval_actions(
     ));
     let json = serde_json::to_string_pretty(&result).map_err(|e| Failure::new(exit::FAILURE, e))?;
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
+}
+
+/// The action a test clip's file name (`stem`) names: the longest action
+/// whose name starts it (`bye_*.bvh` tests `bye`), else the action
+/// `library init` named by the side of its takes (`bye_right`; not its
+/// mirror image).
+fn action_named_by(
+    stem: &str,
+    actions: &[crate::control::action::model::ActionModel],
+) -> Option<String> {
+    let named = |n: &str| stem.starts_with(&format!("{n}_"));
+    let sided = |a: &&crate::control::action::model::ActionModel| {
+        !a.def.clips.iter().all(|c| c.ends_with("~mirror"))
+            && ["_left", "_right"]
+                .iter()
+                .any(|side| a.def.name.strip_suffix(side).is_some_and(named))
+    };
+    actions
+        .iter()
+        .map(|a| a.def.name.clone())
+        .filter(|n| named(n))
+        .max_by_key(String::len)
+        .or_else(|| {
+            actions
+                .iter()
+                .filter(sided)
+                .map(|a| a.def.name.clone())
+                .max_by_key(String::len)
+        })
 }
 
 pub(super) fn pose_setup(

@@ -174,6 +174,7 @@ pub fn run_with_clock(
     let frame_s = 1.0 / f64::from(screen.refresh_hz());
     let textfile =
         Some(config.kiosk.metrics_textfile.clone()).filter(|p| !p.as_os_str().is_empty());
+    // This start's number: one more than the metrics file says.
     let starts = textfile
         .as_ref()
         .and_then(|p| std::fs::read_to_string(p).ok())
@@ -204,34 +205,42 @@ pub fn run_with_clock(
         no_panel_shown: false,
     };
     frame::run(&mut ctl, &mut frames, &mut kiosk)?;
-    let Kiosk {
-        input,
-        screen,
-        mut stats,
-        vitals,
-        ..
-    } = kiosk;
-    (stats.touch_to_flip_ms_mean, stats.touch_to_flip_n) = vitals.run_latency();
-    input.stop();
-    stats.seconds = frames.now();
-    stats.flips = screen.flips();
-    if stats.frames > 0 {
-        stats.render_ms_mean /= stats.frames as f64;
+    Ok(kiosk.stopped(frames.now()))
+}
+
+impl Kiosk<'_> {
+    /// The kiosk stopped after `seconds`: its input thread ended, its
+    /// figures (the means taken) logged and returned.
+    fn stopped(self, seconds: f64) -> RunStats {
+        let Kiosk {
+            input,
+            screen,
+            mut stats,
+            vitals,
+            ..
+        } = self;
+        (stats.touch_to_flip_ms_mean, stats.touch_to_flip_n) = vitals.run_latency();
+        input.stop();
+        stats.seconds = seconds;
+        stats.flips = screen.flips();
+        if stats.frames > 0 {
+            stats.render_ms_mean /= stats.frames as f64;
+        }
+        tracing::info!(
+            seconds = stats.seconds,
+            frames = stats.frames,
+            flips = stats.flips,
+            touch_frames = stats.touch_frames,
+            gpu_rebuilds = stats.gpu_rebuilds,
+            display_losses = stats.display_losses,
+            render_ms_mean = stats.render_ms_mean,
+            render_ms_max = stats.render_ms_max,
+            touch_to_flip_ms_mean = stats.touch_to_flip_ms_mean,
+            touch_to_flip_n = stats.touch_to_flip_n,
+            "stopped"
+        );
+        stats
     }
-    tracing::info!(
-        seconds = stats.seconds,
-        frames = stats.frames,
-        flips = stats.flips,
-        touch_frames = stats.touch_frames,
-        gpu_rebuilds = stats.gpu_rebuilds,
-        display_losses = stats.display_losses,
-        render_ms_mean = stats.render_ms_mean,
-        render_ms_max = stats.render_ms_max,
-        touch_to_flip_ms_mean = stats.touch_to_flip_ms_mean,
-        touch_to_flip_n = stats.touch_to_flip_n,
-        "stopped"
-    );
-    Ok(stats)
 }
 
 /// What was last shown: the posture, the camera's yaw, pitch and

@@ -148,30 +148,7 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
             return Err(t.err("a second ROOT: marionette reads one skeleton per file"));
         }
     }
-    t.expect("MOTION")?;
-    t.expect("Frames:")?;
-    let line = t.line();
-    let frames_declared = t.number("the frame count")?;
-    if frames_declared < 0.0 || frames_declared.fract() != 0.0 {
-        return Err(BvhError::Syntax {
-            path: path.to_owned(),
-            line,
-            message: format!("expected a whole number of frames, found {frames_declared}"),
-        });
-    }
-    t.expect("Frame")?;
-    t.expect("Time:")?;
-    let line = t.line();
-    let frame_time = t.number("the frame time in seconds")?;
-    if !(MIN_FRAME_TIME_S..=MAX_FRAME_TIME_S).contains(&frame_time) {
-        return Err(BvhError::Syntax {
-            path: path.to_owned(),
-            line,
-            message: format!(
-                "frame time must be between {MIN_FRAME_TIME_S} and {MAX_FRAME_TIME_S} seconds (1000 to 1 frames per second), found {frame_time}"
-            ),
-        });
-    }
+    let (frames_declared, frame_time) = motion_header(&mut t, path)?;
     let per_frame: usize = channels.iter().map(Vec::len).sum();
     let (remaining, last_value_line) = t.remaining();
     if per_frame == 0 {
@@ -199,24 +176,7 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
     }
     let mut frames = Vec::with_capacity(declared);
     for _ in 0..declared {
-        let mut pose = skeleton.rest_pose();
-        for (j, chans) in channels.iter().enumerate() {
-            let mut rot = DQuat::IDENTITY;
-            let mut trans = skeleton.joints[j].offset;
-            for ch in chans {
-                let v = t.number("a channel value")?;
-                match ch {
-                    Channel::Xposition => trans.x = v,
-                    Channel::Yposition => trans.y = v,
-                    Channel::Zposition => trans.z = v,
-                    Channel::Xrotation => rot *= DQuat::from_rotation_x(v.to_radians()),
-                    Channel::Yrotation => rot *= DQuat::from_rotation_y(v.to_radians()),
-                    Channel::Zrotation => rot *= DQuat::from_rotation_z(v.to_radians()),
-                }
-            }
-            pose.translations[j] = trans;
-            pose.rotations[j] = rot.normalize();
-        }
+        let pose = read_frame(&mut t, &skeleton, &channels)?;
         frames.push(pose);
     }
     let relative = positions_relative_to_offsets(&skeleton, &channels, &mut frames);
@@ -233,6 +193,63 @@ pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
         frame_time,
         frames,
     })
+}
+
+/// The MOTION section's header: the frame count declared (a whole number)
+/// and the frame time (within bounds).
+fn motion_header(t: &mut Tokens<'_>, path: &Path) -> Result<(f64, f64), BvhError> {
+    t.expect("MOTION")?;
+    t.expect("Frames:")?;
+    let line = t.line();
+    let frames_declared = t.number("the frame count")?;
+    if frames_declared < 0.0 || frames_declared.fract() != 0.0 {
+        return Err(BvhError::Syntax {
+            path: path.to_owned(),
+            line,
+            message: format!("expected a whole number of frames, found {frames_declared}"),
+        });
+    }
+    t.expect("Frame")?;
+    t.expect("Time:")?;
+    let line = t.line();
+    let frame_time = t.number("the frame time in seconds")?;
+    if !(MIN_FRAME_TIME_S..=MAX_FRAME_TIME_S).contains(&frame_time) {
+        return Err(BvhError::Syntax {
+            path: path.to_owned(),
+            line,
+            message: format!(
+                "frame time must be between {MIN_FRAME_TIME_S} and {MAX_FRAME_TIME_S} seconds (1000 to 1 frames per second), found {frame_time}"
+            ),
+        });
+    }
+    Ok((frames_declared, frame_time))
+}
+
+/// One frame's channel values into a posture of `skeleton`.
+fn read_frame(
+    t: &mut Tokens<'_>,
+    skeleton: &Skeleton,
+    channels: &[Vec<Channel>],
+) -> Result<Pose, BvhError> {
+    let mut pose = skeleton.rest_pose();
+    for (j, chans) in channels.iter().enumerate() {
+        let mut rot = DQuat::IDENTITY;
+        let mut trans = skeleton.joints[j].offset;
+        for ch in chans {
+            let v = t.number("a channel value")?;
+            match ch {
+                Channel::Xposition => trans.x = v,
+                Channel::Yposition => trans.y = v,
+                Channel::Zposition => trans.z = v,
+                Channel::Xrotation => rot *= DQuat::from_rotation_x(v.to_radians()),
+                Channel::Yrotation => rot *= DQuat::from_rotation_y(v.to_radians()),
+                Channel::Zrotation => rot *= DQuat::from_rotation_z(v.to_radians()),
+            }
+        }
+        pose.translations[j] = trans;
+        pose.rotations[j] = rot.normalize();
+    }
+    Ok(pose)
 }
 
 /// Exporters disagree on what a joint's position channels hold: the
@@ -339,36 +356,7 @@ fn parse_joint(
                 let z = t.number("the OFFSET's z")?;
                 skeleton.joints[index].offset = DVec3::new(x, y, z);
             }
-            "CHANNELS" => {
-                let n_line = t.line();
-                let n = t.number("the number of channels")?;
-                if !(0.0..=6.0).contains(&n) || n.fract() != 0.0 {
-                    return Err(BvhError::Syntax {
-                        path: t.path.to_owned(),
-                        line: n_line,
-                        message: format!("a joint has 0 to 6 channels, found {n}"),
-                    });
-                }
-                let mut list = Vec::new();
-                for _ in 0..n as usize {
-                    let cline = t.line();
-                    let c = t.next("a channel name")?;
-                    let ch = Channel::parse(c).ok_or_else(|| BvhError::Syntax {
-                        path: t.path.to_owned(),
-                        line: cline,
-                        message: format!("expected a channel (Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation), found {}", quote(c)),
-                    })?;
-                    if list.contains(&ch) {
-                        return Err(BvhError::Syntax {
-                            path: t.path.to_owned(),
-                            line: cline,
-                            message: format!("channel `{c}` appears twice"),
-                        });
-                    }
-                    list.push(ch);
-                }
-                channels[index] = list;
-            }
+            "CHANNELS" => channels[index] = channel_list(t)?,
             "JOINT" => parse_joint(t, skeleton, channels, Some(index))?,
             "END" => {
                 t.expect("Site")?;
@@ -393,6 +381,38 @@ fn parse_joint(
             }
         }
     }
+}
+
+/// A joint's CHANNELS list: 0 to 6 channels, each named once.
+fn channel_list(t: &mut Tokens<'_>) -> Result<Vec<Channel>, BvhError> {
+    let n_line = t.line();
+    let n = t.number("the number of channels")?;
+    if !(0.0..=6.0).contains(&n) || n.fract() != 0.0 {
+        return Err(BvhError::Syntax {
+            path: t.path.to_owned(),
+            line: n_line,
+            message: format!("a joint has 0 to 6 channels, found {n}"),
+        });
+    }
+    let mut list = Vec::new();
+    for _ in 0..n as usize {
+        let cline = t.line();
+        let c = t.next("a channel name")?;
+        let ch = Channel::parse(c).ok_or_else(|| BvhError::Syntax {
+            path: t.path.to_owned(),
+            line: cline,
+            message: format!("expected a channel (Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation), found {}", quote(c)),
+        })?;
+        if list.contains(&ch) {
+            return Err(BvhError::Syntax {
+                path: t.path.to_owned(),
+                line: cline,
+                message: format!("channel `{c}` appears twice"),
+            });
+        }
+        list.push(ch);
+    }
+    Ok(list)
 }
 
 /// Read a BVH file from disk.

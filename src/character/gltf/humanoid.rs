@@ -405,7 +405,6 @@ pub(super) fn limb_by_names(rig: &Rig<'_>, side: Side, arm: bool) -> Limb {
             &[Seg::Foot],
         )
     };
-    let mut limb = Limb::default();
     let side = Some(side);
     // From the end up: the end by name, or the joint above a named toe.
     let end = rig
@@ -419,41 +418,69 @@ pub(super) fn limb_by_names(rig: &Rig<'_>, side: Side, arm: bool) -> Limb {
                 .filter(|&f| rig.side(f) == side || rig.side(f).is_none())
                 .map(|f| (f, Evidence::Hierarchy))
         });
-    if let Some((e, _)) = end {
-        limb.end = end;
-        // The middle: the nearest joint above whose name says it (within
-        // two steps), else the joint above.
-        let above = |j: usize, segs: &[Seg]| -> Option<(usize, Evidence)> {
-            let first = rig.limb_parent(j)?;
-            let second = rig.limb_parent(first);
-            if segs.contains(&rig.seg(first)) {
-                Some((rig.run_top(first), Evidence::Name))
-            } else if let Some(s) = second.filter(|&s| segs.contains(&rig.seg(s))) {
-                Some((rig.run_top(s), Evidence::Name))
-            } else {
-                Some((first, Evidence::Hierarchy))
-            }
-        };
-        // A foot the rig hangs from its root (IK style) says nothing of
-        // the leg above it: the leg by its names.
-        limb.middle = above(e, middle_segs)
-            .filter(|&(m, _)| rig.side(m) == side)
-            .or_else(|| {
-                rig.named(side, &middle_segs[..1])
-                    .or_else(|| {
-                        (0..rig.names.len()).find(|&j| {
-                            rig.side(j) == side
-                                && rig.seg(j) == Seg::Leg
-                                && rig.limb_parent(j).is_some_and(|p| rig.seg(p) == Seg::Thigh)
-                        })
-                    })
-                    .map(|m| (m, Evidence::Name))
-            });
-        if let Some((m, _)) = limb.middle {
-            limb.upper = above(m, upper_segs);
-        }
-        return limb;
+    match end {
+        Some(end) => limb_up_from(rig, side, (upper_segs, middle_segs), end),
+        None => limb_down_from_root(rig, side, arm, (upper_segs, middle_segs, end_segs)),
     }
+}
+
+/// A limb up from its end (`end`): the middle the nearest joint above
+/// whose name says it (within two steps), else the joint above; the upper
+/// likewise above the middle.
+fn limb_up_from(
+    rig: &Rig<'_>,
+    side: Option<Side>,
+    (upper_segs, middle_segs): (&[Seg], &[Seg]),
+    end: (usize, Evidence),
+) -> Limb {
+    let e = end.0;
+    let mut limb = Limb {
+        end: Some(end),
+        ..Limb::default()
+    };
+    // The middle: the nearest joint above whose name says it (within
+    // two steps), else the joint above.
+    let above = |j: usize, segs: &[Seg]| -> Option<(usize, Evidence)> {
+        let first = rig.limb_parent(j)?;
+        let second = rig.limb_parent(first);
+        if segs.contains(&rig.seg(first)) {
+            Some((rig.run_top(first), Evidence::Name))
+        } else if let Some(s) = second.filter(|&s| segs.contains(&rig.seg(s))) {
+            Some((rig.run_top(s), Evidence::Name))
+        } else {
+            Some((first, Evidence::Hierarchy))
+        }
+    };
+    // A foot the rig hangs from its root (IK style) says nothing of
+    // the leg above it: the leg by its names.
+    limb.middle = above(e, middle_segs)
+        .filter(|&(m, _)| rig.side(m) == side)
+        .or_else(|| {
+            rig.named(side, &middle_segs[..1])
+                .or_else(|| {
+                    (0..rig.names.len()).find(|&j| {
+                        rig.side(j) == side
+                            && rig.seg(j) == Seg::Leg
+                            && rig.limb_parent(j).is_some_and(|p| rig.seg(p) == Seg::Thigh)
+                    })
+                })
+                .map(|m| (m, Evidence::Name))
+        });
+    if let Some((m, _)) = limb.middle {
+        limb.upper = above(m, upper_segs);
+    }
+    limb
+}
+
+/// A limb down from its upper part, named, along the chain; for an arm
+/// without a named upper, from a named forearm.
+fn limb_down_from_root(
+    rig: &Rig<'_>,
+    side: Option<Side>,
+    arm: bool,
+    (upper_segs, middle_segs, end_segs): (&[Seg], &[Seg], &[Seg]),
+) -> Limb {
+    let mut limb = Limb::default();
     // From the root down: the upper by name, the rest along the chain.
     let upper = if arm {
         rig.named(side, upper_segs)
@@ -593,35 +620,7 @@ pub(super) fn trunk(rig: &Rig<'_>, found: &mut Found) {
         return;
     };
     if !found.contains_key(&Role::Head) {
-        // A head by name below the chest (an IK target named `HEAD`
-        // elsewhere in the rig is not it).
-        let named = (0..rig.names.len())
-            .filter(|&j| rig.seg(j) == Seg::Head && j != chest && rig.is_ancestor(chest, j))
-            .min_by_key(|&j| (rig.depth[j], j));
-        let head = named.map(|h| (h, Evidence::Name)).or_else(|| {
-            // The top of the chain leaving the chest that holds no arm.
-            let arms: Vec<usize> = [Role::LeftShoulder, Role::RightShoulder]
-                .iter()
-                .filter_map(|r| get(found, *r))
-                .collect();
-            let mut j = rig.children[chest]
-                .iter()
-                .copied()
-                .filter(|&c| {
-                    !rig.is_helper(c)
-                        && !matches!(rig.seg(c), Seg::Face | Seg::Finger)
-                        && !arms.iter().any(|&a| rig.is_ancestor(c, a))
-                        && rig.side(c).is_none()
-                })
-                .max_by_key(|&c| rig.size[c])?;
-            while let Some(c) = rig.limb_child(j) {
-                if rig.side(c).is_some() {
-                    break;
-                }
-                j = c;
-            }
-            Some((j, Evidence::Hierarchy))
-        });
+        let head = head_below(rig, chest, found);
         if let Some(h) = head {
             found.insert(Role::Head, h);
         }
@@ -650,6 +649,41 @@ pub(super) fn trunk(rig: &Rig<'_>, found: &mut Found) {
             found.insert(Role::Neck, neck);
         }
     }
+}
+
+/// The head below `chest`: a joint named as one (an IK target named
+/// `HEAD` elsewhere in the rig is not it), else the top of the chain
+/// leaving the chest that holds no arm.
+fn head_below(rig: &Rig<'_>, chest: usize, found: &Found) -> Option<(usize, Evidence)> {
+    // A head by name below the chest (an IK target named `HEAD`
+    // elsewhere in the rig is not it).
+    let named = (0..rig.names.len())
+        .filter(|&j| rig.seg(j) == Seg::Head && j != chest && rig.is_ancestor(chest, j))
+        .min_by_key(|&j| (rig.depth[j], j));
+    named.map(|h| (h, Evidence::Name)).or_else(|| {
+        // The top of the chain leaving the chest that holds no arm.
+        let arms: Vec<usize> = [Role::LeftShoulder, Role::RightShoulder]
+            .iter()
+            .filter_map(|r| found.get(r).map(|x| x.0))
+            .collect();
+        let mut j = rig.children[chest]
+            .iter()
+            .copied()
+            .filter(|&c| {
+                !rig.is_helper(c)
+                    && !matches!(rig.seg(c), Seg::Face | Seg::Finger)
+                    && !arms.iter().any(|&a| rig.is_ancestor(c, a))
+                    && rig.side(c).is_none()
+            })
+            .max_by_key(|&c| rig.size[c])?;
+        while let Some(c) = rig.limb_child(j) {
+            if rig.side(c).is_some() {
+                break;
+            }
+            j = c;
+        }
+        Some((j, Evidence::Hierarchy))
+    })
 }
 
 /// VRM's humanoid bone names and the role each plays (`chest` is where

@@ -38,94 +38,14 @@ impl File {
     /// The document in `data`, read as the file `path` (whose folder holds
     /// any buffer files it names).
     pub(super) fn parse(path: &Path, data: &[u8]) -> Result<Self, GltfError> {
-        // A GLB header whose length is under its own 12 bytes would
-        // underflow in the reader's arithmetic.
-        if let Some(len) = data
-            .strip_prefix(b"glTF")
-            .and_then(|rest| rest.get(4..8))
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .filter(|&len| len < 12)
-        {
-            return Err(GltfError::NotGltf {
-                path: path.to_owned(),
-                why: format!(
-                    "its GLB header gives a length of {len} bytes, less than the header's own 12"
-                ),
-            });
-        }
-        // The reader's own validation indexes a primitive's POSITION
-        // accessor before checking that it exists.
-        let not = |why: String| GltfError::NotGltf {
-            path: path.to_owned(),
-            why,
-        };
-        let unchecked =
-            gltf::Gltf::from_slice_without_validation(data).map_err(|e| not(e.to_string()))?;
-        let root = unchecked.document.as_json();
-        for (m, mesh) in root.meshes.iter().enumerate() {
-            for p in &mesh.primitives {
-                let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
-                if let Some(a) = p.attributes.get(&pos) {
-                    if a.value() >= root.accessors.len() {
-                        return Err(not(format!(
-                            "mesh {m}: POSITION names accessor {}, of {}",
-                            a.value(),
-                            root.accessors.len()
-                        )));
-                    }
-                }
-            }
-        }
+        refuse_what_the_reader_would_trip_on(path, data)?;
         let gltf = gltf::Gltf::from_slice(data).map_err(|e| GltfError::NotGltf {
             path: path.to_owned(),
             why: e.to_string(),
         })?;
-        let dir = path.parent().unwrap_or(Path::new("."));
         let mut buffers = Vec::new();
         for b in gltf.document.buffers() {
-            let why = |why: String| GltfError::Buffer {
-                path: path.to_owned(),
-                why: format!("buffer {}: {why}", b.index()),
-            };
-            let data = match b.source() {
-                gltf::buffer::Source::Bin => gltf
-                    .blob
-                    .clone()
-                    .ok_or_else(|| why("the GLB has no binary chunk".to_owned()))?,
-                gltf::buffer::Source::Uri(uri) => {
-                    if let Some(rest) = uri.strip_prefix("data:") {
-                        let (_, b64) = rest
-                            .split_once(";base64,")
-                            .ok_or_else(|| why("a data URI that is not base64".to_owned()))?;
-                        base64(b64).ok_or_else(|| why("bad base64 in its data URI".to_owned()))?
-                    } else {
-                        let rel = inside(uri).ok_or_else(|| {
-                            why(format!(
-                                "`{uri}` is not a file beside the glTF (no folders above it, no absolute paths or URLs)"
-                            ))
-                        })?;
-                        let file = dir.join(rel);
-                        let len = std::fs::metadata(&file)
-                            .map_err(|e| why(format!("missing buffer {}: {e}", file.display())))?
-                            .len();
-                        if len > MAX_FILE_BYTES {
-                            return Err(why(format!(
-                                "{} is {len} bytes, over {MAX_FILE_BYTES}",
-                                file.display()
-                            )));
-                        }
-                        std::fs::read(&file)
-                            .map_err(|e| why(format!("cannot read {}: {e}", file.display())))?
-                    }
-                }
-            };
-            if data.len() < b.length() {
-                return Err(why(format!(
-                    "holds {} bytes of the {} the file declares (truncated?)",
-                    data.len(),
-                    b.length()
-                )));
-            }
+            let data = buffer_data(path, &gltf, &b)?;
             buffers.push(data);
         }
         let extensions = gltf
@@ -247,6 +167,100 @@ pub(super) enum Kind {
     Matrices,
     /// Texture coordinates.
     Uvs,
+}
+
+/// Refuse what the glTF reader would trip on before it says what is
+/// wrong: a GLB header whose length is under its own 12 bytes (it would
+/// underflow in the reader's arithmetic) and a primitive's POSITION naming
+/// an accessor that is not there (its own validation indexes it before
+/// checking).
+fn refuse_what_the_reader_would_trip_on(path: &Path, data: &[u8]) -> Result<(), GltfError> {
+    if let Some(len) = data
+        .strip_prefix(b"glTF")
+        .and_then(|rest| rest.get(4..8))
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .filter(|&len| len < 12)
+    {
+        return Err(GltfError::NotGltf {
+            path: path.to_owned(),
+            why: format!(
+                "its GLB header gives a length of {len} bytes, less than the header's own 12"
+            ),
+        });
+    }
+    let not = |why: String| GltfError::NotGltf {
+        path: path.to_owned(),
+        why,
+    };
+    let unchecked =
+        gltf::Gltf::from_slice_without_validation(data).map_err(|e| not(e.to_string()))?;
+    let root = unchecked.document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for p in &mesh.primitives {
+            let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = p.attributes.get(&pos) {
+                if a.value() >= root.accessors.len() {
+                    return Err(not(format!(
+                        "mesh {m}: POSITION names accessor {}, of {}",
+                        a.value(),
+                        root.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The bytes of buffer `b` of `gltf` (read from `path`): the GLB's binary
+/// chunk, a base64 data URI, or a file beside the glTF (bounded in size),
+/// holding at least the length the file declares.
+fn buffer_data(path: &Path, gltf: &gltf::Gltf, b: &gltf::Buffer<'_>) -> Result<Vec<u8>, GltfError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let why = |why: String| GltfError::Buffer {
+        path: path.to_owned(),
+        why: format!("buffer {}: {why}", b.index()),
+    };
+    let data = match b.source() {
+        gltf::buffer::Source::Bin => gltf
+            .blob
+            .clone()
+            .ok_or_else(|| why("the GLB has no binary chunk".to_owned()))?,
+        gltf::buffer::Source::Uri(uri) => {
+            if let Some(rest) = uri.strip_prefix("data:") {
+                let (_, b64) = rest
+                    .split_once(";base64,")
+                    .ok_or_else(|| why("a data URI that is not base64".to_owned()))?;
+                base64(b64).ok_or_else(|| why("bad base64 in its data URI".to_owned()))?
+            } else {
+                let rel = inside(uri).ok_or_else(|| {
+                    why(format!(
+                        "`{uri}` is not a file beside the glTF (no folders above it, no absolute paths or URLs)"
+                    ))
+                })?;
+                let file = dir.join(rel);
+                let len = std::fs::metadata(&file)
+                    .map_err(|e| why(format!("missing buffer {}: {e}", file.display())))?
+                    .len();
+                if len > MAX_FILE_BYTES {
+                    return Err(why(format!(
+                        "{} is {len} bytes, over {MAX_FILE_BYTES}",
+                        file.display()
+                    )));
+                }
+                std::fs::read(&file)
+                    .map_err(|e| why(format!("cannot read {}: {e}", file.display())))?
+            }
+        }
+    };
+    if data.len() < b.length() {
+        return Err(why(format!(
+            "holds {} bytes of the {} the file declares (truncated?)",
+            data.len(),
+            b.length()
+        )));
+    }
+    Ok(data)
 }
 
 /// A relative path with no folder above its start, no root, no scheme.
