@@ -386,57 +386,7 @@ impl Config {
         }
         let first = all.first();
         for (k, c) in all.iter().enumerate() {
-            let range = |name: &str, v: f64, lo: f64, hi: f64| {
-                if (lo..=hi).contains(&v) {
-                    Ok(())
-                } else {
-                    Err(invalid(
-                        &key(k, name),
-                        format!("must be between {lo} and {hi}, found {v}"),
-                    ))
-                }
-            };
-            range("pick_radius_px", c.pick_radius_px, 1.0, 500.0)?;
-            range("camera_home_after_s", c.camera_home_after_s, 0.0, 3600.0)?;
-            if k > 0
-                && (c.pick_radius_px != first.pick_radius_px
-                    || c.camera_home_after_s != first.camera_home_after_s)
-            {
-                return Err(invalid(
-                    &key(k, "pick_radius_px"),
-                    "and camera_home_after_s hold for the whole table: set them in the first [[character]] only".to_owned(),
-                ));
-            }
-            if let Some([x, z]) = c.place {
-                range("place", x, -5.0, 5.0)?;
-                range("place", z, -5.0, 5.0)?;
-            }
-            if let Some(f) = c.facing_deg {
-                range("facing_deg", f, -360.0, 360.0)?;
-            }
-            if let Some(t) = c.tint {
-                for v in t {
-                    range("tint", v, 0.0, 1.0)?;
-                }
-            }
-            for role in c.mesh_roles.keys() {
-                if crate::character::roles::Role::from_name(role).is_none() {
-                    let all: Vec<&str> = crate::character::roles::Role::ALL
-                        .iter()
-                        .map(|r| r.name())
-                        .collect();
-                    return Err(invalid(
-                        &key(k, &format!("mesh_roles.{role}")),
-                        format!("is not a role; roles are {}", all.join(", ")),
-                    ));
-                }
-            }
-            if !c.mesh_roles.is_empty() && c.mesh.as_os_str().is_empty() {
-                return Err(invalid(
-                    &key(k, "mesh_roles"),
-                    "names joints of a mesh, but no `mesh` is set".to_owned(),
-                ));
-            }
+            check_character(c, (k > 0).then_some(first), &|name| key(k, name), invalid)?;
         }
         let places = all.placements();
         for (i, a) in places.iter().enumerate() {
@@ -546,6 +496,68 @@ impl Config {
         }
         Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library")
     }
+}
+
+/// One `[[character]]` table's values in range (`key` names a value in
+/// errors); the table-wide ones as the first table (`first`, for the
+/// others) sets them.
+fn check_character(
+    c: &CharacterConfig,
+    first: Option<&CharacterConfig>,
+    key: &dyn Fn(&str) -> String,
+    invalid: &dyn Fn(&str, String) -> ConfigError,
+) -> Result<(), ConfigError> {
+    let range = |name: &str, v: f64, lo: f64, hi: f64| {
+        if (lo..=hi).contains(&v) {
+            Ok(())
+        } else {
+            Err(invalid(
+                &key(name),
+                format!("must be between {lo} and {hi}, found {v}"),
+            ))
+        }
+    };
+    range("pick_radius_px", c.pick_radius_px, 1.0, 500.0)?;
+    range("camera_home_after_s", c.camera_home_after_s, 0.0, 3600.0)?;
+    if first.is_some_and(|f| {
+        c.pick_radius_px != f.pick_radius_px || c.camera_home_after_s != f.camera_home_after_s
+    }) {
+        return Err(invalid(
+            &key("pick_radius_px"),
+            "and camera_home_after_s hold for the whole table: set them in the first [[character]] only".to_owned(),
+        ));
+    }
+    if let Some([x, z]) = c.place {
+        range("place", x, -5.0, 5.0)?;
+        range("place", z, -5.0, 5.0)?;
+    }
+    if let Some(f) = c.facing_deg {
+        range("facing_deg", f, -360.0, 360.0)?;
+    }
+    if let Some(t) = c.tint {
+        for v in t {
+            range("tint", v, 0.0, 1.0)?;
+        }
+    }
+    for role in c.mesh_roles.keys() {
+        if crate::character::roles::Role::from_name(role).is_none() {
+            let all: Vec<&str> = crate::character::roles::Role::ALL
+                .iter()
+                .map(|r| r.name())
+                .collect();
+            return Err(invalid(
+                &key(&format!("mesh_roles.{role}")),
+                format!("is not a role; roles are {}", all.join(", ")),
+            ));
+        }
+    }
+    if !c.mesh_roles.is_empty() && c.mesh.as_os_str().is_empty() {
+        return Err(invalid(
+            &key("mesh_roles"),
+            "names joints of a mesh, but no `mesh` is set".to_owned(),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -234,64 +234,63 @@ impl<'a> Author<'a> {
         self.actions(&[(0, 0, name)]);
     }
 
+    /// Character `k`'s action `name` planned as a drag of its trajectory
+    /// by the finger in `slot` (put down on the part), ending where it is
+    /// farthest from its start (a walk's after a few steps); `None` where
+    /// the character has no such action or it draws nothing.
+    fn plan_drag(&mut self, k: usize, slot: i32, name: &str) -> Option<Drag> {
+        let index = self.ctl.actors()[k]
+            .ctl
+            .character()
+            .actions
+            .iter()
+            .position(|a| a.def.name == name)?;
+        let role = self.ctl.actors()[k].ctl.character().actions[index]
+            .def
+            .primary;
+        let start = self.part_of(k, role);
+        let cam = self.ctl.rig().camera();
+        let c = &self.ctl.actors()[k].ctl;
+        let at = c.placement_now();
+        let model = &c.character().actions[index];
+        let traj = if self.from_template {
+            model.most_drawn(&cam, &at)
+        } else {
+            model.projected(&cam, &at)
+        };
+        let first = traj.first().copied()?;
+        let end = traj
+            .iter()
+            .max_by(|a, b| {
+                let d = |p: &TrailPoint| p.at.distance(first.at);
+                d(a).total_cmp(&d(b))
+            })
+            .map_or(0.0, |p| p.t)
+            .max(0.7 * traj.last().map_or(0.0, |p| p.t));
+        // A walk's drag walks the character along it: a few steps,
+        // not the take's whole length, so it stays in view.
+        let end = if c.character().travels[index] && !c.character().gait.is_empty() {
+            end.min(TRAVEL_DRAG_S)
+        } else {
+            end
+        };
+        self.down(slot, start);
+        Some(Drag {
+            slot,
+            offset: (start.x - first.at.x, start.y - first.at.y),
+            traj,
+            end,
+        })
+    }
+
     /// Several drags at once, `(character, finger slot, action)`, each as
     /// [`Self::action`] describes; all lift once the last has gone its way.
     fn actions(&mut self, drags: &[(usize, i32, &str)]) {
-        struct Drag {
-            slot: i32,
-            traj: Vec<TrailPoint>,
-            offset: (f64, f64),
-            end: f64,
-        }
         let mut planned = Vec::new();
         for &(k, slot, name) in drags {
-            let Some(index) = self.ctl.actors()[k]
-                .ctl
-                .character()
-                .actions
-                .iter()
-                .position(|a| a.def.name == name)
-            else {
-                continue;
-            };
-            let role = self.ctl.actors()[k].ctl.character().actions[index]
-                .def
-                .primary;
-            let start = self.part_of(k, role);
-            let cam = self.ctl.rig().camera();
-            let c = &self.ctl.actors()[k].ctl;
-            let at = c.placement_now();
-            let model = &c.character().actions[index];
-            let traj = if self.from_template {
-                model.most_drawn(&cam, &at)
-            } else {
-                model.projected(&cam, &at)
-            };
-            let Some(first) = traj.first().copied() else {
-                continue;
-            };
-            let end = traj
-                .iter()
-                .max_by(|a, b| {
-                    let d = |p: &TrailPoint| p.at.distance(first.at);
-                    d(a).total_cmp(&d(b))
-                })
-                .map_or(0.0, |p| p.t)
-                .max(0.7 * traj.last().map_or(0.0, |p| p.t));
-            // A walk's drag walks the character along it: a few steps,
-            // not the take's whole length, so it stays in view.
-            let end = if c.character().travels[index] && !c.character().gait.is_empty() {
-                end.min(TRAVEL_DRAG_S)
-            } else {
-                end
-            };
-            self.down(slot, start);
-            planned.push(Drag {
-                slot,
-                offset: (start.x - first.at.x, start.y - first.at.y),
-                traj,
-                end,
-            });
+            if let Some(d) = self.plan_drag(k, slot, name) {
+                planned.push(d);
+            }
         }
         if planned.is_empty() {
             return;
@@ -471,8 +470,17 @@ impl Author<'_> {
     /// while another poses, camera turns and a pinch, and a rest while the
     /// camera eases home (after `home_after_s` and a little more).
     fn posing_tour(&mut self, home_after_s: f64) {
+        self.pose_hands();
+        self.pin_a_foot();
+        self.turn_the_view();
+        // Idle: the camera eases back home.
+        self.wait(home_after_s + 3.5);
+    }
+
+    /// One finger poses the right hand (up and out, held, let go), then two
+    /// fingers pose both hands.
+    fn pose_hands(&mut self) {
         let a = self;
-        let (width, height) = (a.width, a.height);
         // One finger poses the right hand: up and out, held, let go.
         let hand = a.part(Role::RightHand);
         a.down(0, hand);
@@ -503,7 +511,12 @@ impl Author<'_> {
         a.synth.up(0).up(1);
         a.frame();
         a.wait(0.6);
-        // A foot pinned by one finger while another moves the other hand around.
+    }
+
+    /// A foot pinned by one finger while another moves the other hand
+    /// around.
+    fn pin_a_foot(&mut self) {
+        let a = self;
         let foot = a.part(Role::LeftFoot);
         a.down(0, foot);
         a.frame();
@@ -528,8 +541,12 @@ impl Author<'_> {
         a.synth.up(0);
         a.frame();
         a.wait(0.6);
-        // Camera: one finger on empty space turns the view, then two pinch and
-        // twist.
+    }
+
+    /// One finger on empty space turns the view, then two pinch and twist.
+    fn turn_the_view(&mut self) {
+        let a = self;
+        let (width, height) = (a.width, a.height);
         let empty = ScreenPoint::new(width * 0.12, height * 0.85);
         a.down(0, empty);
         a.frame();
@@ -559,9 +576,16 @@ impl Author<'_> {
         a.synth.up(0).up(1);
         a.frame();
         a.wait(0.5);
-        // Idle: the camera eases back home.
-        a.wait(home_after_s + 3.5);
     }
+}
+
+/// An action's drag being played: its finger's slot, the trajectory, the
+/// finger's offset from it and when the drag ends.
+struct Drag {
+    slot: i32,
+    traj: Vec<TrailPoint>,
+    offset: (f64, f64),
+    end: f64,
 }
 
 /// The duel recording, for a table of two characters facing each other

@@ -517,6 +517,27 @@ pub fn table(cast: Vec<Arc<Character>>, config: &Config, tracking: bool, t: f64)
     Stage::new(actors, w, h, t)
 }
 
+/// The contact sheet of `thumbs` (where there are any) and the summary
+/// written into `dir`, the summary saying where.
+fn write_sheet_and_summary(
+    dir: &Path,
+    thumbs: &[(Image, String, f64)],
+    summary: &mut Summary,
+) -> Result<(), HeadlessError> {
+    if !thumbs.is_empty() {
+        let list: Vec<(&Image, String)> = thumbs.iter().map(|(i, l, _)| (i, l.clone())).collect();
+        let sheet_img = contact::sheet(&list, 4, 4);
+        let path = dir.join("contact-sheet.png");
+        write(&path, &sheet_img)?;
+        summary.sheet = Some(path);
+    }
+    summary.out = Some(dir.to_owned());
+    let path = dir.join("summary.json");
+    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    std::fs::write(&path, json + "\n").map_err(|source| HeadlessError::Write { path, source })?;
+    Ok(())
+}
+
 /// Replay `frames` on a table of `cast` (one character or several).
 ///
 /// # Panics
@@ -592,19 +613,7 @@ pub fn run_table(
     super::frame::run(&mut ctl, &mut Steps::new(opts.tick_hz), &mut replay)?;
     let (mut summary, thumbs) = replay.finish(&ctl);
     if let Some(dir) = &opts.out {
-        if !thumbs.is_empty() {
-            let list: Vec<(&Image, String)> =
-                thumbs.iter().map(|(i, l, _)| (i, l.clone())).collect();
-            let sheet_img = contact::sheet(&list, 4, 4);
-            let path = dir.join("contact-sheet.png");
-            write(&path, &sheet_img)?;
-            summary.sheet = Some(path);
-        }
-        summary.out = Some(dir.clone());
-        let path = dir.join("summary.json");
-        let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        std::fs::write(&path, json + "\n")
-            .map_err(|source| HeadlessError::Write { path, source })?;
+        write_sheet_and_summary(dir, &thumbs, &mut summary)?;
     }
     Ok(summary)
 }

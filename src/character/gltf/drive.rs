@@ -310,23 +310,8 @@ impl Drive {
                     // the one that leaves the lowest highest (raising the
                     // toes lowers the heel).
                     let axis = axis.normalize();
-                    let low_after = |angle: f64| {
-                        let q = DQuat::from_axis_angle(axis, angle);
-                        lowest(&mut points.iter().map(|p| ankle + q * (*p - ankle)))
-                            .map_or(f64::NEG_INFINITY, |p| p.y)
-                    };
-                    let mut best = (0.0, low.y);
-                    for step in 1..=FLATTEN_STEPS {
-                        let angle = FLATTEN_MAX * f64::from(step) / f64::from(FLATTEN_STEPS);
-                        let y = low_after(angle);
-                        if y > best.1 + 1e-6 {
-                            best = (angle, y);
-                        }
-                        if y >= 0.0 {
-                            break;
-                        }
-                    }
-                    turn[k] = DQuat::from_axis_angle(axis, best.0) * turn[k];
+                    let angle = flatter(&points, ankle, axis, low.y);
+                    turn[k] = DQuat::from_axis_angle(axis, angle) * turn[k];
                 } else {
                     lift[k] -= low.y;
                 }
@@ -706,6 +691,34 @@ fn hip_wide(
     };
     let d = fpos[fig_roles.get(hip)] - fpos[fig_roles.get(Role::Pelvis)] - lib_under * scale;
     DVec3::new(d.x, 0.0, 0.0)
+}
+
+/// How far to turn a foot's `points` about its `ankle` and `axis` (up to
+/// [`FLATTEN_MAX`], in [`FLATTEN_STEPS`]) to raise the lowest, now at
+/// `low_y`: the least turn that brings every point onto the floor, else
+/// the one that leaves the lowest highest (raising the toes lowers the
+/// heel).
+fn flatter(points: &[DVec3], ankle: DVec3, axis: DVec3, low_y: f64) -> f64 {
+    let low_after = |angle: f64| {
+        let q = DQuat::from_axis_angle(axis, angle);
+        points
+            .iter()
+            .map(|p| ankle + q * (*p - ankle))
+            .min_by(|a, b| a.y.total_cmp(&b.y))
+            .map_or(f64::NEG_INFINITY, |p| p.y)
+    };
+    let mut best = (0.0, low_y);
+    for step in 1..=FLATTEN_STEPS {
+        let angle = FLATTEN_MAX * f64::from(step) / f64::from(FLATTEN_STEPS);
+        let y = low_after(angle);
+        if y > best.1 + 1e-6 {
+            best = (angle, y);
+        }
+        if y >= 0.0 {
+            break;
+        }
+    }
+    best.0
 }
 
 /// it hangs straight down; at most to the horizontal.

@@ -143,6 +143,15 @@ pub struct Part {
     pub role: Option<super::roles::Role>,
 }
 
+impl Part {
+    /// Its vertices' positions, in double precision.
+    pub(crate) fn points(&self) -> impl Iterator<Item = glam::DVec3> + '_ {
+        self.positions
+            .iter()
+            .map(|v| glam::DVec3::new(v[0].into(), v[1].into(), v[2].into()))
+    }
+}
+
 /// Every vertex of `parts` (rest pose) with the joint that carries it
 /// most.
 pub(crate) fn carried(parts: &[Part]) -> impl Iterator<Item = (usize, glam::DVec3)> + '_ {

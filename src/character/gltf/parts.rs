@@ -75,29 +75,9 @@ pub(super) fn parts(
                 role: None,
             };
             part.colours = colours(file, &prim, n, &mut budget, &mut textures, &mut warnings)?;
-            for ((p, j), w) in positions.iter().zip(&joints).zip(&weights) {
-                let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
-                let w = fixes.weights(*w);
-                let mut q = DVec3::ZERO;
-                let mut ours = [0u16; 4];
-                for k in 0..4 {
-                    if w[k] == 0.0 {
-                        continue;
-                    }
-                    let s = j[k] as usize;
-                    let (Some(m), Some(&o)) = (matrices.get(s), skin_joints.get(s)) else {
-                        return Err(file.data_error(what(&format!(
-                            "names joint {s} of a skin of {}",
-                            matrices.len()
-                        ))));
-                    };
-                    q += m.transform_point3(v) * f64::from(w[k]);
-                    ours[k] = u16::try_from(o).unwrap_or(0);
-                }
-                part.positions.push([q.x as f32, q.y as f32, q.z as f32]);
-                part.joints.push(ours);
-                part.weights.push(w);
-            }
+            let skin = (&matrices[..], &skin_joints[..]);
+            let vertices = (&positions[..], &joints[..], &weights[..]);
+            rest_vertices(file, &what, vertices, skin, &mut fixes, &mut part)?;
             out.push(part);
         }
     }
@@ -106,6 +86,47 @@ pub(super) fn parts(
         return Err(file.data_error("no triangles to draw".to_owned()));
     }
     Ok((out, warnings))
+}
+
+/// A primitive's vertex positions, joints and weights.
+type Vertices<'a> = (&'a [[f32; 3]], &'a [[u16; 4]], &'a [[f32; 4]]);
+
+/// A primitive's vertices into `part` at rest, each moved by its skin
+/// joints' matrices (`skin`: the matrices and the skeleton's joint of
+/// each) by its weights (fixed where they need it), and carried by those
+/// joints.
+fn rest_vertices(
+    file: &File,
+    what: &dyn Fn(&str) -> String,
+    (positions, joints, weights): Vertices<'_>,
+    (matrices, skin_joints): (&[DMat4], &[usize]),
+    fixes: &mut WeightFixes,
+    part: &mut Part,
+) -> Result<(), GltfError> {
+    for ((p, j), w) in positions.iter().zip(joints).zip(weights) {
+        let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+        let w = fixes.weights(*w);
+        let mut q = DVec3::ZERO;
+        let mut ours = [0u16; 4];
+        for k in 0..4 {
+            if w[k] == 0.0 {
+                continue;
+            }
+            let s = j[k] as usize;
+            let (Some(m), Some(&o)) = (matrices.get(s), skin_joints.get(s)) else {
+                return Err(file.data_error(what(&format!(
+                    "names joint {s} of a skin of {}",
+                    matrices.len()
+                ))));
+            };
+            q += m.transform_point3(v) * f64::from(w[k]);
+            ours[k] = u16::try_from(o).unwrap_or(0);
+        }
+        part.positions.push([q.x as f32, q.y as f32, q.z as f32]);
+        part.joints.push(ours);
+        part.weights.push(w);
+    }
+    Ok(())
 }
 
 /// A primitive's vertex positions, checked: every one finite (`what`

@@ -359,14 +359,7 @@ pub(super) fn figure(
         humanoid::limbs_by_names(&rig, &mut found);
         humanoid::trunk(&rig, &mut found);
     }
-    let verts: Vec<DVec3> = parts_raw
-        .iter()
-        .flat_map(|p| {
-            p.positions
-                .iter()
-                .map(|v| DVec3::new(v[0].into(), v[1].into(), v[2].into()))
-        })
-        .collect();
+    let verts: Vec<DVec3> = parts_raw.iter().flat_map(Part::points).collect();
     let (turn, up_name, facing_name) = body_turn(
         &mut found,
         (&names, &parents, &places),

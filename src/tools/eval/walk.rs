@@ -296,17 +296,13 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         .collect();
     let mut watch = Watch::new(ch, table.ctl(), dt);
     let total = path_length(&pts);
-    let screen = |table: &Stage, p: DVec3| table.rig().camera().project(p.with_y(pelvis.y));
-    let t0 = step(&mut table, &[], &mut k);
-    let down = ScreenFrame {
-        t: t0,
-        contacts: vec![contact(
-            1,
-            Phase::Down,
-            screen(&table, pts[0]).unwrap_or_default(),
-        )],
+    let screen = |table: &Stage, p: DVec3| {
+        let at = table.rig().camera().project(p.with_y(pelvis.y));
+        at.unwrap_or_default()
     };
-    step(&mut table, &[down], &mut k);
+    let t = step(&mut table, &[], &mut k);
+    let contacts = vec![contact(1, Phase::Down, screen(&table, pts[0]))];
+    step(&mut table, &[ScreenFrame { t, contacts }], &mut k);
     let start = f64::from(k) * dt;
     let mut lifted = false;
     let mut after_lift = 0.0;
@@ -323,7 +319,7 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         if !lifted {
             let p = point_along(&pts, s);
             let phase = if s >= total { Phase::Up } else { Phase::Move };
-            contacts.push(contact(1, phase, screen(&table, p).unwrap_or_default()));
+            contacts.push(contact(1, phase, screen(&table, p)));
             if watch.left_reach.is_none()
                 && (p - table.ctl().world().positions[pelvis_j].with_y(0.0)).length()
                     > crate::control::controller::WALK_REACH_M
