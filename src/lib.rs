@@ -43,6 +43,7 @@ pub mod input;
 pub mod output;
 pub mod physics;
 pub(crate) mod platform;
+pub mod reading;
 pub mod render;
 pub mod screen;
 pub mod tools;

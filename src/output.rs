@@ -75,6 +75,40 @@ pub fn replace_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
     written
 }
 
+/// A file written as it goes (a live recording, whose every frame must
+/// be on disk as it comes): created, or a regular file there truncated;
+/// a link, a folder, a device, a pipe or a socket there is refused as
+/// [`replace_file`] refuses it, and the file is opened without following
+/// a link put there since.
+pub fn create(path: &Path) -> io::Result<std::fs::File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    if let Some(what) = not_regular(path)? {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "{} is {what}, not a regular file: refusing to write into it (give the path of a file)",
+                path.display()
+            ),
+        ));
+    }
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(path)?;
+    if !file.metadata()?.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "{} is not a regular file: refusing to write into it",
+                path.display()
+            ),
+        ));
+    }
+    Ok(file)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -87,6 +121,22 @@ mod tests {
         replace_file(&out, b"two").unwrap();
         assert_eq!(std::fs::read(&out).unwrap(), b"two");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_file_written_as_it_goes_is_never_a_link_or_a_device() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("precious.txt");
+        std::fs::write(&target, b"keep").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        for path in [link.as_path(), dir.path(), Path::new("/dev/null")] {
+            assert!(create(path).is_err(), "{}", path.display());
+        }
+        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+        let out = dir.path().join("rec.evemu");
+        create(&out).unwrap().write_all(b"one").unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), b"one");
     }
 
     #[test]

@@ -92,3 +92,79 @@ fn every_file_under_src_is_on_the_map_and_nothing_else() {
     }
     assert!(modules >= 9, "{modules} modules found under src/");
 }
+
+/// Every `.rs` file under `dir`, recursively.
+fn sources(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            sources(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// Files are read through `reading` and written through `output` only:
+/// no other code of the crate (its unit tests aside) opens, reads or
+/// writes a file by itself, so a new reader cannot skip the checks on
+/// special files, links and sizes. The device edges open device nodes.
+#[test]
+fn every_file_goes_through_the_two_doors() {
+    const DOORS: [&str; 4] = [
+        "src/reading.rs",
+        "src/output.rs",
+        "src/platform/evdev.rs",
+        "src/platform/kms.rs",
+    ];
+    const AROUND: [&str; 8] = [
+        "fs::read(",
+        "fs::read_to_string(",
+        "fs::write(",
+        "fs::copy(",
+        "File::open(",
+        "File::create(",
+        "OpenOptions::new(",
+        "read_to_end(",
+    ];
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    sources(&root.join("src"), &mut files);
+    let mut found = Vec::new();
+    for file in files {
+        let name = file
+            .strip_prefix(root)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        if DOORS.contains(&name.as_str()) {
+            continue;
+        }
+        let text = std::fs::read_to_string(&file).unwrap();
+        // The unit tests at the end of a file make their own files.
+        let code = text.split("\n#[cfg(test)]").next().unwrap_or_default();
+        for (n, line) in code.lines().enumerate() {
+            if line.trim_start().starts_with("//") {
+                continue;
+            }
+            for call in AROUND {
+                // `File::open` of the crate's own types (`read::File`)
+                // is not the standard library's.
+                let around = line.match_indices(call).any(|(at, _)| {
+                    let before = &line[..at];
+                    !call.starts_with("File::")
+                        || before.ends_with("fs::")
+                        || !before.ends_with(':')
+                });
+                if around && !line.contains("take(") {
+                    found.push(format!("{name}:{}: {}", n + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "files read or written around crate::reading and crate::output:\n{}",
+        found.join("\n")
+    );
+}

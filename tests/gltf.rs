@@ -414,6 +414,20 @@ fn a_gltf_with_its_buffer_beside_it_loads_as_the_glb_does() {
     assert_eq!(fig.parts, glb.parts);
 }
 
+#[test]
+fn a_buffer_linked_from_outside_the_folder_is_refused() {
+    let (mut json, bin) = split_glb(&std::fs::read(shared("CesiumMan.glb")).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let figure = dir.path().join("figure");
+    std::fs::create_dir(&figure).unwrap();
+    std::fs::write(dir.path().join("man.bin"), &bin).unwrap();
+    std::os::unix::fs::symlink(dir.path().join("man.bin"), figure.join("man.bin")).unwrap();
+    json["buffers"][0]["uri"] = serde_json::json!("man.bin");
+    std::fs::write(figure.join("man.gltf"), serde_json::to_vec(&json).unwrap()).unwrap();
+    let err = load(&figure.join("man.gltf")).unwrap_err().to_string();
+    assert!(err.contains("leads outside"), "{err}");
+}
+
 /// Every character in the shared folder (a file added there is checked
 /// too): a glTF by its content, whatever its name.
 fn shared_characters() -> Vec<PathBuf> {

@@ -99,6 +99,9 @@ fn decode(bytes: &[u8], key: u64, n: usize) -> Result<Vec<[f64; 2]>, String> {
         .collect())
 }
 
+/// The largest cache file read (bytes).
+const MAX_CACHE_BYTES: u64 = 1 << 30;
+
 /// How a model was obtained.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Source {
@@ -114,22 +117,17 @@ pub enum Source {
     },
 }
 
-/// Write a cache file (beside it, then renamed into place; the temporary
-/// file is removed when that fails): how the model was obtained.
+/// Write a cache file whole (through [`crate::output::replace_file`]):
+/// how the model was obtained.
 fn store(dir: &Path, path: &Path, bytes: &[u8], reason: String) -> Source {
-    let tmp = path.with_extension("tmp");
-    let written = std::fs::create_dir_all(dir)
-        .and_then(|()| std::fs::write(&tmp, bytes))
-        .and_then(|()| std::fs::rename(&tmp, path));
+    let written =
+        std::fs::create_dir_all(dir).and_then(|()| crate::output::replace_file(path, bytes));
     match written {
         Ok(()) => Source::Baked { reason },
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Source::Uncached {
-                reason,
-                error: format!("cannot write {}: {e}", path.display()),
-            }
-        }
+        Err(e) => Source::Uncached {
+            reason,
+            error: format!("cannot write {}: {e}", path.display()),
+        },
     }
 }
 
@@ -149,7 +147,7 @@ pub fn posing_model(
     let reason = if force {
         "asked to bake".to_owned()
     } else {
-        match std::fs::read(&path) {
+        match crate::reading::read(&path, MAX_CACHE_BYTES).map_err(std::io::Error::from) {
             Ok(bytes) => match decode(&bytes, key, samples.len()) {
                 Ok(coords) => {
                     return (
@@ -251,7 +249,7 @@ pub fn recogniser(lib: &Library, actions: &[ActionModel], dir: &Path) -> (Recogn
         h.finish()
     };
     let path = dir.join(format!("recogniser-{key:016x}.bin"));
-    let reason = match std::fs::read(&path) {
+    let reason = match crate::reading::read(&path, MAX_CACHE_BYTES).map_err(std::io::Error::from) {
         Ok(bytes) => match decode_recogniser(&bytes, key) {
             Ok((thresholds, _)) => {
                 return (Recogniser { rule, thresholds }, Source::Cache(path));

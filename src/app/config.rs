@@ -116,13 +116,17 @@ impl Default for LogConfig {
     }
 }
 
+/// The largest configuration file read (bytes).
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
 impl Config {
     /// Read and validate a configuration file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text =
+            crate::reading::read_text(path, MAX_CONFIG_BYTES).map_err(|e| ConfigError::Read {
+                path: path.to_owned(),
+                source: e.into(),
+            })?;
         Self::parse(&text, path)
     }
 

@@ -210,7 +210,7 @@ impl Library {
             dir: dir.to_owned(),
             problems,
         };
-        let text = std::fs::read_to_string(toml_path)
+        let text = crate::reading::read_text(toml_path, MAX_TOML_BYTES)
             .map_err(|e| fail(vec![format!("cannot read {}: {e}", toml_path.display())]))?;
         let file: LibraryFile = toml::from_str(&text).map_err(|e| {
             fail(vec![format!(
@@ -317,6 +317,9 @@ fn settings_of(file: &LibraryFile, problems: &mut Vec<String>) -> (f64, ImportSe
     (lead_in, settings)
 }
 
+/// The largest `library.toml` read (bytes).
+const MAX_TOML_BYTES: u64 = 1 << 20;
+
 /// Every clip named anywhere in a library file, once, in name order.
 fn clip_names(file: &LibraryFile) -> Vec<&String> {
     let mut names: Vec<&String> = file
@@ -334,19 +337,17 @@ fn clip_names(file: &LibraryFile) -> Vec<&String> {
 }
 
 /// A BVH file of at most `max_bytes`, parsed, with the digest of its
-/// bytes.
+/// bytes. A clip may be a link to a take kept elsewhere (a folder of takes
+/// linked from a studio's share): it is read where it leads.
 fn read_bvh(path: &Path, max_bytes: u64) -> Result<(bvh::BvhFile, u64), bvh::BvhError> {
-    std::fs::metadata(path)
-        .and_then(|m| {
-            if m.len() > max_bytes {
-                Err(std::io::Error::other(format!(
-                    "{} MB, over settings.max_file_mb ({} MB)",
-                    m.len().div_ceil(1 << 20),
-                    max_bytes >> 20
-                )))
-            } else {
-                std::fs::read(path)
-            }
+    crate::reading::read(path, max_bytes)
+        .map_err(|e| match e {
+            crate::reading::ReadError::TooLarge { said, .. } => std::io::Error::other(format!(
+                "{} MB, over settings.max_file_mb ({} MB)",
+                said.div_ceil(1 << 20),
+                max_bytes >> 20
+            )),
+            e => e.into(),
         })
         .map_err(|source| bvh::BvhError::Io {
             path: path.to_owned(),

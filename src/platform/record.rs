@@ -30,7 +30,7 @@ pub fn record(
         path: path.clone(),
         source,
     })?;
-    let file = std::fs::File::create(out).map_err(|source| LiveError::Write {
+    let file = crate::output::create(out).map_err(|source| LiveError::Write {
         path: out.to_owned(),
         source,
     })?;

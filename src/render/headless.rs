@@ -77,7 +77,7 @@ impl Image {
 
     /// Read a PNG file (8-bit RGB or RGBA).
     pub fn read_png(path: &Path) -> std::io::Result<Self> {
-        let file = std::io::BufReader::new(std::fs::File::open(path)?);
+        let file = std::io::BufReader::new(crate::reading::open(path)?);
         let mut dec = png::Decoder::new(file);
         dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
         let mut reader = dec.read_info().map_err(std::io::Error::other)?;

@@ -123,17 +123,14 @@ pub fn write_sheet(
             canvas.dot(head.0, head.1 - 8.0, 7.0, [60, 60, 60]);
         }
     }
-    let file = std::fs::File::create(path)?;
-    let mut enc = png::Encoder::new(
-        std::io::BufWriter::new(file),
-        canvas.w as u32,
-        canvas.h as u32,
-    );
+    let mut png_bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut png_bytes, canvas.w as u32, canvas.h as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     let mut writer = enc.write_header().map_err(std::io::Error::other)?;
     writer
         .write_image_data(&canvas.rgb)
         .map_err(std::io::Error::other)?;
-    writer.finish().map_err(std::io::Error::other)
+    writer.finish().map_err(std::io::Error::other)?;
+    crate::output::replace_file(path, &png_bytes)
 }

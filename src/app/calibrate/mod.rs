@@ -135,32 +135,29 @@ pub fn with_calibration(
     Ok(doc.to_string())
 }
 
-/// Write `text` to `path` atomically, keeping the old file as `.bak`.
-fn write_config(path: &Path, text: &str) -> Result<Option<PathBuf>, CalibrateError> {
+/// Write `text` to `path` whole, keeping the old file (`old`, its text,
+/// where there was one) as `.bak`; both through
+/// [`crate::output::replace_file`], so a link or a device there is refused.
+fn write_config(
+    path: &Path,
+    old: Option<&str>,
+    text: &str,
+) -> Result<Option<PathBuf>, CalibrateError> {
     let werr = |path: &Path| {
         let path = path.to_owned();
         move |source| CalibrateError::Write { path, source }
     };
-    let with_ext = |ext: &str| {
-        let mut p = path.as_os_str().to_owned();
-        p.push(ext);
-        PathBuf::from(p)
+    let backup = match old {
+        Some(old) => {
+            let mut bak = path.as_os_str().to_owned();
+            bak.push(".bak");
+            let bak = PathBuf::from(bak);
+            crate::output::replace_file(&bak, old.as_bytes()).map_err(werr(&bak))?;
+            Some(bak)
+        }
+        None => None,
     };
-    let backup = if path.exists() {
-        let bak = with_ext(".bak");
-        std::fs::copy(path, &bak).map_err(werr(&bak))?;
-        Some(bak)
-    } else {
-        None
-    };
-    let tmp = with_ext(".tmp");
-    {
-        use std::io::Write as _;
-        let mut f = std::fs::File::create(&tmp).map_err(werr(&tmp))?;
-        f.write_all(text.as_bytes()).map_err(werr(&tmp))?;
-        f.sync_all().map_err(werr(&tmp))?;
-    }
-    std::fs::rename(&tmp, path).map_err(werr(path))?;
+    crate::output::replace_file(path, text.as_bytes()).map_err(werr(path))?;
     Ok(backup)
 }
 
@@ -383,9 +380,10 @@ fn store(
     device: &str,
     solution: &Solution,
 ) -> Result<Option<PathBuf>, CalibrateError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+    let max = crate::app::config::MAX_CONFIG_BYTES;
+    let old = match crate::reading::read_text(path, max).map_err(std::io::Error::from) {
+        Ok(t) => Some(t),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(source) => {
             return Err(CalibrateError::Write {
                 path: path.to_owned(),
@@ -393,14 +391,15 @@ fn store(
             });
         }
     };
+    let text = old.as_deref().unwrap_or_default();
     let cerr = |message: String| CalibrateError::ConfigText {
         path: path.to_owned(),
         message,
     };
     let new_text =
-        with_calibration(&text, device, solution.matrix.0).map_err(|e| cerr(e.to_string()))?;
+        with_calibration(text, device, solution.matrix.0).map_err(|e| cerr(e.to_string()))?;
     Config::parse(&new_text, path).map_err(|e| cerr(e.to_string()))?;
-    write_config(path, &new_text)
+    write_config(path, old.as_deref(), &new_text)
 }
 
 #[cfg(test)]
@@ -442,9 +441,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("marionette.toml");
         std::fs::write(&p, "old").unwrap();
-        let bak = write_config(&p, "new").unwrap().unwrap();
+        let bak = write_config(&p, Some("old"), "new").unwrap().unwrap();
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "new");
         assert_eq!(std::fs::read_to_string(bak).unwrap(), "old");
-        assert!(!dir.path().join("marionette.toml.tmp").exists());
+        // Nothing else left beside them.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 }

@@ -30,7 +30,9 @@ pub(super) enum Content {
 pub(super) fn sniff(file: &Path) -> Content {
     use std::io::Read;
     let mut head = Vec::new();
-    let read = std::fs::File::open(file).and_then(|f| f.take(4096).read_to_end(&mut head));
+    let read = crate::reading::open(file)
+        .map_err(std::io::Error::from)
+        .and_then(|f| f.take(4096).read_to_end(&mut head));
     let by_name = || {
         let ext = file
             .extension()

@@ -318,13 +318,14 @@ fn copy_takes(
     for name in &plan.posing {
         let from = plan.src.join(name);
         let to = clips.join(name);
-        let bytes = std::fs::read(&from).map_err(|e| {
+        let limit = crate::character::bvh::MAX_FILE_BYTES;
+        let bytes = crate::reading::read(&from, limit).map_err(|e| {
             Failure::new(
                 exit::NOINPUT,
                 format!("cannot read {}: {e}", from.display()),
             )
         })?;
-        if !force && std::fs::read(&to).is_ok_and(|old| old != bytes) {
+        if !force && crate::reading::read(&to, limit).map_or(to.exists(), |old| old != bytes) {
             return Err(Failure::new(
                 exit::CANTCREAT,
                 format!(

@@ -534,7 +534,8 @@ fn write_sheet_and_summary(
     summary.out = Some(dir.to_owned());
     let path = dir.join("summary.json");
     let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    std::fs::write(&path, json + "\n").map_err(|source| HeadlessError::Write { path, source })?;
+    crate::output::replace_file(&path, (json + "\n").as_bytes())
+        .map_err(|source| HeadlessError::Write { path, source })?;
     Ok(())
 }
 

@@ -177,7 +177,7 @@ pub fn run_with_clock(
     // This start's number: one more than the metrics file says.
     let starts = textfile
         .as_ref()
-        .and_then(|p| std::fs::read_to_string(p).ok())
+        .and_then(|p| crate::reading::read_text(p, 1 << 20).ok())
         .map_or(0, |t| vitals::starts_before(&t))
         + 1;
     let service = ServiceView::new(config.display.service_view);

@@ -426,19 +426,21 @@ pub fn read_file_within(path: &Path, max_bytes: u64) -> Result<BvhFile, BvhError
         path: path.to_owned(),
         source,
     };
-    let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > max_bytes {
-        return Err(BvhError::Syntax {
-            path: path.to_owned(),
-            line: 1,
-            message: format!(
-                "the file is {} MB, over the {} MB a clip may be (settings.max_file_mb in library.toml raises it)",
-                size.div_ceil(1 << 20),
-                max_bytes >> 20
-            ),
-        });
-    }
-    let bytes = std::fs::read(path).map_err(io)?;
+    let bytes = match crate::reading::read(path, max_bytes) {
+        Ok(b) => b,
+        Err(crate::reading::ReadError::TooLarge { said, .. }) => {
+            return Err(BvhError::Syntax {
+                path: path.to_owned(),
+                line: 1,
+                message: format!(
+                    "the file is {} MB, over the {} MB a clip may be (settings.max_file_mb in library.toml raises it)",
+                    said.div_ceil(1 << 20),
+                    max_bytes >> 20
+                ),
+            });
+        }
+        Err(e) => return Err(io(e.into())),
+    };
     parse(&String::from_utf8_lossy(&bytes), path)
 }
 

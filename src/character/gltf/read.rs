@@ -6,6 +6,7 @@
 use std::path::{Component, Path, PathBuf};
 
 use super::{GltfError, MAX_DATA_BYTES, MAX_FILE_BYTES};
+use crate::reading::ReadError;
 
 /// A parsed, validated glTF document and its buffers' bytes.
 pub(super) struct File {
@@ -23,15 +24,17 @@ impl File {
             path: path.to_owned(),
             source,
         };
-        let bytes = std::fs::metadata(path).map_err(io)?.len();
-        if bytes > MAX_FILE_BYTES {
-            return Err(GltfError::TooBig {
-                path: path.to_owned(),
-                bytes,
-                max: MAX_FILE_BYTES,
-            });
-        }
-        let data = std::fs::read(path).map_err(io)?;
+        let data = match crate::reading::read(path, MAX_FILE_BYTES) {
+            Ok(d) => d,
+            Err(crate::reading::ReadError::TooLarge { said, .. }) => {
+                return Err(GltfError::TooBig {
+                    path: path.to_owned(),
+                    bytes: said,
+                    max: MAX_FILE_BYTES,
+                });
+            }
+            Err(e) => return Err(io(e.into())),
+        };
         Self::parse(path, &data)
     }
 
@@ -239,17 +242,16 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, b: &gltf::Buffer<'_>) -> Result<V
                     ))
                 })?;
                 let file = dir.join(rel);
-                let len = std::fs::metadata(&file)
-                    .map_err(|e| why(format!("missing buffer {}: {e}", file.display())))?
-                    .len();
-                if len > MAX_FILE_BYTES {
-                    return Err(why(format!(
-                        "{} is {len} bytes, over {MAX_FILE_BYTES}",
+                crate::reading::read_inside(&file, dir, MAX_FILE_BYTES).map_err(|e| match e {
+                    ReadError::Io(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                        why(format!("missing buffer {}: {e}", file.display()))
+                    }
+                    ReadError::TooLarge { said, .. } => why(format!(
+                        "{} is {said} bytes, over {MAX_FILE_BYTES}",
                         file.display()
-                    )));
-                }
-                std::fs::read(&file)
-                    .map_err(|e| why(format!("cannot read {}: {e}", file.display())))?
+                    )),
+                    e => why(format!("cannot read {}: {e}", file.display())),
+                })?
             }
         }
     };

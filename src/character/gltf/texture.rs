@@ -101,13 +101,14 @@ pub fn load(file: &File, index: usize) -> Result<Texture, String> {
                     inside(uri).ok_or_else(|| format!("`{uri}` is not a file beside the glTF"))?;
                 let dir = file.path.parent().unwrap_or(Path::new("."));
                 let path = dir.join(rel);
-                let len = std::fs::metadata(&path)
-                    .map_err(|e| format!("{}: {e}", path.display()))?
-                    .len();
-                if len > super::MAX_FILE_BYTES {
-                    return Err(format!("{} is {len} bytes", path.display()));
-                }
-                std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?
+                crate::reading::read_inside(&path, dir, super::MAX_FILE_BYTES).map_err(
+                    |e| match e {
+                        crate::reading::ReadError::TooLarge { said, .. } => {
+                            format!("{} is {said} bytes", path.display())
+                        }
+                        e => format!("{}: {e}", path.display()),
+                    },
+                )?
             }
         }
     };

@@ -380,13 +380,17 @@ pub(super) fn parse_time(s: &str) -> Option<i64> {
     sec.checked_mul(1_000_000)?.checked_add(usec)
 }
 
+/// The largest recording read (bytes): days of touches.
+pub const MAX_RECORDING_BYTES: u64 = 1 << 30;
+
 impl Recording {
     /// Read a recording from a file.
     pub fn read_file(path: &Path) -> Result<Self, EvemuError> {
-        let bytes = std::fs::read(path).map_err(|source| EvemuError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let bytes =
+            crate::reading::read(path, MAX_RECORDING_BYTES).map_err(|e| EvemuError::Io {
+                path: path.to_owned(),
+                source: e.into(),
+            })?;
         let text = String::from_utf8_lossy(&bytes);
         Self::parse(&text, path)
     }

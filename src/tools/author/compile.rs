@@ -410,9 +410,7 @@ pub fn author_library(src: &Path, out: &Path) -> Result<usize, AuthorError> {
     })?;
     for (name, text) in &compiled.files {
         let path = out.join(name);
-        let tmp = out.join(format!(".{name}.tmp"));
-        std::fs::write(&tmp, text)
-            .and_then(|()| std::fs::rename(&tmp, &path))
+        crate::output::replace_file(&path, text.as_bytes())
             .map_err(|source| AuthorError::Write { path, source })?;
     }
     Ok(compiled.files.len())

@@ -179,13 +179,17 @@ pub struct Score {
     pub channels: BTreeMap<String, Vec<ChannelKey>>,
 }
 
+/// The largest score file read (bytes).
+const MAX_SCORE_BYTES: u64 = 1 << 20;
+
 impl Score {
     /// Read and validate a score file.
     pub fn load(path: &Path) -> Result<Self, ScoreError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScoreError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text =
+            crate::reading::read_text(path, MAX_SCORE_BYTES).map_err(|e| ScoreError::Io {
+                path: path.to_owned(),
+                source: e.into(),
+            })?;
         let invalid = |message: String| ScoreError::Invalid {
             path: path.to_owned(),
             message,

@@ -89,17 +89,13 @@ pub struct WalkReport {
 /// Read a paths file: `{"paths": [{"points": [[x, z], ...], "speed_mps": v}]}`.
 /// The error names the file and, for a bad number, the path and point.
 pub fn read_paths(file: &Path) -> Result<Vec<WalkPath>, String> {
-    let len = std::fs::metadata(file)
-        .map_err(|e| format!("cannot read {}: {e}", file.display()))?
-        .len();
-    if len > 64 << 20 {
-        return Err(format!(
-            "{}: {len} bytes; a paths file holds at most 64 MB",
+    let text = crate::reading::read_text(file, 64 << 20).map_err(|e| match e {
+        crate::reading::ReadError::TooLarge { said, .. } => format!(
+            "{}: {said} bytes; a paths file holds at most 64 MB",
             file.display()
-        ));
-    }
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+        ),
+        e => format!("cannot read {}: {e}", file.display()),
+    })?;
     let parsed: PathsFile = serde_json::from_str(&text).map_err(|e| {
         format!(
             "{}: not a paths file ({e}); expected {{\"paths\": [{{\"points\": [[x, z], ...], \"speed_mps\": v}}]}}",

@@ -1,0 +1,237 @@
+//! Every input file comes in through one door: it is opened without
+//! blocking (a pipe with no writer does not hang the reader), the opened
+//! handle is checked to be a regular file (a folder, a device such as
+//! `/dev/zero`, a pipe or a socket is refused, whatever its metadata says
+//! of its size), and at most the reader's limit is read (`take(limit +
+//! 1)`): a file that grows past it, or whose size is not what its metadata
+//! said, is refused as too large before more is allocated. A file that
+//! must stay inside a folder (a glTF's buffers and images, a library's
+//! clips) is resolved first, symbolic links included, and refused if it
+//! leads outside. Files written go out through the other door,
+//! [`crate::output::replace_file`].
+
+use std::fmt;
+use std::fs::File;
+use std::io::{self, Read};
+use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+use std::path::{Path, PathBuf};
+
+/// Why a file could not be read. Its message does not repeat the path:
+/// the caller says which file.
+#[derive(Debug)]
+pub enum ReadError {
+    /// The system refused: missing, unreadable, a read that failed.
+    Io(io::Error),
+    /// Something other than a regular file stands there.
+    NotRegular(&'static str),
+    /// Longer than the reader takes (`limit` bytes); `said`: its length as
+    /// the opened file gave it (under the limit where it grew as it was
+    /// read).
+    TooLarge { limit: u64, said: u64 },
+    /// It leads (through `..` or a symbolic link) outside `folder`.
+    Outside { folder: PathBuf },
+    /// Its text is not UTF-8.
+    NotText,
+}
+
+impl fmt::Display for ReadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Io(e) => write!(f, "{e}"),
+            Self::NotRegular(what) => write!(f, "it is {what}, not a regular file"),
+            Self::TooLarge { limit, said } if said > limit => write!(
+                f,
+                "it is {}, over the {} marionette reads of it",
+                size(*said),
+                size(*limit)
+            ),
+            Self::TooLarge { limit, .. } => write!(
+                f,
+                "it grew past the {} marionette reads of it as it was read",
+                size(*limit)
+            ),
+            Self::Outside { folder } => write!(
+                f,
+                "it leads outside {} (a `..` or a symbolic link): keep it inside that folder",
+                folder.display()
+            ),
+            Self::NotText => write!(f, "it is not UTF-8 text"),
+        }
+    }
+}
+
+impl std::error::Error for ReadError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Self::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl From<io::Error> for ReadError {
+    fn from(e: io::Error) -> Self {
+        Self::Io(e)
+    }
+}
+
+impl From<ReadError> for io::Error {
+    /// For readers whose errors carry an `io::Error`: the kind says what
+    /// it was, the message says it as [`ReadError`] does.
+    fn from(e: ReadError) -> Self {
+        match e {
+            ReadError::Io(e) => e,
+            ReadError::NotRegular(_) => io::Error::new(io::ErrorKind::InvalidInput, e.to_string()),
+            ReadError::TooLarge { .. } => {
+                io::Error::new(io::ErrorKind::FileTooLarge, e.to_string())
+            }
+            ReadError::Outside { .. } => {
+                io::Error::new(io::ErrorKind::PermissionDenied, e.to_string())
+            }
+            ReadError::NotText => io::Error::new(io::ErrorKind::InvalidData, e.to_string()),
+        }
+    }
+}
+
+/// A size said in the unit that reads best (rounded up).
+fn size(bytes: u64) -> String {
+    if bytes >= 1 << 20 {
+        format!("{} MB", bytes.div_ceil(1 << 20))
+    } else if bytes >= 1 << 10 {
+        format!("{} KB", bytes.div_ceil(1 << 10))
+    } else {
+        format!("{bytes} bytes")
+    }
+}
+
+/// What stands there, where it is not a regular file.
+fn not_regular(t: std::fs::FileType) -> Option<&'static str> {
+    if t.is_file() {
+        None
+    } else if t.is_dir() {
+        Some("a folder")
+    } else if t.is_fifo() {
+        Some("a pipe")
+    } else if t.is_socket() {
+        Some("a socket")
+    } else if t.is_char_device() || t.is_block_device() {
+        Some("a device")
+    } else {
+        Some("not a file")
+    }
+}
+
+/// Open `path` for reading: without blocking on a pipe, checked on the
+/// opened handle to be a regular file.
+#[allow(clippy::disallowed_methods)]
+pub fn open(path: &Path) -> Result<File, ReadError> {
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(path)?;
+    if let Some(what) = not_regular(file.metadata()?.file_type()) {
+        return Err(ReadError::NotRegular(what));
+    }
+    Ok(file)
+}
+
+/// The bytes of `path`, at most `limit` of them (see the module).
+pub fn read(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    let file = open(path)?;
+    let said = file.metadata()?.len();
+    if said > limit {
+        return Err(ReadError::TooLarge { limit, said });
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(said.min(limit)).unwrap_or(0));
+    file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(ReadError::TooLarge { limit, said });
+    }
+    Ok(bytes)
+}
+
+/// The text of `path` (UTF-8), at most `limit` bytes.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
+    String::from_utf8(read(path, limit)?).map_err(|_| ReadError::NotText)
+}
+
+/// Where `path` leads (symbolic links resolved), if that is inside
+/// `folder` (resolved too).
+pub fn inside(path: &Path, folder: &Path) -> Result<PathBuf, ReadError> {
+    let real = path.canonicalize()?;
+    let home = folder.canonicalize()?;
+    if real.starts_with(&home) {
+        Ok(real)
+    } else {
+        Err(ReadError::Outside {
+            folder: folder.to_owned(),
+        })
+    }
+}
+
+/// The bytes of `path`, which must stay inside `folder`, at most `limit`.
+pub fn read_inside(path: &Path, folder: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    read(&inside(path, folder)?, limit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_regular_file_is_read_up_to_its_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.txt");
+        std::fs::write(&p, b"12345").unwrap();
+        assert_eq!(read(&p, 5).unwrap(), b"12345");
+        assert!(matches!(
+            read(&p, 4),
+            Err(ReadError::TooLarge { limit: 4, said: 5 })
+        ));
+        assert_eq!(read_text(&p, 10).unwrap(), "12345");
+    }
+
+    #[test]
+    fn devices_folders_and_pipes_are_refused_without_reading_or_waiting() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("fifo");
+        nix::unistd::mkfifo(&fifo, nix::sys::stat::Mode::S_IRWXU).unwrap();
+        for (path, what) in [
+            (Path::new("/dev/zero"), "a device"),
+            (dir.path(), "a folder"),
+            (fifo.as_path(), "a pipe"),
+        ] {
+            let e = read(path, 1 << 30).unwrap_err();
+            assert!(
+                matches!(e, ReadError::NotRegular(w) if w == what),
+                "{}: {e}",
+                path.display()
+            );
+        }
+    }
+
+    #[test]
+    fn a_link_out_of_its_folder_is_refused_and_one_inside_followed() {
+        let dir = tempfile::tempdir().unwrap();
+        let home = dir.path().join("home");
+        std::fs::create_dir(&home).unwrap();
+        let secret = dir.path().join("secret.txt");
+        std::fs::write(&secret, b"secret").unwrap();
+        let mine = home.join("mine.txt");
+        std::fs::write(&mine, b"mine").unwrap();
+        std::os::unix::fs::symlink(&secret, home.join("out.txt")).unwrap();
+        std::os::unix::fs::symlink(&mine, home.join("in.txt")).unwrap();
+        assert!(matches!(
+            read_inside(&home.join("out.txt"), &home, 100),
+            Err(ReadError::Outside { .. })
+        ));
+        assert!(matches!(
+            read_inside(&home.join("../secret.txt"), &home, 100),
+            Err(ReadError::Outside { .. })
+        ));
+        assert_eq!(
+            read_inside(&home.join("in.txt"), &home, 100).unwrap(),
+            b"mine"
+        );
+    }
+}

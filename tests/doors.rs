@@ -1,0 +1,102 @@
+//! Files come in through one door and go out through one: a device, a pipe
+//! or a folder given as an input is refused at once (never read until
+//! memory runs out, never waited on), and an output that is a link is
+//! refused with the file it points to left as it was. (A glTF's buffer
+//! linked from outside its folder: `tests/gltf.rs`.)
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+/// Run marionette with `args`, killed if it has not ended within `limit`
+/// (a hang is a failure of its own).
+fn within(limit: Duration, args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_marionette"))
+        .args(args)
+        .env_remove("RUST_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run marionette");
+    // Counted in naps rather than read from a clock: a slow machine only
+    // waits longer.
+    let mut naps = limit.as_millis() / 20;
+    while child.try_wait().expect("wait").is_none() {
+        if naps == 0 {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("marionette {args:?} still running after {limit:?}");
+        }
+        naps -= 1;
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("output")
+}
+
+fn fifo(path: &Path) {
+    nix::unistd::mkfifo(path, nix::sys::stat::Mode::S_IRWXU).unwrap();
+}
+
+#[test]
+fn devices_pipes_and_folders_given_as_inputs_are_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipe = dir.path().join("pipe.glb");
+    fifo(&pipe);
+    let pipe_evemu = dir.path().join("pipe.evemu");
+    fifo(&pipe_evemu);
+    let pipe_toml = dir.path().join("pipe.toml");
+    fifo(&pipe_toml);
+    let metrics = dir.path().join("m.json");
+    let metrics = metrics.to_str().unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["inspect", "/dev/zero"],
+        vec!["inspect", pipe.to_str().unwrap()],
+        vec!["replay", "/dev/zero", "--metrics", metrics],
+        vec!["replay", pipe_evemu.to_str().unwrap(), "--metrics", metrics],
+        vec!["--config", "/dev/zero", "list-devices"],
+        vec!["--config", pipe_toml.to_str().unwrap(), "list-devices"],
+        vec!["--config", dir.path().to_str().unwrap(), "list-devices"],
+    ];
+    for args in cases {
+        let out = within(Duration::from_secs(60), &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && out.status.code() != Some(101),
+            "{args:?}: {:?} {err}",
+            out.status
+        );
+        assert!(
+            err.contains("not a regular file"),
+            "{args:?} says why: {err}"
+        );
+    }
+}
+
+#[test]
+fn an_output_that_is_a_link_is_refused_and_what_it_points_to_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let precious = dir.path().join("precious.txt");
+    std::fs::write(&precious, "keep").unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    std::os::unix::fs::symlink(&precious, out_dir.join("summary.json")).unwrap();
+    let rec = common::data_dir().join("tracking-ids.evemu");
+    let out = within(
+        Duration::from_secs(300),
+        &[
+            "replay",
+            rec.to_str().unwrap(),
+            "--headless",
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--fps",
+            "1",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("a symbolic link"), "{err}");
+    assert_eq!(std::fs::read_to_string(&precious).unwrap(), "keep");
+}
