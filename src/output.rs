@@ -75,6 +75,17 @@ pub fn replace_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
     written
 }
 
+/// Whether `output` is the same file as `input` (same device and inode,
+/// whatever the paths say): writing it would replace what is being read.
+#[must_use]
+pub fn same_file(input: &Path, output: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(input), std::fs::metadata(output)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
 /// A file written as it goes (a live recording, whose every frame must
 /// be on disk as it comes): created, or a regular file there truncated;
 /// a link, a folder, a device, a pipe or a socket there is refused as
@@ -121,6 +132,18 @@ mod tests {
         replace_file(&out, b"two").unwrap();
         assert_eq!(std::fs::read(&out).unwrap(), b"two");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn the_same_file_is_known_by_any_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.evemu");
+        std::fs::write(&a, b"x").unwrap();
+        let link = dir.path().join("b.evemu");
+        std::os::unix::fs::symlink(&a, &link).unwrap();
+        assert!(same_file(&a, &dir.path().join(".").join("a.evemu")));
+        assert!(same_file(&a, &link));
+        assert!(!same_file(&a, &dir.path().join("c.evemu")));
     }
 
     #[test]

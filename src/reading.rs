@@ -41,8 +41,7 @@ impl fmt::Display for ReadError {
             Self::NotRegular(what) => write!(f, "it is {what}, not a regular file"),
             Self::TooLarge { limit, said } if said > limit => write!(
                 f,
-                "it is {}, over the {} marionette reads of it",
-                size(*said),
+                "it is {said} bytes, over the {} marionette reads of it",
                 size(*limit)
             ),
             Self::TooLarge { limit, .. } => write!(
@@ -81,7 +80,8 @@ impl From<ReadError> for io::Error {
     fn from(e: ReadError) -> Self {
         match e {
             ReadError::Io(e) => e,
-            ReadError::NotRegular(_) => io::Error::new(io::ErrorKind::InvalidInput, e.to_string()),
+            ReadError::NotRegular("a folder") => io::Error::new(io::ErrorKind::IsADirectory, e),
+            ReadError::NotRegular(_) => io::Error::new(io::ErrorKind::InvalidInput, e),
             ReadError::TooLarge { .. } => {
                 io::Error::new(io::ErrorKind::FileTooLarge, e.to_string())
             }
@@ -93,7 +93,21 @@ impl From<ReadError> for io::Error {
     }
 }
 
-/// A size said in the unit that reads best (rounded up).
+/// Whether an input could not be read for what stands at its path
+/// (missing, forbidden, a folder, a device or a pipe) rather than for what
+/// is in it: exit 66, missing input.
+#[must_use]
+pub fn unreadable(e: &io::Error) -> bool {
+    matches!(
+        e.kind(),
+        io::ErrorKind::NotFound | io::ErrorKind::PermissionDenied | io::ErrorKind::IsADirectory
+    ) || e
+        .get_ref()
+        .and_then(|inner| inner.downcast_ref::<ReadError>())
+        .is_some_and(|r| matches!(r, ReadError::NotRegular(_)))
+}
+
+/// A limit said in the unit that reads best (rounded up).
 fn size(bytes: u64) -> String {
     if bytes >= 1 << 20 {
         format!("{} MB", bytes.div_ceil(1 << 20))

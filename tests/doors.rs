@@ -50,23 +50,30 @@ fn devices_pipes_and_folders_given_as_inputs_are_refused_at_once() {
     fifo(&pipe_toml);
     let metrics = dir.path().join("m.json");
     let metrics = metrics.to_str().unwrap();
-    let cases: Vec<Vec<&str>> = vec![
-        vec!["inspect", "/dev/zero"],
-        vec!["inspect", pipe.to_str().unwrap()],
-        vec!["replay", "/dev/zero", "--metrics", metrics],
-        vec!["replay", pipe_evemu.to_str().unwrap(), "--metrics", metrics],
-        vec!["--config", "/dev/zero", "list-devices"],
-        vec!["--config", pipe_toml.to_str().unwrap(), "list-devices"],
-        vec!["--config", dir.path().to_str().unwrap(), "list-devices"],
+    // An input that cannot be read is missing input (66); a configuration
+    // that cannot be read is a configuration error (78).
+    let cases: Vec<(Vec<&str>, i32)> = vec![
+        (vec!["inspect", "/dev/zero"], 66),
+        (vec!["inspect", pipe.to_str().unwrap()], 66),
+        (vec!["replay", "/dev/zero", "--metrics", metrics], 66),
+        (
+            vec!["replay", pipe_evemu.to_str().unwrap(), "--metrics", metrics],
+            66,
+        ),
+        (vec!["--config", "/dev/zero", "list-devices"], 78),
+        (
+            vec!["--config", pipe_toml.to_str().unwrap(), "list-devices"],
+            78,
+        ),
+        (
+            vec!["--config", dir.path().to_str().unwrap(), "list-devices"],
+            78,
+        ),
     ];
-    for args in cases {
+    for (args, code) in cases {
         let out = within(Duration::from_secs(60), &args);
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && out.status.code() != Some(101),
-            "{args:?}: {:?} {err}",
-            out.status
-        );
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
         assert!(
             err.contains("not a regular file"),
             "{args:?} says why: {err}"
@@ -99,4 +106,64 @@ fn an_output_that_is_a_link_is_refused_and_what_it_points_to_kept() {
     assert!(!out.status.success(), "{err}");
     assert!(err.contains("a symbolic link"), "{err}");
     assert_eq!(std::fs::read_to_string(&precious).unwrap(), "keep");
+}
+
+#[test]
+fn a_configuration_over_its_limit_is_refused_before_it_is_parsed() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.toml");
+    // 1 MB of comments and one byte more.
+    let mut text =
+        "# a comment line of sixty-four bytes, padded out to the end....\n".repeat((1 << 20) / 64);
+    text.push('\n');
+    assert_eq!(text.len(), (1 << 20) + 1);
+    std::fs::write(&big, text).unwrap();
+    let out = within(
+        Duration::from_secs(60),
+        &["--config", big.to_str().unwrap(), "list-devices"],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("over the 1 MB"), "{err}");
+}
+
+#[test]
+fn an_output_that_is_the_input_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("a.evemu");
+    std::fs::copy(common::data_dir().join("tracking-ids.evemu"), &rec).unwrap();
+    let before = std::fs::read(&rec).unwrap();
+    // The same file by another name, too.
+    let again = dir.path().join(".").join("a.evemu");
+    let config = dir.path().join("m.toml");
+    std::fs::write(&config, "").unwrap();
+    for args in [
+        vec![
+            "replay",
+            rec.to_str().unwrap(),
+            "--metrics",
+            again.to_str().unwrap(),
+        ],
+        vec![
+            "export-bvh",
+            rec.to_str().unwrap(),
+            "--out",
+            rec.to_str().unwrap(),
+        ],
+        vec![
+            "--config",
+            config.to_str().unwrap(),
+            "replay",
+            rec.to_str().unwrap(),
+            "--metrics",
+            config.to_str().unwrap(),
+        ],
+    ] {
+        let out = within(Duration::from_secs(60), &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(73), "{args:?}: {err}");
+        assert!(err.contains("is the file being read"), "{args:?}: {err}");
+    }
+    assert_eq!(std::fs::read(&rec).unwrap(), before);
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), "");
 }

@@ -153,16 +153,7 @@ impl ExitStatus for ConfigError {
 impl ExitStatus for EvemuError {
     fn exit_code(&self) -> u8 {
         match self {
-            EvemuError::Io { source, .. }
-                if matches!(
-                    source.kind(),
-                    io::ErrorKind::NotFound
-                        | io::ErrorKind::PermissionDenied
-                        | io::ErrorKind::IsADirectory
-                ) =>
-            {
-                NOINPUT
-            }
+            EvemuError::Io { source, .. } if crate::reading::unreadable(source) => NOINPUT,
             EvemuError::Io { .. } => IOERR,
             _ => DATAERR,
         }
@@ -174,7 +165,7 @@ impl ExitStatus for GltfError {
         match self {
             // A file that is not there (or cannot be read) is missing
             // input; anything wrong inside it is bad data.
-            Self::Io { source, .. } if source.kind() == io::ErrorKind::NotFound => NOINPUT,
+            Self::Io { source, .. } if crate::reading::unreadable(source) => NOINPUT,
             Self::Io { .. } => IOERR,
             _ => DATAERR,
         }

@@ -128,7 +128,53 @@ fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {
     }
 }
 
+/// The output a command would write over one of its inputs (the file it
+/// reads, or the configuration), refused before any work: exit 73.
+fn output_is_input(command: &Command, config_path: &Path) -> Result<(), Failure> {
+    let pairs: Vec<(&Path, &Path)> = match command {
+        Command::Replay {
+            file,
+            metrics: Some(out),
+            ..
+        }
+        | Command::ExportBvh { file, out, .. }
+        | Command::ConvertBvh { file, out, .. } => vec![(file, out)],
+        _ => Vec::new(),
+    };
+    let pairs = pairs
+        .into_iter()
+        .chain(command_outputs(command).map(|out| (config_path, out)));
+    for (input, out) in pairs {
+        if crate::output::same_file(input, out) {
+            return Err(Failure::new(
+                exit::CANTCREAT,
+                format!(
+                    "{} is the file being read ({}): writing it would replace it; give another output (nothing was done)",
+                    out.display(),
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The files a command writes that are named on its command line.
+fn command_outputs(command: &Command) -> impl Iterator<Item = &Path> {
+    let out: Option<&Path> = match command {
+        Command::Replay {
+            metrics: Some(out), ..
+        }
+        | Command::ExportBvh { out, .. }
+        | Command::ConvertBvh { out, .. }
+        | Command::Record { out, .. } => Some(out),
+        _ => None,
+    };
+    out.into_iter()
+}
+
 fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
+    output_is_input(&command, config_path)?;
     // A replay's `--library` stands for the configuration's.
     let replayed;
     let config = match &command {

@@ -37,16 +37,7 @@ pub(super) fn read_clip_with(
     use crate::character::motion::{Clip, ImportSettings};
     let parsed = bvh::read_file(file).map_err(|e| {
         let code = match &e {
-            BvhError::Io { source, .. }
-                if matches!(
-                    source.kind(),
-                    std::io::ErrorKind::NotFound
-                        | std::io::ErrorKind::PermissionDenied
-                        | std::io::ErrorKind::IsADirectory
-                ) =>
-            {
-                exit::NOINPUT
-            }
+            BvhError::Io { source, .. } if crate::reading::unreadable(source) => exit::NOINPUT,
             BvhError::Io { .. } => exit::IOERR,
             BvhError::Syntax { .. } => exit::DATAERR,
         };
