@@ -30,6 +30,21 @@ fn not_regular(path: &Path) -> io::Result<Option<&'static str>> {
     }
 }
 
+/// Refuse to `doing` (replace, write into) anything at `path` but a
+/// regular file or nothing.
+fn only_a_regular_file(path: &Path, doing: &str) -> io::Result<()> {
+    match not_regular(path)? {
+        None => Ok(()),
+        Some(what) => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "{} is {what}, not a regular file: refusing to {doing} it (give the path of a file)",
+                path.display()
+            ),
+        )),
+    }
+}
+
 /// The temporary file beside `path`.
 fn temporary(path: &Path) -> io::Result<PathBuf> {
     let name = path.file_name().ok_or_else(|| {
@@ -47,15 +62,7 @@ fn temporary(path: &Path) -> io::Result<PathBuf> {
 
 /// Write `bytes` to `path` whole (see the module's documentation).
 pub fn replace_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
-    if let Some(what) = not_regular(path)? {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!(
-                "{} is {what}, not a regular file: refusing to replace it (give the path of a file)",
-                path.display()
-            ),
-        ));
-    }
+    only_a_regular_file(path, "replace")?;
     let tmp = temporary(path)?;
     let written = (|| {
         // A temporary file left by a process of the same id is stale.
@@ -93,15 +100,7 @@ pub fn same_file(input: &Path, output: &Path) -> bool {
 /// a link put there since.
 pub fn create(path: &Path) -> io::Result<std::fs::File> {
     use std::os::unix::fs::OpenOptionsExt;
-    if let Some(what) = not_regular(path)? {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!(
-                "{} is {what}, not a regular file: refusing to write into it (give the path of a file)",
-                path.display()
-            ),
-        ));
-    }
+    only_a_regular_file(path, "write into")?;
     let file = std::fs::OpenOptions::new()
         .write(true)
         .create(true)
