@@ -242,6 +242,15 @@ fn usage_errors_name_the_flag_and_exit_2() {
     ]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("--frames"), "{}", stderr(&out));
+    let out = marionette(&[
+        "contact-sheet",
+        "--frames",
+        "0",
+        "--out",
+        "/tmp/never-written",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--frames"), "{}", stderr(&out));
 }
 
 #[test]

@@ -277,7 +277,7 @@ impl Config {
             return Err(invalid(
                 "display.mode",
                 format!(
-                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found \"{}\"",
+                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ, each above 0 (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found \"{}\"",
                     d.mode
                 ),
             ));

@@ -29,7 +29,7 @@ impl OutputChoice {
     }
 
     /// Parse a mode as written in the configuration: `1280x800` or
-    /// `1920x1080@60`.
+    /// `1920x1080@60`; no size or rate of 0.
     #[must_use]
     pub fn parse_mode(s: &str) -> Option<(u16, u16, Option<u32>)> {
         let (size, hz) = match s.split_once('@') {
@@ -37,7 +37,8 @@ impl OutputChoice {
             None => (s, None),
         };
         let (w, h) = size.split_once('x')?;
-        Some((w.trim().parse().ok()?, h.trim().parse().ok()?, hz))
+        let (w, h): (u16, u16) = (w.trim().parse().ok()?, h.trim().parse().ok()?);
+        (w > 0 && h > 0 && hz != Some(0)).then_some((w, h, hz))
     }
 }
 
@@ -300,5 +301,9 @@ mod tests {
         );
         assert_eq!(OutputChoice::parse_mode("big"), None);
         assert_eq!(OutputChoice::parse_mode("1280x"), None);
+        // No size or rate of nothing.
+        for zero in ["0x0@0", "0x800", "1280x0", "1920x1080@0"] {
+            assert_eq!(OutputChoice::parse_mode(zero), None, "{zero}");
+        }
     }
 }

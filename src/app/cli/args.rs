@@ -193,8 +193,8 @@ pub(super) enum Command {
         /// Output folder for the PNG files
         #[arg(long, default_value = "contact-sheets")]
         out: PathBuf,
-        /// Frames per sheet
-        #[arg(long, default_value_t = 10)]
+        /// Frames per sheet (at least 1)
+        #[arg(long, default_value_t = 10, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
         frames: usize,
     },
     /// List the input devices and what marionette makes of each
