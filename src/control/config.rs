@@ -10,6 +10,7 @@ use serde::Deserialize;
 
 use super::controller::{RecogniserKind, Settings};
 use crate::control::action::trail::StartRule;
+use crate::input::config::exactly_some;
 
 /// `[tracking]`: how the shown motion follows the synthesised one (the
 /// paper's section 6).
@@ -53,12 +54,14 @@ pub struct CharacterConfig {
     pub camera_home_after_s: f64,
     /// Where the character stands on the floor, `[x, z]` in metres; unset:
     /// see [`Characters::placements`].
+    #[serde(deserialize_with = "exactly_some")]
     pub place: Option<[f64; 2]>,
     /// Which way it faces (degrees from +Z, the camera's home side,
     /// positive towards +X); unset: see [`Characters::placements`].
     pub facing_deg: Option<f64>,
     /// Colour of its clothes, linear RGB 0..1; unset: the default shirt
     /// for a lone character, else one of [`TINTS`].
+    #[serde(deserialize_with = "exactly_some")]
     pub tint: Option<[f64; 3]>,
     /// A skinned glTF character (`.glb`, `.gltf`) the library drives;
     /// empty: the project's own body (`[display] body`).

@@ -35,6 +35,27 @@ impl Default for InputConfig {
     }
 }
 
+/// A list of `N` numbers in the configuration, exactly: a longer list is
+/// refused rather than cut short (a fixed-size array would drop what is
+/// past `N` without a word).
+pub fn exactly<'de, D, const N: usize>(d: D) -> Result<[f64; N], D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    let v = Vec::<f64>::deserialize(d)?;
+    let n = v.len();
+    v.try_into()
+        .map_err(|_| serde::de::Error::custom(format!("expected {N} numbers, found {n}")))
+}
+
+/// [`exactly`], for a list that may be left out.
+pub fn exactly_some<'de, D, const N: usize>(d: D) -> Result<Option<[f64; N]>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    exactly(d).map(Some)
+}
+
 /// `[[input.device]]`
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -46,7 +67,7 @@ pub struct DeviceConfig {
     #[serde(default)]
     pub match_usb: Option<String>,
     /// libinput calibration matrix `[a, b, c, d, e, f]`.
-    #[serde(default = "identity")]
+    #[serde(default = "identity", deserialize_with = "exactly")]
     pub calibration: [f64; 6],
     /// Do not read this device at all.
     #[serde(default)]

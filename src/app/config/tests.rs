@@ -114,3 +114,28 @@ fn devices_match_by_name_or_usb_id() {
     d.id.product = 1;
     assert!(c.input.device_for(&d).is_none());
 }
+
+#[test]
+fn a_list_longer_than_its_key_takes_is_refused_not_cut() {
+    for (text, says) in [
+        (
+            "[[character]]\ntint = [0.1, 0.2, 0.3, 0.4]\n",
+            "expected 3 numbers, found 4",
+        ),
+        (
+            "[[character]]\nplace = [1.0, 0.0, 2.0]\n",
+            "expected 2 numbers, found 3",
+        ),
+        (
+            "[[input.device]]\nmatch_name = \"P\"\ncalibration = [1, 0, 0, 0, 1, 0, 0]\n",
+            "expected 6 numbers, found 7",
+        ),
+    ] {
+        let e = parse(text).unwrap_err().to_string();
+        assert!(e.contains(says), "{text}: {e}");
+    }
+    // Exactly as many still reads.
+    let c = parse("[[character]]\ntint = [0.1, 0.2, 0.3]\nplace = [1, 0]\n").unwrap();
+    assert_eq!(c.character.first().tint, Some([0.1, 0.2, 0.3]));
+    assert_eq!(c.character.first().place, Some([1.0, 0.0]));
+}
