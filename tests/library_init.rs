@@ -180,3 +180,32 @@ fn folders_without_usable_takes_are_refused_with_the_reason() {
     assert!(err.contains("wave_a.bvh"), "{err}");
     assert!(!out.path().join("library.toml").exists());
 }
+
+#[test]
+fn a_take_named_with_a_hash_makes_a_library_that_loads() {
+    let src = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    takes(
+        src.path(),
+        &[("punch", "normal", "punch_#2"), ("bow", "active", "bow_#1")],
+    );
+    let lib_dir = out.path().join("lib");
+    let run = marionette(&[
+        "library",
+        "init",
+        src.path().to_str().unwrap(),
+        "--out",
+        lib_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let lib = Library::load(&lib_dir).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        lib.posing.iter().any(|c| c.contains("punch_#2")),
+        "{:?}",
+        lib.posing
+    );
+}

@@ -1,5 +1,6 @@
 //! Clip names in `library.toml`: a BVH file inside the library's clips
-//! folder, or frames of one (`take.bvh#120-185`).
+//! folder, or frames of one (`take.bvh#120-185`); a file's own `#`
+//! (`punch_#2.bvh`) stays in its name.
 
 use std::path::{Component, Path};
 
@@ -30,7 +31,12 @@ impl<'a> ClipRef<'a> {
     /// Split a clip name into its file and frame range. The file must lie
     /// inside the clips folder: relative, and never above it.
     pub fn parse(name: &'a str) -> Result<Self, ClipRefError> {
-        let Some((file, range)) = name.rsplit_once('#') else {
+        // A `#` followed by a name with a dot (`punch_#2.bvh`, a take's own
+        // name) is part of the file's name, not a frame range.
+        let split = name
+            .rsplit_once('#')
+            .filter(|(_, after)| !after.contains('.'));
+        let Some((file, range)) = split else {
             inside(name)?;
             return Ok(Self {
                 file: name,
@@ -79,6 +85,28 @@ fn inside(file: &str) -> Result<(), ClipRefError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_hash_in_a_takes_name_is_part_of_the_file() {
+        assert_eq!(
+            ClipRef::parse("punch_#2.bvh").unwrap(),
+            ClipRef {
+                file: "punch_#2.bvh",
+                frames: None
+            }
+        );
+        assert_eq!(
+            ClipRef::parse("punch_#2.bvh#10-40").unwrap(),
+            ClipRef {
+                file: "punch_#2.bvh",
+                frames: Some((10, 40))
+            }
+        );
+        assert!(matches!(
+            ClipRef::parse("take.bvh#12O-185"),
+            Err(ClipRefError::NotARange { .. })
+        ));
+    }
 
     #[test]
     fn clip_names_stay_inside_the_clips_folder() {
