@@ -345,12 +345,8 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
     }
     let end = *pts.last().expect("a path has points");
     let arrival = (table.ctl().world().positions[pelvis_j].with_y(0.0) - end).length();
-    WalkRow {
-        length_m: (total * 1000.0).round() / 1000.0,
-        speed_mps: path.speed_mps,
-        layered: second.map(SecondFinger::finish),
-        ..watch.row(arrival)
-    }
+    let layered = second.map(SecondFinger::finish);
+    watch.row(path.speed_mps, total, arrival, layered)
 }
 
 /// What a walk's frames show: the motion's meter, the pelvis's way off
@@ -400,14 +396,20 @@ impl<'a> Watch<'a> {
         }
     }
 
-    /// The walk's row, the pelvis ending `arrival` from the path's end
-    /// (its length, speed and layer left to the caller).
-    fn row(self, arrival: f64) -> WalkRow {
+    /// The row of a walk at `speed_mps` along a path `length_m` long, the
+    /// pelvis ending `arrival` from its end, with the layered action's row.
+    fn row(
+        self,
+        speed_mps: f64,
+        length_m: f64,
+        arrival: f64,
+        layered: Option<LayerRow>,
+    ) -> WalkRow {
         let (dev_sum, dev_n) = self.dev;
         let m = self.meter.finish();
         WalkRow {
-            length_m: 0.0,
-            speed_mps: 0.0,
+            length_m: (length_m * 1000.0).round() / 1000.0,
+            speed_mps,
             followed: arrival <= FOLLOWED_M,
             arrival_cm: arrival * 100.0,
             deviation_cm: if dev_n > 0 {
@@ -424,7 +426,7 @@ impl<'a> Watch<'a> {
                 (Some(a), Some(b)) => (b - a).max(0.0),
                 _ => -1.0,
             },
-            layered: None,
+            layered,
         }
     }
 }
