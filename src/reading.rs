@@ -9,12 +9,122 @@
 //! clips) is resolved first, symbolic links included, and refused if it
 //! leads outside. Files written go out through the other door,
 //! [`crate::output::replace_file`].
+//!
+//! What comes in is repeated in a message only through [`quote`]: cut to
+//! [`QUOTE_CHARS`] characters and escaped, so no control character of a
+//! file (an ESC that clears a terminal, a newline that forges a log line)
+//! reaches a terminal, the journal or the screen, and a token of 200 MB
+//! gives a message of a line.
 
 use std::fmt;
 use std::fs::File;
 use std::io::{self, Read};
 use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
+
+/// The most characters of input a message repeats.
+pub const QUOTE_CHARS: usize = 120;
+
+/// Input repeated in a message, between backticks: escaped (no control
+/// character reaches a terminal, the journal or the screen) and cut to
+/// [`QUOTE_CHARS`] characters, with the input's length after a cut.
+#[must_use]
+pub fn quote(input: &str) -> String {
+    let (shown, cut) = bare(input);
+    match cut {
+        None => format!("`{shown}`"),
+        Some(n) => format!("`{shown}…` ({n} characters)"),
+    }
+}
+
+/// [`quote`] without the backticks, for a value that stands alone (a
+/// name in a list): escaped and cut, `…` marking the cut.
+#[must_use]
+pub fn quote_bare(input: &str) -> String {
+    match bare(input) {
+        (shown, None) => shown,
+        (shown, Some(_)) => format!("{shown}…"),
+    }
+}
+
+/// The escaped text shown, and the input's length in characters where it
+/// was cut. Only what is shown is escaped: a token of 200 MB is not copied.
+fn bare(input: &str) -> (String, Option<usize>) {
+    let shown: String = input
+        .chars()
+        .take(QUOTE_CHARS + 1)
+        .flat_map(escaped)
+        .collect();
+    if shown.chars().count() <= QUOTE_CHARS {
+        (shown, None)
+    } else {
+        let cut: String = shown.chars().take(QUOTE_CHARS).collect();
+        (cut, Some(input.chars().count()))
+    }
+}
+
+/// A character as a message shows it: control characters (ESC, NUL, a
+/// line break) and the marks that turn text around (bidirectional
+/// overrides) written as escapes (`\n`, `\u{1b}`), every other
+/// character as itself.
+fn escaped(c: char) -> impl Iterator<Item = char> {
+    let hidden = c.is_control()
+        || matches!(c, '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}');
+    let (one, many) = if hidden {
+        (None, Some(c.escape_debug()))
+    } else {
+        (Some(c), None)
+    };
+    one.into_iter().chain(many.into_iter().flatten())
+}
+
+/// Text with every control character escaped as [`quote`] escapes it,
+/// nothing cut: a line already bounded (a log record) made safe for a
+/// terminal and the journal.
+#[must_use]
+pub fn escape_controls(text: &str) -> String {
+    text.chars().flat_map(escaped).collect()
+}
+
+/// A TOML error as one message that repeats no more of the file than
+/// [`quote`] does: where (line and column), what the parser said (its
+/// control characters escaped, cut), and the text it stopped at. The
+/// parser's own rendering shows the whole line, which can be megabytes.
+#[must_use]
+pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
+    let said = quote_bare_up_to(e.message().trim_end(), 4 * QUOTE_CHARS);
+    let Some(span) = e.span() else {
+        return said;
+    };
+    let start = span.start.min(text.len());
+    let before = text.get(..start).unwrap_or("");
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    let at = text.get(start..span.end.min(text.len())).unwrap_or("");
+    if at.trim().is_empty() {
+        format!("line {line}, column {column}: {said}")
+    } else {
+        format!("line {line}, column {column}, at {}: {said}", quote(at))
+    }
+}
+
+/// Text escaped and cut to `max` characters (`…` marks a cut): a longer
+/// message written by a parser, which may itself repeat the input.
+fn quote_bare_up_to(input: &str, max: usize) -> String {
+    let shown: String = input
+        .chars()
+        .take(max + 1)
+        // A parser's own line breaks stay readable as spaces.
+        .flat_map(|c| escaped(if c == '\n' { ' ' } else { c }))
+        .collect();
+    if shown.chars().count() <= max {
+        shown
+    } else {
+        let mut cut: String = shown.chars().take(max).collect();
+        cut.push('…');
+        cut
+    }
+}
 
 /// Why a file could not be read. Its message does not repeat the path:
 /// the caller says which file.
@@ -190,6 +300,37 @@ pub fn read_inside(path: &Path, folder: &Path, limit: u64) -> Result<Vec<u8>, Re
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn a_quote_is_escaped_and_cut() {
+        assert_eq!(quote("can't"), "`can't`");
+        assert_eq!(quote("a\u{1b}[2J\0\n"), "`a\\u{1b}[2J\\0\\n`");
+        assert_eq!(quote("\u{202e}txt"), "`\\u{202e}txt`");
+        let long = "x".repeat(1_000_000);
+        let q = quote(&long);
+        assert_eq!(
+            q,
+            format!("`{}…` (1000000 characters)", "x".repeat(QUOTE_CHARS))
+        );
+        assert_eq!(quote_bare(&long).chars().count(), QUOTE_CHARS + 1);
+        // Escapes count towards the cut: 120 characters shown at most.
+        let q = quote(&"\u{7}".repeat(200));
+        assert_eq!(
+            q.chars().count(),
+            QUOTE_CHARS + 2 + 1 + " (200 characters)".len()
+        );
+    }
+
+    #[test]
+    fn a_toml_error_says_where_without_the_whole_line() {
+        let text = format!("[log]\nlevel = {}\u{1b}\n", "x".repeat(100_000));
+        let e = toml::from_str::<toml::Table>(&text).unwrap_err();
+        let m = toml_error(&text, &e);
+        assert!(m.starts_with("line 2, column 9"), "{m}");
+        assert!(m.len() < 600, "{m}");
+        assert!(!m.chars().any(char::is_control), "{m}");
+    }
+
     use super::*;
 
     #[test]

@@ -167,3 +167,129 @@ fn an_output_that_is_the_input_is_refused_before_any_work() {
     assert_eq!(std::fs::read(&rec).unwrap(), before);
     assert_eq!(std::fs::read_to_string(&config).unwrap(), "");
 }
+
+/// What a message may hold of its input: no control character but the
+/// line breaks between records, and no more than a few lines of text.
+fn plain_and_short(args: &[&str], err: &str) {
+    assert!(
+        err.len() < 1200,
+        "{args:?}: {} bytes of messages: {}",
+        err.len(),
+        &err[..300]
+    );
+    assert!(
+        !err.chars().any(|c| c.is_control() && c != '\n'),
+        "{args:?}: a control character reached the terminal: {err:?}"
+    );
+}
+
+#[test]
+fn every_value_repeated_from_input_is_escaped_and_cut() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_owned()
+    };
+    let head = "# EVEMU 1.3\nN: panel\nI: 0003 0eef 72a1 0001\n";
+    let token = at(
+        "token.evemu",
+        &format!("{head}E: {} 0003 0035 100\n", "9".repeat(1_000_000)),
+    );
+    let esc = at(
+        "esc.evemu",
+        &format!("{head}E: \u{1b}[2J\0 0003 0035 100\n"),
+    );
+    let tag = at(
+        "tag.evemu",
+        &format!("{head}{}\u{1b}[2J: 1\n", "Q".repeat(500_000)),
+    );
+    // A recording whose last line was cut, under a name with an ESC: the
+    // warning and the error name it escaped.
+    let cut = at(
+        "cut\u{1b}[2J.evemu",
+        &format!("{head}E: 0.000001 0000 0000 0000\nE: 1.0 0003 \u{1b}[2J"),
+    );
+    let level = at(
+        "level.toml",
+        &format!(
+            "[log]\nlevel = \"\\u001b[2J{}\\nforged\"\n",
+            "a".repeat(500_000)
+        ),
+    );
+    let syntax = at(
+        "syntax.toml",
+        &format!("[log]\nlevel = {}\u{1b}\n", "x".repeat(500_000)),
+    );
+    let joints = at(
+        "joints.bvh",
+        "HIERARCHY\nROOT a\u{1b}[2J\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\nJOINT a\u{1b}[2J\n{\nOFFSET 0 1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\nMOTION\nFrames: 1\nFrame Time: 0.03\n0 0 0 0 0 0\n",
+    );
+    let lib = dir.path().join("lib");
+    std::fs::create_dir(&lib).unwrap();
+    std::fs::write(
+        lib.join("library.toml"),
+        "[[action]]\nname = \"wave\\u001b[2J\"\nprimary = \"left_hand\\u0007\"\nclips = [\"x\\u001b.bvh\"]\n",
+    )
+    .unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["inspect", &token],
+        vec!["inspect", &esc],
+        vec!["inspect", &tag],
+        vec!["replay", &cut],
+        vec!["--config", &level, "list-devices"],
+        vec!["--config", &syntax, "list-devices"],
+        vec!["inspect", &joints],
+        vec!["library", "check", lib.to_str().unwrap()],
+    ];
+    for args in cases {
+        let out = within(Duration::from_secs(60), &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        plain_and_short(&args, &err);
+        assert!(
+            String::from_utf8_lossy(&out.stdout)
+                .chars()
+                .all(|c| !c.is_control() || c == '\n'),
+            "{args:?}"
+        );
+        // Every one but the cut recording (its complete events replay) is
+        // refused; the cut one warns in one record.
+        if args[0] == "replay" {
+            assert_eq!(out.status.code(), Some(65), "{args:?}: {err}");
+            assert!(err.contains("cut short"), "{err}");
+        } else {
+            assert!(!out.status.success(), "{args:?}: {err}");
+            assert!(err.contains('`'), "{args:?}: the value is quoted: {err}");
+        }
+    }
+}
+
+#[test]
+fn a_file_that_is_not_motion_capture_is_refused_without_showing_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    std::fs::write(
+        elsewhere.join("passwd"),
+        "root:x:0:0:secret:/root:/bin/sh\n",
+    )
+    .unwrap();
+    let lib = dir.path().join("lib");
+    std::fs::create_dir(&lib).unwrap();
+    std::fs::write(
+        lib.join("library.toml"),
+        format!(
+            "[settings]\nclips_dir = \"{}\"\n[posing]\nclips = [\"passwd\"]\n",
+            elsewhere.display()
+        ),
+    )
+    .unwrap();
+    let out = within(
+        Duration::from_secs(60),
+        &["library", "check", lib.to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(65), "{err}");
+    assert!(err.contains("not a BVH file"), "{err}");
+    assert!(!err.contains("root:x"), "{err}");
+}

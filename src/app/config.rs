@@ -10,6 +10,7 @@
 //! the file, the key and what is allowed; the binary exits with
 //! `exit::CONFIG` (78) on it.
 
+use crate::reading::quote;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
@@ -134,7 +135,7 @@ impl Config {
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
         let mut config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
             path: path.to_owned(),
-            message: e.to_string().trim_end().to_owned(),
+            message: crate::reading::toml_error(text, &e),
         })?;
         config.validate(path)?;
         // A relative library folder is the configuration file's neighbour,
@@ -191,8 +192,8 @@ impl Config {
             return Err(invalid(
                 "kiosk.metrics_textfile",
                 format!(
-                    "must be an absolute path (node_exporter's textfile directory, e.g. \"/var/lib/prometheus/node-exporter/marionette.prom\") or empty, found \"{}\"",
-                    textfile.display()
+                    "must be an absolute path (node_exporter's textfile directory, e.g. \"/var/lib/prometheus/node-exporter/marionette.prom\") or empty, found {}",
+                    quote(&textfile.display().to_string())
                 ),
             ));
         }
@@ -231,8 +232,8 @@ impl Config {
             return Err(invalid(
                 "log.level",
                 format!(
-                    "must be one of error, warn, info, debug, trace, found \"{}\"",
-                    self.log.level
+                    "must be one of error, warn, info, debug, trace, found {}",
+                    quote(&self.log.level)
                 ),
             ));
         }
@@ -277,8 +278,8 @@ impl Config {
             return Err(invalid(
                 "display.mode",
                 format!(
-                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ, each above 0 (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found \"{}\"",
-                    d.mode
+                    "must be WIDTHxHEIGHT or WIDTHxHEIGHT@HZ, each above 0 (e.g. \"1920x1080@60\"; see `marionette list-outputs`), or empty for the preferred mode, found {}",
+                    quote(&d.mode)
                 ),
             ));
         }
@@ -291,8 +292,8 @@ impl Config {
             return Err(invalid(
                 "display.body",
                 format!(
-                    "must be \"skinned\" (one smooth skinned body) or \"capsules\" (the mannequin of capsules), found \"{}\"",
-                    d.body
+                    "must be \"skinned\" (one smooth skinned body) or \"capsules\" (the mannequin of capsules), found {}",
+                    quote(&d.body)
                 ),
             ));
         }
@@ -300,8 +301,8 @@ impl Config {
             return Err(invalid(
                 "display.presenter",
                 format!(
-                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (gbm's scanout buffers, rendered into where the Vulkan driver imports them, else written into: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found \"{}\"",
-                    d.presenter
+                    "must be \"auto\", \"direct\" (Vulkan drives the display: real GPU drivers), \"gbm\" (gbm's scanout buffers, rendered into where the Vulkan driver imports them, else written into: drivers Mesa's gbm opens) or \"copy\" (frames copied into dumb buffers: any driver), found {}",
+                    quote(&d.presenter)
                 ),
             ));
         }
@@ -327,7 +328,8 @@ impl Config {
                     return Err(invalid(
                         &key("match_usb"),
                         format!(
-                            "must be \"vendor:product\" in hex, like \"0eef:72a1\", found \"{u}\""
+                            "must be \"vendor:product\" in hex, like \"0eef:72a1\", found {}",
+                            quote(u)
                         ),
                     ));
                 }
@@ -338,7 +340,8 @@ impl Config {
                         return Err(invalid(
                             &key(&format!("axes.{k}")),
                             format!(
-                                "`{name}` is not an axis marionette knows; one of {}",
+                                "{} is not an axis marionette knows; one of {}",
+                                quote(name),
                                 crate::input::remap::AXIS_NAMES.map(|(n, _)| n).join(", ")
                             ),
                         ));
@@ -347,7 +350,10 @@ impl Config {
                 if axes.x.eq_ignore_ascii_case(&axes.y) {
                     return Err(invalid(
                         &key("axes"),
-                        format!("x and y must be two axes, found {} for both", axes.x),
+                        format!(
+                            "x and y must be two axes, found {} for both",
+                            quote(&axes.x)
+                        ),
                     ));
                 }
             }

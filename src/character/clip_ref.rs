@@ -15,14 +15,15 @@ pub struct ClipRef<'a> {
 /// Why a clip name cannot be read.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum ClipRefError {
-    #[error("`#{range}` is not a frame range; write it as FIRST-LAST, e.g. `{file}#120-185`")]
+    #[error("{} is not a frame range; write it as FIRST-LAST, e.g. {}", crate::reading::quote(&format!("#{}", .range)), crate::reading::quote(&format!("{}#120-185", .file)))]
     NotARange { file: String, range: String },
     #[error("the frame range {first}-{last} must end after it begins")]
     Backwards { first: usize, last: usize },
     #[error("names no file before `#`")]
     NoFile,
     #[error(
-        "`{file}` is outside the library's clips folder: name clips by their path inside it (an absolute path, or `..` that leaves the folder, is refused)"
+        "{} is outside the library's clips folder: name clips by their path inside it (an absolute path, or `..` that leaves the folder, is refused)",
+        crate::reading::quote(.file)
     )]
     Outside { file: String },
 }

@@ -48,6 +48,7 @@ use super::floor;
 use super::motion::{Clip, ImportSettings};
 use super::roles::Role;
 use super::skeleton::Skeleton;
+use crate::reading::quote;
 
 /// Everything wrong with a library, listed together.
 #[derive(Debug, Error)]
@@ -157,6 +158,9 @@ impl ActionDef {
     }
 }
 
+/// Most characters in an action's name.
+pub const NAME_CHARS: usize = 64;
+
 /// The most actions a library holds, mirror images included (each is
 /// models and templates in memory, and a drag is matched against those of
 /// its part).
@@ -216,7 +220,7 @@ impl Library {
             fail(vec![format!(
                 "{}: {}",
                 toml_path.display(),
-                e.to_string().trim_end()
+                crate::reading::toml_error(&text, &e)
             )])
         })?;
 
@@ -236,6 +240,8 @@ impl Library {
                 clips_dir.display()
             ));
         }
+        repeated("[posing] clips", &file.posing.clips, &mut problems);
+        repeated("[locomotion] clips", &file.locomotion.clips, &mut problems);
         let names = clip_names(&file);
         if names.is_empty() {
             problems.push("no clips: list posing clips in [posing] clips and action clips in [[action]] tables".to_owned());
@@ -297,7 +303,8 @@ fn settings_of(file: &LibraryFile, problems: &mut Vec<String>) -> (f64, ImportSe
     for key in file.roles.keys() {
         if Role::from_name(key).is_none() {
             problems.push(format!(
-                "[roles] `{key}` is not a role; roles are {}",
+                "[roles] {} is not a role; roles are {}",
+                quote(key),
                 Role::ALL.map(Role::name).join(", ")
             ));
         }
@@ -321,6 +328,31 @@ fn settings_of(file: &LibraryFile, problems: &mut Vec<String>) -> (f64, ImportSe
 const MAX_TOML_BYTES: u64 = 1 << 20;
 
 /// Every clip named anywhere in a library file, once, in name order.
+/// A list that names one clip twice is a mistake (a clip listed twice
+/// counts twice, and a list repeated a hundred thousand times is read as
+/// many times): each repeat goes to `problems`, the first named.
+fn repeated(what: &str, list: &[String], problems: &mut Vec<String>) {
+    let mut seen = std::collections::BTreeSet::new();
+    let repeats: Vec<&String> = list.iter().filter(|c| !seen.insert(*c)).collect();
+    if let Some(first) = repeats.first() {
+        problems.push(format!(
+            "{what}: {} is listed {} times; list each clip once",
+            quote(first),
+            1 + repeats.iter().filter(|r| *r == first).count()
+        ));
+        if repeats.iter().any(|r| r != first) {
+            problems.push(format!(
+                "{what}: {} more clips are listed more than once",
+                repeats
+                    .iter()
+                    .filter(|r| *r != first)
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len()
+            ));
+        }
+    }
+}
+
 fn clip_names(file: &LibraryFile) -> Vec<&String> {
     let mut names: Vec<&String> = file
         .posing
@@ -383,7 +415,7 @@ fn read_clips<'a>(
         let clip_ref = match ClipRef::parse(name) {
             Ok(r) => r,
             Err(why) => {
-                problems.push(format!("clip `{name}`: {why}"));
+                problems.push(format!("clip {}: {why}", quote(name)));
                 continue;
             }
         };
@@ -411,8 +443,9 @@ fn read_clips<'a>(
             },
             Some((_, b)) => {
                 problems.push(format!(
-                    "clip `{name}`: frame {b} is past the end of {} ({} frames, numbered from 0)",
-                    clip_ref.file,
+                    "clip {}: frame {b} is past the end of {} ({} frames, numbered from 0)",
+                    quote(name),
+                    quote(clip_ref.file),
                     file.frames.len()
                 ));
                 continue;
@@ -456,11 +489,17 @@ fn action_defs(file: &LibraryFile, problems: &mut Vec<String>) -> Vec<ActionDef>
         let label = if a.name.is_empty() {
             format!("action #{}", i + 1)
         } else {
-            format!("action `{}`", a.name)
+            format!("action {}", quote(&a.name))
         };
         if a.name.is_empty() {
             problems.push(format!("{label}: needs a name"));
         }
+        if a.name.chars().count() > NAME_CHARS || a.name.chars().any(char::is_control) {
+            problems.push(format!(
+                "{label}: a name is shown on the screen and in the journal: at most {NAME_CHARS} characters, none of them a control character"
+            ));
+        }
+        repeated(&format!("{label} clips"), &a.clips, problems);
         if seen.insert(a.name.clone(), i).is_some() {
             problems.push(format!("{label}: the name is used twice"));
         }
@@ -470,8 +509,8 @@ fn action_defs(file: &LibraryFile, problems: &mut Vec<String>) -> Vec<ActionDef>
         let primary = Role::from_name(&a.primary);
         if primary.is_none() {
             problems.push(format!(
-                "{label}: primary `{}` is not a role; roles are {}",
-                a.primary,
+                "{label}: primary {} is not a role; roles are {}",
+                quote(&a.primary),
                 Role::ALL.map(Role::name).join(", ")
             ));
         }
@@ -514,7 +553,7 @@ fn mirror_actions(
         if !file_a.mirror {
             continue;
         }
-        let label = format!("action `{}`", a.name);
+        let label = format!("action {}", quote(&a.name));
         let primary = a.primary.mirrored();
         if primary == a.primary {
             problems.push(format!("{label}: mirror = true, but its primary `{}` is on the middle line: its mirror image is the same action", a.primary.name()));
@@ -523,7 +562,8 @@ fn mirror_actions(
         let name = mirrored_name(&a.name);
         if file.action.iter().any(|f| f.name == name) {
             problems.push(format!(
-                "{label}: mirror = true would add `{name}`, which the library has already; drop one"
+                "{label}: mirror = true would add {}, which the library has already; drop one",
+                quote(&name)
             ));
             continue;
         }
@@ -629,12 +669,13 @@ pub fn hierarchy_difference(a: &Skeleton, b: &Skeleton) -> Option<String> {
     for (ja, jb) in a.joints.iter().zip(&b.joints) {
         if ja.name != jb.name {
             return Some(format!(
-                "joint `{}` where `{}` was expected",
-                jb.name, ja.name
+                "joint {} where {} was expected",
+                quote(&jb.name),
+                quote(&ja.name)
             ));
         }
         if ja.parent != jb.parent {
-            return Some(format!("joint `{}` has another parent", jb.name));
+            return Some(format!("joint {} has another parent", quote(&jb.name)));
         }
     }
     None

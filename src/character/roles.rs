@@ -103,10 +103,16 @@ impl fmt::Display for Role {
 pub enum RolesError {
     #[error("cannot find the joints for {}: name them in the library's [roles] table (e.g. left_hand = \"LeftWrist\")", list(.0))]
     Missing(Vec<Role>),
-    #[error("[roles] names `{0}`, which is not a role; roles are {all}", all = list(&Role::ALL))]
+    #[error("[roles] names {}, which is not a role; roles are {all}", crate::reading::quote(.0), all = list(&Role::ALL))]
     UnknownRole(String),
-    #[error("[roles] {role} = \"{joint}\": the skeleton has no joint of that name")]
+    #[error("[roles] {role} = {}: the skeleton has no joint of that name", crate::reading::quote(.joint))]
     UnknownJoint { role: Role, joint: String },
+    #[error("[roles] {first} and {second} both name {}: each role needs a joint of its own", crate::reading::quote(.joint))]
+    SharedJoint {
+        first: Role,
+        second: Role,
+        joint: String,
+    },
 }
 
 fn list(roles: &[Role]) -> String {
@@ -257,6 +263,25 @@ fn limb_parent(skeleton: &Skeleton, j: usize) -> Option<usize> {
     Some(p)
 }
 
+/// Refused where a role given by hand names a joint another role given
+/// by hand has already (every role on one joint: its actions would never
+/// start).
+pub(crate) fn shared(
+    given: &BTreeMap<Role, usize>,
+    role: Role,
+    joint: usize,
+    name: &str,
+) -> Result<(), RolesError> {
+    match given.iter().find(|&(r, &j)| j == joint && *r != role) {
+        Some((&first, _)) => Err(RolesError::SharedJoint {
+            first,
+            second: role,
+            joint: name.to_owned(),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Fill every role, applying `overrides` (role name → joint name) first.
 pub fn fill(
     skeleton: &Skeleton,
@@ -271,6 +296,7 @@ pub fn fill(
                 role: r,
                 joint: joint.clone(),
             })?;
+        shared(&map, r, j, joint)?;
         map.insert(r, j);
     }
     let put = |map: &mut BTreeMap<Role, usize>, role: Role, j: Option<usize>| {

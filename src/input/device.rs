@@ -278,10 +278,11 @@ impl DeviceDescription {
     }
 }
 
-/// A short label for a device in logs: name and vendor:product.
+/// A short label for a device in logs: name (escaped and cut, as any
+/// name a device gives itself) and vendor:product.
 #[must_use]
 pub fn device_label(name: &str, id: InputId) -> String {
-    format!("\"{name}\" ({id})")
+    format!("\"{}\" ({id})", crate::reading::quote_bare(name))
 }
 
 #[cfg(test)]

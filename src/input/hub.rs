@@ -417,7 +417,7 @@ impl fmt::Display for DeviceListing {
         write!(
             f,
             "  \"{}\" [{}] {}",
-            self.name.as_deref().unwrap_or(""),
+            crate::reading::quote_bare(self.name.as_deref().unwrap_or("")),
             self.usb.as_deref().unwrap_or("?"),
             self.kind.map_or("?".to_owned(), |k| k.to_string())
         )?;

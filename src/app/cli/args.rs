@@ -406,7 +406,10 @@ pub enum LibraryCommand {
 /// smaller than a micrometre or larger than a kilometre.
 fn metres_per_unit(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|_| {
-        format!("`{s}` is not a number (metres per file unit: 0.01 for centimetres)")
+        format!(
+            "{} is not a number (metres per file unit: 0.01 for centimetres)",
+            crate::reading::quote(s)
+        )
     })?;
     if v.is_finite() && (1e-6..=1e3).contains(&v) {
         Ok(v)
@@ -421,6 +424,9 @@ fn metres_per_unit(s: &str) -> Result<f64, String> {
 fn at_least_one(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!("`{s}` is not a count of at least 1")),
+        _ => Err(format!(
+            "{} is not a count of at least 1",
+            crate::reading::quote(s)
+        )),
     }
 }

@@ -81,7 +81,7 @@ pub fn main() -> ExitCode {
         Ok(c) => c,
         Err(e) => {
             logging::init("info");
-            eprintln!("marionette: {e}");
+            eprintln!("marionette: {}", shown(&e.to_string()));
             if let Some(dri) = &kiosk_dri {
                 let defaults = Config::default();
                 crate::app::fault::show(
@@ -103,7 +103,7 @@ pub fn main() -> ExitCode {
     match run(cli.command, &config, &config_path) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
-            eprintln!("marionette: {}", f.message);
+            eprintln!("marionette: {}", shown(&f.message));
             if let (Some(dri), exit::CONFIG | exit::DATAERR) = (&kiosk_dri, f.code) {
                 crate::app::fault::show(
                     &config.display,
@@ -116,6 +116,17 @@ pub fn main() -> ExitCode {
             ExitCode::from(f.code)
         }
     }
+}
+
+/// The last message, as the terminal and the journal get it: its lines
+/// kept, any other control character (a path given with an ESC in it)
+/// escaped.
+fn shown(message: &str) -> String {
+    message
+        .split('\n')
+        .map(crate::reading::escape_controls)
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 fn load_config(path: Option<&Path>) -> Result<Config, ConfigError> {

@@ -149,8 +149,20 @@ pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Resul
         )
     })?;
     let mut stdout = std::io::stdout().lock();
+    let mut taken = std::collections::BTreeSet::new();
     for (name, clip) in &lib.clips {
-        let png = out.join(sheet_name(name));
+        // Two clips whose names make one file name (`sub/pose.bvh` and
+        // `sub_pose.bvh`) get a sheet each: the later one numbered.
+        let base = sheet_name(name);
+        let file = (1..)
+            .map(|k| match k {
+                1 => base.clone(),
+                k => format!("{}-{k}.png", base.trim_end_matches(".png")),
+            })
+            .find(|f| !taken.contains(f))
+            .unwrap_or_default();
+        taken.insert(file.clone());
+        let png = out.join(file);
         sheet::write_sheet(&png, &clip.skeleton, &clip.roles, &clip.frames, frames).map_err(
             |e| {
                 Failure::new(
@@ -168,13 +180,17 @@ pub(super) fn contact_sheets(library: &Path, out: &Path, frames: usize) -> Resul
         );
         writeln!(
             stdout,
-            "{name}: {} frames, slide {:.2} mm/frame ({}), below floor {:.1} mm, {} limit problems{}",
+            "{}: {} frames, slide {:.2} mm/frame ({}), below floor {:.1} mm, {} limit problems{}",
+            crate::reading::quote_bare(name),
             clip.frames.len(),
             r.max_slide_mm,
             r.worst_slide,
             r.max_penetration_mm,
             r.violations.len(),
-            r.violations.first().map(|v| format!(" ({v})")).unwrap_or_default()
+            r.violations
+                .first()
+                .map(|v| format!(" ({v})"))
+                .unwrap_or_default()
         )
         .map_err(stdout_error)?;
     }

@@ -28,26 +28,7 @@ pub const MAX_VALUES: usize = 400_000_000;
 pub const MIN_FRAME_TIME_S: f64 = 0.001;
 pub const MAX_FRAME_TIME_S: f64 = 1.0;
 
-/// Input quoted in an error: escaped (no control character reaches a
-/// terminal or the screen) and cut to [`QUOTE_CHARS`] characters.
-#[must_use]
-pub fn quote(input: &str) -> String {
-    // Only what is shown is escaped: a token of 200 MB is not copied.
-    let escaped: String = input
-        .chars()
-        .take(QUOTE_CHARS + 1)
-        .flat_map(char::escape_debug)
-        .collect();
-    if escaped.chars().count() <= QUOTE_CHARS {
-        format!("`{escaped}`")
-    } else {
-        let cut: String = escaped.chars().take(QUOTE_CHARS).collect();
-        format!("`{cut}…` ({} characters)", input.chars().count())
-    }
-}
-
-/// The most characters of input an error message quotes.
-pub const QUOTE_CHARS: usize = 120;
+pub use crate::reading::{QUOTE_CHARS, quote};
 
 /// Errors reading a BVH file.
 #[derive(Debug, Error)]
@@ -133,6 +114,16 @@ use tokens::Tokens;
 /// Parse BVH text; `path` is used in messages.
 pub fn parse(text: &str, path: &Path) -> Result<BvhFile, BvhError> {
     let mut t = Tokens::new(text, path);
+    // A file that does not begin as BVH does is not quoted: it may be any
+    // file at all, and its contents are not the message's to show.
+    if !t
+        .peek()
+        .is_some_and(|w| w.eq_ignore_ascii_case("HIERARCHY"))
+    {
+        return Err(t.err(
+            "not a BVH file: it does not begin with `HIERARCHY` (BVH motion capture begins with its skeleton)",
+        ));
+    }
     t.expect("HIERARCHY")?;
     let mut skeleton = Skeleton::default();
     let mut channels: Vec<Vec<Channel>> = Vec::new();
@@ -335,7 +326,7 @@ fn parse_joint(
         return Err(t.err(format!("more than {MAX_JOINTS} joints")));
     }
     if skeleton.find(&name).is_some() {
-        return Err(t.err(format!("joint name `{name}` is used twice")));
+        return Err(t.err(format!("joint name {} is used twice", quote(&name))));
     }
     let index = skeleton.joints.len();
     skeleton.joints.push(Joint {
@@ -407,7 +398,7 @@ fn channel_list(t: &mut Tokens<'_>) -> Result<Vec<Channel>, BvhError> {
             return Err(BvhError::Syntax {
                 path: t.path.to_owned(),
                 line: cline,
-                message: format!("channel `{c}` appears twice"),
+                message: format!("channel {} appears twice", quote(c)),
             });
         }
         list.push(ch);

@@ -3,6 +3,7 @@
 //! to one normalised, and said), meshes hung rigidly on a joint carried by
 //! it. Every count, index and number is checked before it is used.
 
+use crate::reading::quote;
 use glam::{DMat4, DVec3};
 
 use super::read::{File, Kind};
@@ -35,8 +36,8 @@ pub(super) fn parts(
             None => {
                 let Some(j) = carrier(node.index()) else {
                     warnings.push(format!(
-                        "mesh `{}` hangs on no joint: left out",
-                        mesh.name().unwrap_or("")
+                        "mesh {} hangs on no joint: left out",
+                        quote(mesh.name().unwrap_or(""))
                     ));
                     continue;
                 };
@@ -46,13 +47,13 @@ pub(super) fn parts(
         for prim in mesh.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 warnings.push(format!(
-                    "mesh `{}`: a primitive of {:?} left out (triangles only)",
-                    mesh.name().unwrap_or(""),
+                    "mesh {}: a primitive of {:?} left out (triangles only)",
+                    quote(mesh.name().unwrap_or("")),
                     prim.mode()
                 ));
                 continue;
             }
-            let what = |s: &str| format!("mesh `{}` {s}", mesh.name().unwrap_or(""));
+            let what = |s: &str| format!("mesh {} {s}", quote(mesh.name().unwrap_or("")));
             let positions = positions(file, &prim, &what, &mut budget)?;
             let n = positions.len();
             let skinned = node.skin().is_some()

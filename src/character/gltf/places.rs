@@ -6,6 +6,7 @@
 //! bone's mesh. What a character cannot do without is named, with the
 //! joints that were found.
 
+use crate::reading::quote;
 use std::collections::BTreeMap;
 
 use glam::{DMat4, DVec3};
@@ -128,7 +129,7 @@ fn make_up_ends(body: &mut Body<'_>, parts: &[Part], h: f64, found: &mut Found) 
 fn refusal(file: &File, skeleton: &Skeleton, found: &Found, lacking: &[Role]) -> GltfError {
     let seen: Vec<String> = found
         .iter()
-        .map(|(r, (j, e))| format!("{r} = `{}` ({})", skeleton.joints[*j].name, e.name()))
+        .map(|(r, (j, e))| format!("{r} = {} ({})", quote(&skeleton.joints[*j].name), e.name()))
         .collect();
     GltfError::NotHumanoid {
         path: file.path.clone(),
@@ -152,7 +153,7 @@ fn refusal(file: &File, skeleton: &Skeleton, found: &Found, lacking: &[Role]) ->
 fn overrule(skeleton: &Skeleton, p: &[DVec3], h: f64, found: &mut Found, notes: &mut Vec<String>) {
     let soft = |e: Evidence| matches!(e, Evidence::Name | Evidence::Hierarchy);
     let head_y = found.get(&Role::Head).map(|&(j, _)| p[j].y);
-    let name = |j: usize| skeleton.joints[j].name.clone();
+    let name = |j: usize| quote(&skeleton.joints[j].name);
     for (side, arm) in LIMBS {
         let roles = limb_roles(side, arm);
         let Some(&(end, e)) = found.get(&roles[2]) else {
@@ -161,14 +162,14 @@ fn overrule(skeleton: &Skeleton, p: &[DVec3], h: f64, found: &mut Found, notes: 
         let wrong = if arm {
             head_y
                 .is_some_and(|y| p[end].y > y + 0.05 * h)
-                .then(|| format!("`{}` stands above the head", name(end)))
+                .then(|| format!("{} stands above the head", name(end)))
         } else {
             let above = |a: Role, b: Role| match (found.get(&a), found.get(&b)) {
                 (Some(&(x, _)), Some(&(y, _))) => p[x].y > p[y].y + 0.05 * h,
                 _ => false,
             };
             (above(roles[2], roles[1]) || above(roles[1], roles[0]))
-                .then(|| format!("`{}` stands above its knee or hip", name(end)))
+                .then(|| format!("{} stands above its knee or hip", name(end)))
         };
         if let (Some(why), true) = (wrong, soft(e)) {
             notes.push(format!(
@@ -187,7 +188,7 @@ fn overrule(skeleton: &Skeleton, p: &[DVec3], h: f64, found: &mut Found, notes: 
         if let (Some(&(a, ea)), Some(&(b, eb))) = (found.get(&l), found.get(&r)) {
             if soft(ea) && soft(eb) && p[a].x < -0.02 * h && p[b].x > 0.02 * h {
                 notes.push(format!(
-                    "`{}` and `{}` are named for the other side from where they stand: swapped",
+                    "{} and {} are named for the other side from where they stand: swapped",
                     name(a),
                     name(b)
                 ));

@@ -238,7 +238,8 @@ fn buffer_data(path: &Path, gltf: &gltf::Gltf, b: &gltf::Buffer<'_>) -> Result<V
             } else {
                 let rel = inside(uri).ok_or_else(|| {
                     why(format!(
-                        "`{uri}` is not a file beside the glTF (no folders above it, no absolute paths or URLs)"
+                        "{} is not a file beside the glTF (no folders above it, no absolute paths or URLs)",
+                        crate::reading::quote(uri)
                     ))
                 })?;
                 let file = dir.join(rel);

@@ -51,12 +51,14 @@ fn world_transforms(file: &File) -> Result<Vec<DMat4>, GltfError> {
     let world: Vec<DMat4> = world.into_iter().map(Option::unwrap_or_default).collect();
     if let Some(bad) = (0..n).find(|&i| !world[i].is_finite()) {
         return Err(file.data_error(format!(
-            "node {bad} (`{}`): its transform is not finite",
-            file.doc
-                .nodes()
-                .nth(bad)
-                .and_then(|n| n.name())
-                .unwrap_or("")
+            "node {bad} ({}): its transform is not finite",
+            crate::reading::quote(
+                file.doc
+                    .nodes()
+                    .nth(bad)
+                    .and_then(|n| n.name())
+                    .unwrap_or("")
+            )
         )));
     }
     Ok(world)
@@ -617,6 +619,8 @@ fn given_roles(
                 joint: joint.clone(),
             })
         })?;
+        let given: BTreeMap<Role, usize> = found.iter().map(|(r, (j, _))| (*r, *j)).collect();
+        roles::shared(&given, r, j, joint).map_err(bad)?;
         found.insert(r, (j, humanoid::Evidence::Configuration));
     }
     if let Some(ext) = &file.extensions {

@@ -97,8 +97,12 @@ pub fn load(file: &File, index: usize) -> Result<Texture, String> {
                     .ok_or_else(|| "a data URI that is not base64".to_owned())?;
                 base64(b64).ok_or_else(|| "bad base64 in its data URI".to_owned())?
             } else {
-                let rel =
-                    inside(uri).ok_or_else(|| format!("`{uri}` is not a file beside the glTF"))?;
+                let rel = inside(uri).ok_or_else(|| {
+                    format!(
+                        "{} is not a file beside the glTF",
+                        crate::reading::quote(uri)
+                    )
+                })?;
                 let dir = file.path.parent().unwrap_or(Path::new("."));
                 let path = dir.join(rel);
                 crate::reading::read_inside(&path, dir, super::MAX_FILE_BYTES).map_err(

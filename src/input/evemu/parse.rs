@@ -3,6 +3,7 @@
 //! every malformed line an [`EvemuError`] that names it.
 
 use super::*;
+use crate::reading::{QUOTE_CHARS, quote};
 
 struct Parser<'a> {
     path: &'a Path,
@@ -44,7 +45,10 @@ impl<'a> Parser<'a> {
         if let Some(comment) = trimmed.strip_prefix('#') {
             if let Some(v) = comment.trim().strip_prefix("EVEMU ") {
                 self.rec.version = parse_version(v.trim()).ok_or_else(|| {
-                    self.err(n, format!("expected `# EVEMU major.minor`, found `{line}`"))
+                    self.err(
+                        n,
+                        format!("expected `# EVEMU major.minor`, found {}", quote(line)),
+                    )
                 })?;
                 // evemu has written format 1.x since 2010; a later major
                 // version would be a format this reader does not know.
@@ -64,8 +68,8 @@ impl<'a> Parser<'a> {
             return Err(self.err(
                 n,
                 format!(
-                    "expected a line starting with N:, I:, P:, B:, A:, L:, S:, E: or #, found `{}`",
-                    excerpt(line)
+                    "expected a line starting with N:, I:, P:, B:, A:, L:, S:, E: or #, found {}",
+                    quote(line)
                 ),
             ));
         };
@@ -82,7 +86,7 @@ impl<'a> Parser<'a> {
             if !self.rec.events.is_empty() {
                 return Err(self.err(
                     n,
-                    format!("device description line `{tag}:` after the first event; one recording describes one device"),
+                    format!("device description line {} after the first event; one recording describes one device", quote(&format!("{tag}:"))),
                 ));
             }
             self.seen_description = true;
@@ -102,7 +106,10 @@ impl<'a> Parser<'a> {
             "E" => self.event_line(n, &fields),
             other => Err(self.err(
                 n,
-                format!("unknown line type `{other}:`; expected N:, I:, P:, B:, A:, L:, S: or E:"),
+                format!(
+                    "unknown line type {}; expected N:, I:, P:, B:, A:, L:, S: or E:",
+                    quote(&format!("{other}:"))
+                ),
             )),
         }
     }
@@ -120,7 +127,10 @@ impl<'a> Parser<'a> {
         let mut v = [0u16; 4];
         for (slot, s) in v.iter_mut().zip(f) {
             *slot = u16::from_str_radix(s, 16).map_err(|_| {
-                self.err(n, format!("I: expected a 16-bit hex number, found `{s}`"))
+                self.err(
+                    n,
+                    format!("I: expected a 16-bit hex number, found {}", quote(s)),
+                )
             })?;
         }
         self.rec.device.id = InputId {
@@ -135,8 +145,9 @@ impl<'a> Parser<'a> {
     fn hex_bytes(&self, n: usize, tag: &str, f: &[&str]) -> Result<Vec<u8>, EvemuError> {
         f.iter()
             .map(|s| {
-                u8::from_str_radix(s, 16)
-                    .map_err(|_| self.err(n, format!("{tag}: expected a hex byte, found `{s}`")))
+                u8::from_str_radix(s, 16).map_err(|_| {
+                    self.err(n, format!("{tag}: expected a hex byte, found {}", quote(s)))
+                })
             })
             .collect()
     }
@@ -196,8 +207,12 @@ impl<'a> Parser<'a> {
                 format!("A: needs code, min, max, fuzz, flat and optionally resolution (5 or 6 fields), found {}", f.len()),
             ));
         }
-        let code = u16::from_str_radix(f[0], 16)
-            .map_err(|_| self.err(n, format!("A: expected a hex axis code, found `{}`", f[0])))?;
+        let code = u16::from_str_radix(f[0], 16).map_err(|_| {
+            self.err(
+                n,
+                format!("A: expected a hex axis code, found {}", quote(f[0])),
+            )
+        })?;
         if usize::from(code) >= ABS_CNT {
             return Err(self.err(
                 n,
@@ -207,7 +222,10 @@ impl<'a> Parser<'a> {
         let mut v = [0i32; 5];
         for (slot, s) in v.iter_mut().zip(&f[1..]) {
             *slot = parse_int(s).ok_or_else(|| {
-                self.err(n, format!("A: expected a decimal integer, found `{s}`"))
+                self.err(
+                    n,
+                    format!("A: expected a decimal integer, found {}", quote(s)),
+                )
             })?;
         }
         self.rec.device.set_abs(
@@ -234,12 +252,16 @@ impl<'a> Parser<'a> {
                 ),
             ));
         }
-        let code = u16::from_str_radix(f[0], 16)
-            .map_err(|_| self.err(n, format!("{tag}: expected a hex code, found `{}`", f[0])))?;
+        let code = u16::from_str_radix(f[0], 16).map_err(|_| {
+            self.err(
+                n,
+                format!("{tag}: expected a hex code, found {}", quote(f[0])),
+            )
+        })?;
         let state = parse_int(f[1]).ok_or_else(|| {
             self.err(
                 n,
-                format!("{tag}: expected a decimal state, found `{}`", f[1]),
+                format!("{tag}: expected a decimal state, found {}", quote(f[1])),
             )
         })?;
         if tag == "L" {
@@ -268,19 +290,27 @@ impl<'a> Parser<'a> {
         let time_us = parse_time(f[0]).ok_or_else(|| {
             self.err(
                 n,
-                format!("E: expected a timestamp `sec.usec`, found `{}`", f[0]),
+                format!("E: expected a timestamp `sec.usec`, found {}", quote(f[0])),
             )
         })?;
-        let kind = u16::from_str_radix(f[1], 16)
-            .map_err(|_| self.err(n, format!("E: expected a hex event type, found `{}`", f[1])))?;
+        let kind = u16::from_str_radix(f[1], 16).map_err(|_| {
+            self.err(
+                n,
+                format!("E: expected a hex event type, found {}", quote(f[1])),
+            )
+        })?;
         if kind > crate::input::event::EV_MAX {
             return Err(self.err(
                 n,
                 format!("E: event type {kind:#x} is beyond EV_MAX (0x1f)"),
             ));
         }
-        let code = u16::from_str_radix(f[2], 16)
-            .map_err(|_| self.err(n, format!("E: expected a hex event code, found `{}`", f[2])))?;
+        let code = u16::from_str_radix(f[2], 16).map_err(|_| {
+            self.err(
+                n,
+                format!("E: expected a hex event code, found {}", quote(f[2])),
+            )
+        })?;
         if usize::from(code) >= code_count(kind) {
             return Err(self.err(
                 n,
@@ -294,7 +324,7 @@ impl<'a> Parser<'a> {
         let value = parse_int(f[3]).ok_or_else(|| {
             self.err(
                 n,
-                format!("E: expected a decimal 32-bit value, found `{}`", f[3]),
+                format!("E: expected a decimal 32-bit value, found {}", quote(f[3])),
             )
         })?;
         self.rec
@@ -330,21 +360,16 @@ impl<'a> Parser<'a> {
 }
 
 /// A device name as one printable line: control characters become spaces,
-/// surrounding blanks go.
+/// surrounding blanks go, and at most [`QUOTE_CHARS`] characters stay
+/// (the kernel keeps 80).
 pub(super) fn clean_name(s: &str) -> String {
     let cleaned: String = s
+        .trim()
         .chars()
+        .take(QUOTE_CHARS)
         .map(|c| if c.is_control() { ' ' } else { c })
         .collect();
     cleaned.trim().to_owned()
-}
-
-pub(super) fn excerpt(line: &str) -> String {
-    let mut s: String = line.chars().take(60).collect();
-    if line.chars().count() > 60 {
-        s.push('…');
-    }
-    s
 }
 
 pub(super) fn parse_version(s: &str) -> Option<(u16, u16)> {

@@ -195,7 +195,7 @@ impl Score {
             message,
         };
         let file: ScoreFile =
-            toml::from_str(&text).map_err(|e| invalid(e.to_string().trim_end().to_owned()))?;
+            toml::from_str(&text).map_err(|e| invalid(crate::reading::toml_error(&text, &e)))?;
         let kind = file.kind().map_err(invalid)?;
         file.check().map_err(invalid)?;
         let channels = file.channels().map_err(invalid)?;
@@ -268,8 +268,8 @@ impl ScoreFile {
                     .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
             {
                 return Err(format!(
-                    "variant file name `{}` must be letters, digits, _ and -",
-                    v.file
+                    "variant file name {} must be letters, digits, _ and -",
+                    crate::reading::quote(&v.file)
                 ));
             }
         }
@@ -302,9 +302,10 @@ impl ScoreFile {
             for (name, value) in &k.channels {
                 let Some((_, arity)) = CHANNELS.iter().find(|(n, _)| n == name) else {
                     return Err(format!(
-                        "key {} (t = {}): unknown channel `{name}`; channels are {}",
+                        "key {} (t = {}): unknown channel {}; channels are {}",
                         i + 1,
                         k.t,
+                        crate::reading::quote(name),
                         CHANNELS
                             .iter()
                             .map(|(n, _)| *n)
@@ -314,9 +315,10 @@ impl ScoreFile {
                 };
                 if value.len() != *arity || value.iter().any(|v| !v.is_finite()) {
                     return Err(format!(
-                        "key {} (t = {}): `{name}` takes {arity} finite numbers, found {value:?}",
+                        "key {} (t = {}): {} takes {arity} finite numbers, found {value:?}",
                         i + 1,
-                        k.t
+                        k.t,
+                        crate::reading::quote(name)
                     ));
                 }
                 channels.entry(name.clone()).or_default().push(ChannelKey {
