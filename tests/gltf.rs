@@ -362,7 +362,7 @@ fn broken_files_are_refused_with_the_reason() {
             with(&|j, _| {
                 j["accessors"][position_acc]["count"] = serde_json::json!(200_000_000u64);
             }),
-            "would need over",
+            "would have over 400000 vertices",
         ),
         (
             "a buffer outside its folder",
@@ -905,6 +905,117 @@ fn a_base_colour_texture_colours_each_vertex_and_a_broken_one_is_said() {
         "{:?}",
         fig.warnings
     );
+}
+
+/// `bin` with `bytes` appended (4-byte aligned) as a new buffer view;
+/// its index.
+fn add_view(j: &mut Value, bin: &mut Vec<u8>, bytes: &[u8]) -> usize {
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let views = j["bufferViews"].as_array_mut().unwrap();
+    views
+        .push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+    let view = views.len() - 1;
+    bin.extend_from_slice(bytes);
+    j["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    view
+}
+
+#[test]
+fn what_a_figure_allocates_is_counted_before_it_is_read() {
+    let (json, bin) = split_glb(&std::fs::read(shared("CesiumMan.glb")).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    // 100,000 triangles of u8 indices in one accessor, drawn by 17
+    // primitives: 1.7 million triangles (the accessor counted for each
+    // use, widened to u32), past the million a figure may have; one
+    // primitive drawing it is within it.
+    let shared_indices = |uses: usize| {
+        let (mut j, mut b) = (json.clone(), bin.clone());
+        let view = add_view(&mut j, &mut b, &vec![0u8; 300_000]);
+        let accessors = j["accessors"].as_array_mut().unwrap();
+        accessors.push(serde_json::json!({"bufferView": view, "componentType": 5121, "type": "SCALAR", "count": 300_000}));
+        let acc = accessors.len() - 1;
+        let mut prim = j["meshes"][0]["primitives"][0].clone();
+        prim["indices"] = serde_json::json!(acc);
+        j["meshes"][0]["primitives"] = Value::Array(vec![prim; uses]);
+        glb(&j, &b)
+    };
+    let path = dir.path().join("shared.glb");
+    std::fs::write(&path, shared_indices(17)).unwrap();
+    let (code, _, err) = inspect(&path);
+    assert_eq!(code, Some(65), "{err}");
+    assert!(err.contains("over 1000000 triangles"), "{err}");
+    std::fs::write(&path, shared_indices(1)).unwrap();
+    assert!(load(&path).is_ok());
+    // 1,100 joints (a chain hung under the first): over the 1024 read.
+    let (mut j, b) = (json.clone(), bin.clone());
+    let first = j["nodes"].as_array().unwrap().len();
+    let top = j["skins"][0]["joints"][0].as_u64().unwrap() as usize;
+    for k in 0..1100 {
+        j["nodes"].as_array_mut().unwrap().push(serde_json::json!({
+            "name": format!("extra{k}"),
+            "children": if k + 1 < 1100 { serde_json::json!([first + k + 1]) } else { serde_json::json!([]) },
+            "translation": [0.0, 0.001, 0.0]
+        }));
+        j["skins"][0]["joints"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!(first + k));
+    }
+    let kids = j["nodes"][top]["children"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    j["nodes"][top]["children"] = Value::Array([kids, vec![serde_json::json!(first)]].concat());
+    std::fs::write(&path, glb(&j, &b)).unwrap();
+    let (code, _, err) = inspect(&path);
+    assert_eq!(code, Some(65), "{err}");
+    assert!(err.contains("over the 1024"), "{err}");
+    // 24 textures of 4096 x 4096 (a 70 KB PNG each): the first two are
+    // decoded (32 M texels, all a figure may have), the rest said and
+    // drawn in their base colour.
+    let mut png = Vec::new();
+    {
+        let mut e = png::Encoder::new(&mut png, 4096, 4096);
+        e.set_color(png::ColorType::Grayscale);
+        let mut w = e.write_header().unwrap();
+        w.write_image_data(&vec![200u8; 4096 * 4096]).unwrap();
+    }
+    let (mut j, mut b) = (json.clone(), bin.clone());
+    let view = add_view(&mut j, &mut b, &png);
+    let prim = j["meshes"][0]["primitives"][0].clone();
+    let material = j["materials"][prim["material"].as_u64().unwrap() as usize].clone();
+    let mut prims = Vec::new();
+    for k in 0..24 {
+        let image = j["images"].as_array().unwrap().len();
+        j["images"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({"bufferView": view, "mimeType": "image/png"}));
+        let texture = j["textures"].as_array().unwrap().len();
+        j["textures"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({"source": image}));
+        let mut m = material.clone();
+        m["pbrMetallicRoughness"]["baseColorTexture"] = serde_json::json!({"index": texture});
+        m["name"] = serde_json::json!(format!("m{k}"));
+        j["materials"].as_array_mut().unwrap().push(m);
+        let mut p = prim.clone();
+        p["material"] = serde_json::json!(j["materials"].as_array().unwrap().len() - 1);
+        prims.push(p);
+    }
+    j["meshes"][0]["primitives"] = Value::Array(prims);
+    std::fs::write(&path, glb(&j, &b)).unwrap();
+    let fig = load(&path).unwrap();
+    let coloured = fig.parts.iter().filter(|p| !p.colours.is_empty()).count();
+    let said = fig
+        .warnings
+        .iter()
+        .filter(|w| w.contains("texels left"))
+        .count();
+    assert_eq!((coloured, said), (2, 22), "{:?}", fig.warnings);
 }
 
 #[test]

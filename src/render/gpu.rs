@@ -131,6 +131,12 @@ impl Gpu {
             adapter: info.name.clone(),
             source,
         })?;
+        // An error wgpu does not hand back (a buffer past the device's
+        // limits, a validation error) is said in the journal; wgpu's own
+        // handler would end the process with a panic.
+        device.on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
+            tracing::error!(error = %e, "the GPU refused a command");
+        }));
         tracing::info!(
             adapter = %info.name,
             kind = ?info.device_type,
@@ -143,6 +149,21 @@ impl Gpu {
             queue,
             info,
         })
+    }
+
+    /// Whether a buffer of `bytes` is within what the device holds in
+    /// one buffer; said where it is not.
+    pub(crate) fn holds(&self, label: &str, bytes: u64) -> bool {
+        let max = self.device.limits().max_buffer_size;
+        if bytes > max {
+            tracing::error!(
+                buffer = label,
+                bytes,
+                max,
+                "over the largest buffer the GPU holds: not drawn"
+            );
+        }
+        bytes <= max
     }
 
     /// A buffer for `usage` (and copying into) holding `bytes`.
@@ -213,14 +234,20 @@ impl GrowBuffer {
         })
     }
 
+    /// Write `bytes` (grown to hold them, within the device's largest
+    /// buffer); nothing written, and said, where they are over it.
     pub(crate) fn write(&mut self, gpu: &Gpu, bytes: &[u8]) {
         let need = (bytes.len() as u64).next_multiple_of(4);
+        if !gpu.holds(self.label, need) {
+            return;
+        }
         if need > self.buffer.size() {
+            let max = gpu.device.limits().max_buffer_size;
             self.buffer = Self::make(
                 &gpu.device,
                 self.label,
                 self.usage,
-                need.next_power_of_two(),
+                need.next_power_of_two().min(max),
             );
         }
         if !bytes.is_empty() {

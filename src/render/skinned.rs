@@ -27,7 +27,17 @@ impl Uploaded {
     /// The buffers of `geometry` (the project's own body when `own`), its
     /// vertices on the GPU when skinned there (`on_gpu`), else kept here.
     fn new(gpu: &Gpu, geometry: &Arc<Geometry>, own: bool, on_gpu: bool) -> Self {
-        let buffer = |label, usage, bytes: &[u8]| gpu.filled_buffer(label, usage, bytes);
+        // A buffer past the device's largest is said and left empty (the
+        // figure's size is bounded where it is read: this is not reached
+        // from a file marionette loads).
+        let buffer = |label, usage, bytes: &[u8]| {
+            let bytes = if gpu.holds(label, bytes.len() as u64) {
+                bytes
+            } else {
+                &[]
+            };
+            gpu.filled_buffer(label, usage, bytes)
+        };
         let v = vertices(geometry, own);
         Self {
             geometry: Arc::clone(geometry),

@@ -87,9 +87,19 @@ use super::skeleton::Skeleton;
 /// The largest glTF file read (bytes): a kiosk character is a few MB.
 pub const MAX_FILE_BYTES: u64 = 256 << 20;
 
-/// The most the vertex and index data of a figure may need (bytes),
-/// checked from the accessors' counts before anything is read.
+/// The most the vertex and index data of a figure may need (bytes, as
+/// read and kept: u8 indices count as the u32 they become, an accessor
+/// shared by several primitives once for each), checked from the
+/// accessors' counts before anything is read.
 pub const MAX_DATA_BYTES: u64 = 1 << 30;
+
+/// The most vertices a figure may have: four figures' vertices as the
+/// renderer keeps them (88 bytes each) stay within the 256 MiB a GPU
+/// buffer may hold.
+pub const MAX_VERTICES: u64 = 400_000;
+
+/// The most triangles a figure may have.
+pub const MAX_TRIANGLES: u64 = 1_000_000;
 
 /// What is wrong with a glTF file; nothing of it is kept.
 #[derive(Debug, Error)]

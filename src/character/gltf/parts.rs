@@ -6,7 +6,7 @@
 use crate::reading::quote;
 use glam::{DMat4, DVec3};
 
-use super::read::{File, Kind};
+use super::read::{Budget, File, Kind};
 use super::{GltfError, Part};
 
 /// The figure's parts, positions in the file's world frame, and what was
@@ -20,7 +20,7 @@ pub(super) fn parts(
 ) -> Result<(Vec<Part>, Vec<String>), GltfError> {
     let mut out = Vec::new();
     let mut warnings = Vec::new();
-    let mut budget = 0u64;
+    let mut budget = Budget::default();
     // Decoded images by index (`None`: could not be read, said once).
     let mut textures: Vec<Option<Option<super::texture::Texture>>> =
         vec![None; file.doc.images().len()];
@@ -136,7 +136,7 @@ fn positions(
     file: &File,
     prim: &gltf::Primitive<'_>,
     what: &dyn Fn(&str) -> String,
-    budget: &mut u64,
+    budget: &mut Budget,
 ) -> Result<Vec<[f32; 3]>, GltfError> {
     let reader = prim.reader(|b| file.buffer(b));
     let pos = prim
@@ -160,7 +160,7 @@ fn indices(
     prim: &gltf::Primitive<'_>,
     n: usize,
     what: &dyn Fn(&str) -> String,
-    budget: &mut u64,
+    budget: &mut Budget,
 ) -> Result<Vec<u32>, GltfError> {
     let reader = prim.reader(|b| file.buffer(b));
     let indices: Vec<u32> = match prim.indices() {
@@ -237,7 +237,7 @@ fn skin_matrices(
     skin: &gltf::Skin<'_>,
     world: &[DMat4],
     joint_of: &[usize],
-    budget: &mut u64,
+    budget: &mut Budget,
 ) -> Result<(Vec<DMat4>, Vec<usize>), GltfError> {
     let joints: Vec<gltf::Node<'_>> = skin.joints().collect();
     let ibms: Vec<DMat4> = match skin.inverse_bind_matrices() {
@@ -292,7 +292,7 @@ fn skin_data(
     prim: &gltf::Primitive<'_>,
     n: usize,
     what: &dyn Fn(&str) -> String,
-    budget: &mut u64,
+    budget: &mut Budget,
 ) -> Result<SkinData, GltfError> {
     let reader = prim.reader(|b| file.buffer(b));
     for (sem, kind) in [
@@ -328,7 +328,7 @@ fn colours(
     file: &File,
     prim: &gltf::Primitive<'_>,
     n: usize,
-    budget: &mut u64,
+    budget: &mut Budget,
     textures: &mut [Option<Option<super::texture::Texture>>],
     warnings: &mut Vec<String>,
 ) -> Result<Vec<[f32; 4]>, GltfError> {
@@ -349,21 +349,31 @@ fn colours(
         )));
     }
     let image = info.texture().source().index();
-    let Some(slot) = textures.get_mut(image) else {
+    let Some(first) = textures.get(image).map(Option::is_none) else {
         return Ok(Vec::new());
     };
-    if slot.is_none() {
-        *slot = Some(match super::texture::load(file, image) {
-            Ok(t) => Some(t),
-            Err(why) => {
-                warnings.push(format!(
+    if first {
+        // What the textures decoded so far leave of the figure's texels.
+        let used: u64 = textures
+            .iter()
+            .flatten()
+            .flatten()
+            .map(|t| t.texels())
+            .sum();
+        let left = super::texture::MAX_FIGURE_TEXELS.saturating_sub(used);
+        textures[image] = Some(
+            match super::texture::load(file, image, left.min(super::texture::MAX_TEXELS)) {
+                Ok(t) => Some(t),
+                Err(why) => {
+                    warnings.push(format!(
                     "image {image} (a base colour texture) cannot be read: {why}; its material's base colour is used"
                 ));
-                None
-            }
-        });
+                    None
+                }
+            },
+        );
     }
-    let Some(Some(texture)) = slot.as_ref() else {
+    let Some(Some(texture)) = &textures[image] else {
         return Ok(Vec::new());
     };
     let uvs: Vec<[f32; 2]> = prim

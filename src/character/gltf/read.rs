@@ -5,7 +5,7 @@
 
 use std::path::{Component, Path, PathBuf};
 
-use super::{GltfError, MAX_DATA_BYTES, MAX_FILE_BYTES};
+use super::{GltfError, MAX_DATA_BYTES, MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES};
 use crate::reading::ReadError;
 
 /// A parsed, validated glTF document and its buffers' bytes.
@@ -79,13 +79,14 @@ impl File {
 
     /// Checks that accessor `a` can be read whole as it says (dense, at
     /// least one element, inside its view and its view inside its buffer)
-    /// and adds its size to `budget`, refusing past [`MAX_DATA_BYTES`].
+    /// and adds what reading it allocates to `budget`, refusing past its
+    /// bounds.
     pub(super) fn check(
         &self,
         a: &gltf::Accessor<'_>,
         what: &str,
         kind: Kind,
-        budget: &mut u64,
+        budget: &mut Budget,
     ) -> Result<(), GltfError> {
         let bad = |why: String| self.data_error(format!("{what} (accessor {}): {why}", a.index()));
         // The element type the reader of this data expects: any other is
@@ -114,11 +115,8 @@ impl File {
         if count == 0 {
             return Err(bad("no elements".to_owned()));
         }
-        *budget = budget.saturating_add(count.saturating_mul(size));
-        if *budget > MAX_DATA_BYTES {
-            return Err(bad(format!(
-                "the figure's data would need over {MAX_DATA_BYTES} bytes"
-            )));
+        if let Some(over) = budget.add(kind, count) {
+            return Err(bad(over));
         }
         let stride = view.stride().map_or(size, |s| s as u64);
         if stride < size {
@@ -170,6 +168,62 @@ pub(super) enum Kind {
     Matrices,
     /// Texture coordinates.
     Uvs,
+}
+
+impl Kind {
+    /// Bytes an element takes once read, wherever it is stored smaller
+    /// (u8 indices widen to u32, f32 matrices to f64), times the copies
+    /// the loader and the renderer keep of it (a vertex's place: read,
+    /// posed at rest, uploaded with its normal and colours).
+    fn allocated(self) -> u64 {
+        match self {
+            Kind::Points => 3 * 12 + 88,
+            Kind::Joints => 2 * 8,
+            Kind::Weights => 2 * 16,
+            Kind::Indices => 3 * 4,
+            Kind::Matrices => 64 + 2 * 128,
+            Kind::Uvs => 8 + 16,
+        }
+    }
+}
+
+/// What a figure's accessors allocate, counted each time one is read (an
+/// accessor shared by 17 primitives is read 17 times), and its vertices
+/// and triangles in all.
+#[derive(Debug, Default)]
+pub(super) struct Budget {
+    bytes: u64,
+    vertices: u64,
+    triangles: u64,
+}
+
+impl Budget {
+    /// Count `count` elements of `kind`; why not, past a bound.
+    fn add(&mut self, kind: Kind, count: u64) -> Option<String> {
+        self.bytes = self
+            .bytes
+            .saturating_add(count.saturating_mul(kind.allocated()));
+        match kind {
+            Kind::Points => self.vertices = self.vertices.saturating_add(count),
+            Kind::Indices => self.triangles = self.triangles.saturating_add(count / 3),
+            _ => {}
+        }
+        if self.vertices > MAX_VERTICES {
+            Some(format!(
+                "the figure would have over {MAX_VERTICES} vertices (a figure on the table has tens of thousands)"
+            ))
+        } else if self.triangles > MAX_TRIANGLES {
+            Some(format!(
+                "the figure would have over {MAX_TRIANGLES} triangles (a figure on the table has tens of thousands)"
+            ))
+        } else if self.bytes > MAX_DATA_BYTES {
+            Some(format!(
+                "the figure's data would need over {MAX_DATA_BYTES} bytes"
+            ))
+        } else {
+            None
+        }
+    }
 }
 
 /// Refuse what the glTF reader would trip on before it says what is

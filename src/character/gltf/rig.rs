@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::read::{File, Kind};
+use super::read::{Budget, File, Kind};
 use super::{Figure, GltfError, Part, frame, humanoid, places};
 use crate::character::motion::detect_scale;
 use crate::character::roles::{self, Role};
@@ -107,9 +107,10 @@ impl Joints {
             index_of: vec![usize::MAX; n],
             extra_root: 0,
         };
-        // Each joint's joint parent, once; then children lists, so that
-        // ordering them is linear in the joints.
-        let jp: Vec<Option<usize>> = (0..n).map(|i| this.joint_parent(i)).collect();
+        // Each node's joint parent, once, from the top down (a long chain
+        // of nodes is walked once, not once for each node in it); then
+        // children lists, so that ordering them is linear in the joints.
+        let jp = this.joint_parents();
         let mut kids: Vec<Vec<usize>> = vec![Vec::new(); n];
         for c in (0..n).rev() {
             if let (true, Some(p)) = (this.is_joint[c], jp[c]) {
@@ -140,6 +141,28 @@ impl Joints {
             .map(|&k| k.wrapping_add(this.extra_root))
             .collect();
         this
+    }
+
+    /// Every node's nearest joint above it, each node visited once (from
+    /// the nodes at the top down; a node in a cycle, which the glTF reader
+    /// refuses, has none).
+    fn joint_parents(&self) -> Vec<Option<usize>> {
+        let n = self.parent_node.len();
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (c, p) in self.parent_node.iter().enumerate() {
+            if let Some(p) = *p {
+                children[p].push(c);
+            }
+        }
+        let mut jp = vec![None; n];
+        let mut todo: Vec<usize> = (0..n).filter(|&i| self.parent_node[i].is_none()).collect();
+        while let Some(p) = todo.pop() {
+            for &c in &children[p] {
+                jp[c] = if self.is_joint[p] { Some(p) } else { jp[p] };
+                todo.push(c);
+            }
+        }
+        jp
     }
 
     /// The nearest joint above node `n`.
@@ -196,7 +219,7 @@ fn skin_binds(
     joints: &Joints,
 ) -> Result<Vec<Option<DMat4>>, GltfError> {
     let mut bind: Vec<Option<DMat4>> = vec![None; world.len()];
-    let mut budget = 0u64;
+    let mut budget = Budget::default();
     for skin in file.doc.skins() {
         let Some(a) = skin.inverse_bind_matrices() else {
             continue;
@@ -342,6 +365,12 @@ pub(super) fn figure(
         return Err(GltfError::NoSkin { path });
     }
     let joints = Joints::new(file);
+    if joints.order.len() > MAX_JOINTS {
+        return Err(file.data_error(format!(
+            "its skins have {} joints, over the {MAX_JOINTS} marionette reads (a humanoid rig has tens to a few hundred)",
+            joints.order.len()
+        )));
+    }
     let mut notes = Vec::new();
     let world = bind_or_node_pose(file, &joints, &mut notes)?;
     if joints.order.len() < MIN_JOINTS {
@@ -580,6 +609,10 @@ fn rest_skeleton(
 /// The fewest joints a character can have: a pelvis, a head, and two
 /// arms and two legs of a bone each.
 pub const MIN_JOINTS: usize = 6;
+
+/// The most joints a figure's skins may have together (as BVH's
+/// [`crate::character::bvh::MAX_JOINTS`]).
+pub const MAX_JOINTS: usize = crate::character::bvh::MAX_JOINTS;
 
 /// How far the figure reaches along the file's axis turned up by `turn`.
 fn extent_along_y(verts: &[DVec3], raw: &[DVec3], turn: DQuat) -> f64 {

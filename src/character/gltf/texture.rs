@@ -12,6 +12,11 @@ use super::read::{File, base64, inside};
 /// checked from its header before it is decoded.
 pub const MAX_TEXELS: u64 = 16 << 20;
 
+/// The most texels all of a figure's textures may have together (128 MB
+/// decoded): a texture past what is left is said and its material's base
+/// colour used.
+pub const MAX_FIGURE_TEXELS: u64 = 32 << 20;
+
 /// A decoded texture: RGBA8, rows top to bottom.
 #[derive(Clone, Debug)]
 pub struct Texture {
@@ -66,8 +71,17 @@ fn srgb_to_linear(v: u8) -> f32 {
     }
 }
 
-/// Image `index` of `file`, decoded; why not, where it cannot be.
-pub fn load(file: &File, index: usize) -> Result<Texture, String> {
+impl Texture {
+    /// Its texels (width times height).
+    #[must_use]
+    pub fn texels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+}
+
+/// Image `index` of `file`, decoded if it has at most `max_texels`; why
+/// not, where it cannot be.
+pub fn load(file: &File, index: usize, max_texels: u64) -> Result<Texture, String> {
     let image = file
         .doc
         .images()
@@ -116,12 +130,19 @@ pub fn load(file: &File, index: usize) -> Result<Texture, String> {
             }
         }
     };
-    decode(&bytes)
+    decode_within(&bytes, max_texels)
 }
 
 /// PNG or JPEG bytes (told apart by their signature) as RGBA8.
-pub fn decode(bytes: &[u8]) -> Result<Texture, String> {
-    let too_big = |w: usize, h: usize| (w as u64).saturating_mul(h as u64) > MAX_TEXELS;
+#[cfg(test)]
+fn decode(bytes: &[u8]) -> Result<Texture, String> {
+    decode_within(bytes, MAX_TEXELS)
+}
+
+/// [`decode`], refused from the header where the image has over
+/// `max_texels`.
+fn decode_within(bytes: &[u8], max_texels: u64) -> Result<Texture, String> {
+    let too_big = |w: usize, h: usize| (w as u64).saturating_mul(h as u64) > max_texels;
     if bytes.starts_with(b"\x89PNG") {
         let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
         dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
@@ -129,7 +150,7 @@ pub fn decode(bytes: &[u8]) -> Result<Texture, String> {
         let (w, h) = (reader.info().width as usize, reader.info().height as usize);
         if w == 0 || h == 0 || too_big(w, h) {
             return Err(format!(
-                "a PNG of {w}x{h}: over {MAX_TEXELS} texels or empty"
+                "a PNG of {w}x{h}: empty, or over the {max_texels} texels left of the {MAX_TEXELS} a texture and {MAX_FIGURE_TEXELS} a figure may have"
             ));
         }
         let size = reader
@@ -164,7 +185,7 @@ pub fn decode(bytes: &[u8]) -> Result<Texture, String> {
         let (w, h) = (usize::from(info.width), usize::from(info.height));
         if w == 0 || h == 0 || too_big(w, h) {
             return Err(format!(
-                "a JPEG of {w}x{h}: over {MAX_TEXELS} texels or empty"
+                "a JPEG of {w}x{h}: empty, or over the {max_texels} texels left of the {MAX_TEXELS} a texture and {MAX_FIGURE_TEXELS} a figure may have"
             ));
         }
         let px = dec.decode().map_err(|e| format!("JPEG: {e}"))?;
