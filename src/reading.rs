@@ -108,6 +108,13 @@ pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
     }
 }
 
+/// A parser's message, which may itself repeat the input (serde's
+/// "invalid type: string \"…\""): escaped and cut to four quotes' length.
+#[must_use]
+pub fn parser_message(text: &str) -> String {
+    quote_bare_up_to(text.trim_end(), 4 * QUOTE_CHARS)
+}
+
 /// Text escaped and cut to `max` characters (`…` marks a cut): a longer
 /// message written by a parser, which may itself repeat the input.
 fn quote_bare_up_to(input: &str, max: usize) -> String {

@@ -146,15 +146,17 @@ pub fn library_problem(config: &Config, dir: &Path, key: &str) -> Option<String>
     } else {
         config.source.display().to_string()
     };
-    // A flag is the command line's; a key is the file's.
-    let at = if key.starts_with("--") {
+    // A flag or a command is the command line's; a key is the file's.
+    let at = if key.starts_with("--") || key.contains(' ') {
         key.to_owned()
     } else {
         format!("{file}: {key}")
     };
     let shown = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
     let shown = shown.display();
-    if dir.join("library.toml").is_file() {
+    // A library.toml that is there but cannot be read (a pipe, a folder)
+    // is the loader's to explain.
+    if dir.join("library.toml").symlink_metadata().is_ok() {
         return None;
     }
     Some(if dir.is_file() {
@@ -173,7 +175,7 @@ pub fn library_problem(config: &Config, dir: &Path, key: &str) -> Option<String>
         )
     } else {
         format!(
-            "{at}: {shown} has no library.toml; make one with `marionette library init TAKES --out {shown}`"
+            "{at}: {shown} has no library.toml: name a library's folder (the one with library.toml), or make a library from a folder of BVH takes with `marionette library init TAKES --out NEW_FOLDER`"
         )
     })
 }

@@ -258,6 +258,18 @@ impl Library {
             )]));
         }
         let mut actions = action_defs(&file, &mut problems);
+        // An action is a motion: a clip of one frame has none to learn.
+        for a in &actions {
+            for c in &a.clips {
+                if clips.get(c).is_some_and(|clip| clip.frames.len() < 2) {
+                    problems.push(format!(
+                        "action {}: clip {} has one frame; an action's clips show the motion, two frames at least",
+                        quote(&a.name),
+                        quote(c)
+                    ));
+                }
+            }
+        }
         let mirrored = mirror_actions(&actions, &file, &mut clips, &mut problems);
         actions.extend(mirrored);
         if !problems.is_empty() {

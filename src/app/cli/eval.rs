@@ -149,7 +149,16 @@ pub(super) fn eval_pose(
     let (lib, learned) = crate::app::character::load_models(library, false)?;
     let mut clips = Vec::new();
     for t in tests {
-        let (_, mut clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))?;
+        // A test clip in the library's unit is read in it; one in another
+        // (centimetres against a library in metres) in the unit its bone
+        // lengths give, as `inspect` reads it: a test clip has no
+        // settings of its own to set.
+        let (_, mut clip) = read_clip(t, lib.clips.values().next().map(|c| c.scale_to_m))
+            .or_else(|in_library_unit| {
+                read_clip(t, None).map_err(|_| in_library_unit).inspect(|(_, c)| {
+                    tracing::info!(clip = %t.display(), scale_to_m = c.scale_to_m, "test clip read in the unit its bone lengths give");
+                })
+            })?;
         if let Some(why) =
             crate::character::library::hierarchy_difference(&lib.skeleton, &clip.skeleton)
         {

@@ -104,7 +104,7 @@ fn render(
         until: Some(summary.replay_s),
         ..headless::Options::default()
     };
-    headless::run_table(cast, config, frames, &opts).map_err(Failure::from)
+    headless::run_table(cast, config, frames, &opts).map_err(|e| naming_file(config, e))
 }
 
 /// Frames are written at most once per controller step.
@@ -287,7 +287,8 @@ pub(super) fn replay_poses(
         tracking,
         ..headless::Options::default()
     };
-    let summary = headless::run(ch.clone(), config, frames, &opts).map_err(Failure::from)?;
+    let summary =
+        headless::run(ch.clone(), config, frames, &opts).map_err(|e| naming_file(config, e))?;
     Ok((ch, summary, tick_hz))
 }
 
@@ -420,4 +421,14 @@ pub(super) fn author_abuse(
         out.display()
     )
     .map_err(stdout_error)
+}
+
+/// A headless run's failure; one that the configuration caused (a picture
+/// larger than the adapter renders) names the configuration's file.
+fn naming_file(config: &Config, e: crate::app::headless::HeadlessError) -> Failure {
+    let mut f = Failure::from(e);
+    if f.code == exit::CONFIG && !config.source.as_os_str().is_empty() {
+        f.message = format!("configuration {}: {}", config.source.display(), f.message);
+    }
+    f
 }

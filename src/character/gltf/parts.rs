@@ -130,6 +130,10 @@ fn rest_vertices(
     Ok(())
 }
 
+/// The farthest a vertex may lie from its mesh's origin, in the file's
+/// units (a figure in millimetres is a few thousand across).
+const MAX_COORDINATE: f32 = 1e6;
+
 /// A primitive's vertex positions, checked: every one finite (`what`
 /// names the mesh in errors).
 fn positions(
@@ -149,6 +153,15 @@ fn positions(
         .collect();
     if positions.iter().flatten().any(|x| !x.is_finite()) {
         return Err(file.data_error(what("has positions that are not finite")));
+    }
+    if let Some(far) = positions
+        .iter()
+        .flatten()
+        .find(|x| x.abs() > MAX_COORDINATE)
+    {
+        return Err(file.data_error(what(&format!(
+            "has a vertex {far:e} units from its origin: past the {MAX_COORDINATE:e} (a kilometre in millimetres) a figure's vertices may lie"
+        ))));
     }
     Ok(positions)
 }

@@ -31,6 +31,10 @@ pub const FOLLOWED_M: f64 = 0.3;
 /// The most paths a file may hold, and points a path.
 const MAX_PATHS: usize = 1000;
 const MAX_POINTS: usize = 10_000;
+/// The longest path (m): a table shows a few metres of floor.
+const MAX_PATH_M: f64 = 100.0;
+/// The most walking all paths may take together (s, each at its speed).
+const MAX_WALKING_S: f64 = 600.0;
 
 /// A path to walk: floor points in metres in the character's frame (x to
 /// its right, z ahead), from its pelvis, and the finger's speed along it.
@@ -98,8 +102,9 @@ pub fn read_paths(file: &Path) -> Result<Vec<WalkPath>, String> {
     })?;
     let parsed: PathsFile = serde_json::from_str(&text).map_err(|e| {
         format!(
-            "{}: not a paths file ({e}); expected {{\"paths\": [{{\"points\": [[x, z], ...], \"speed_mps\": v}}]}}",
-            file.display()
+            "{}: not a paths file ({}); expected {{\"paths\": [{{\"points\": [[x, z], ...], \"speed_mps\": v}}]}}",
+            file.display(),
+            crate::reading::parser_message(&e.to_string())
         )
     })?;
     check_paths(&parsed.paths).map_err(|why| format!("{}: {why}", file.display()))?;
@@ -115,6 +120,7 @@ pub fn check_paths(paths: &[WalkPath]) -> Result<(), String> {
     if paths.len() > MAX_PATHS {
         return Err(format!("{} paths; at most {MAX_PATHS}", paths.len()));
     }
+    let mut walking_s = 0.0;
     for (i, p) in paths.iter().enumerate() {
         let n = i + 1;
         if !(p.speed_mps.is_finite() && p.speed_mps > 0.05 && p.speed_mps <= 5.0) {
@@ -140,9 +146,21 @@ pub fn check_paths(paths: &[WalkPath]) -> Result<(), String> {
                 k + 1
             ));
         }
-        if path_length(&world_points(p)) < 0.05 {
+        let length = path_length(&world_points(p));
+        if length < 0.05 {
             return Err(format!("path {n}: its points do not go anywhere"));
         }
+        if length > MAX_PATH_M {
+            return Err(format!(
+                "path {n}: {length:.0} m long; a path on the table is at most {MAX_PATH_M} m"
+            ));
+        }
+        walking_s += length / p.speed_mps;
+    }
+    if walking_s > MAX_WALKING_S {
+        return Err(format!(
+            "the paths take {walking_s:.0} s to walk; at most {MAX_WALKING_S} s in all"
+        ));
     }
     Ok(())
 }
