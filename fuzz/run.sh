@@ -33,6 +33,16 @@ seed evemu_parse "$shared"/recordings/evemu/*.evemu "$root"/assets/recordings/*.
 seed library_toml "$root"/assets/library/library.toml "$root"/tests/libraries/*/library.toml
 seed config "$root"/config/*.toml
 seed gltf "$shared"/characters/RiggedFigure.glb
+# The door: a kind byte (0 a file, 1 and 2 links in and out, 3 a pipe, 4
+# a folder, 5 /dev/zero, 6 a dangling link), a 16-bit limit, the bytes.
+mkdir -p corpus/door
+k=0
+for f in "$shared"/characters/RiggedFigure.glb "$root"/config/*.toml "$root"/assets/library/library.toml \
+    $(ls "$shared"/recordings/evemu/*.evemu | head -3) $(find "$shared/mocap" -name '*.bvh' -size -20k | sort | head -3); do
+    [ -f "$f" ] || continue
+    { printf "\\x$(printf %02x $((k % 7)))\\xff\\xff"; head -c 60000 "$f"; } >"corpus/door/seed-$k"
+    k=$((k + 1))
+done
 mkdir -p corpus/init_names corpus/tracker
 for name in $(find "$shared/mocap" -name '*.bvh' | head -20); do
     printf '%s' "$(basename "$name" .bvh)" >"corpus/init_names/seed-$(basename "$name")"
@@ -40,7 +50,7 @@ done
 printf 'take "one"\n# [x]' >corpus/init_names/seed-quotes
 
 status=0
-for target in bvh_parse evemu_parse tracker library_toml config init_names gltf; do
+for target in bvh_parse evemu_parse tracker library_toml config init_names gltf door; do
     echo "== $target: $seconds s"
     if ! cargo +nightly fuzz run "$target" "corpus/$target" -- \
         -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=4096 -print_final_stats=1 \

@@ -293,3 +293,158 @@ fn a_file_that_is_not_motion_capture_is_refused_without_showing_it() {
     assert!(err.contains("not a BVH file"), "{err}");
     assert!(!err.contains("root:x"), "{err}");
 }
+
+/// A library folder in `dir` with `toml` and the shipped library's bows
+/// (and a one-frame cut of one, `still.bvh`).
+fn library_with(dir: &Path, toml: &str) -> String {
+    let lib = dir.join("lib");
+    std::fs::create_dir_all(&lib).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/library");
+    for f in ["bow_a.bvh", "bow_deep.bvh"] {
+        std::fs::copy(shipped.join(f), lib.join(f)).unwrap();
+    }
+    let bow = std::fs::read_to_string(shipped.join("bow_a.bvh")).unwrap();
+    let (head, motion) = bow.split_once("MOTION").unwrap();
+    let first = motion.lines().nth(3).unwrap();
+    std::fs::write(
+        lib.join("still.bvh"),
+        format!("{head}MOTION\nFrames: 1\nFrame Time: 0.0333333\n{first}\n"),
+    )
+    .unwrap();
+    std::fs::write(lib.join("library.toml"), toml).unwrap();
+    lib.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn repeated_clips_and_one_frame_actions_are_refused() {
+    let action = |clips: &str| {
+        format!(
+            "[posing]\nclips = [\"bow_a.bvh\"]\n[[action]]\nname = \"bow\"\nprimary = \"head\"\nclips = [{clips}]\nsegments = [{{ until = 1, still = true, release = \"forward\" }}]\n"
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let good = library_with(dir.path(), &action("\"bow_a.bvh\", \"bow_deep.bvh\""));
+    let out = within(Duration::from_secs(120), &["library", "check", &good]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let posing_twice =
+        "[posing]\nclips = [\"bow_a.bvh\", \"bow_deep.bvh\", \"bow_a.bvh\", \"bow_a.bvh\"]\n";
+    for (toml, says) in [
+        (
+            posing_twice.to_owned(),
+            "[posing] clips: `bow_a.bvh` is listed 3 times",
+        ),
+        (
+            action("\"bow_a.bvh\", \"bow_a.bvh\""),
+            "action `bow` clips: `bow_a.bvh` is listed 2 times",
+        ),
+        (
+            action("\"bow_a.bvh\", \"still.bvh\""),
+            "action `bow`: clip `still.bvh` has one frame",
+        ),
+    ] {
+        let lib = library_with(dir.path(), &toml);
+        let out = within(Duration::from_secs(60), &["library", "check", &lib]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(65), "{err}");
+        assert!(err.contains(says), "{says}: {err}");
+    }
+}
+
+#[test]
+fn library_check_and_the_library_flag_answer_alike() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("nowhere");
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let toml = dir.path().join("library.toml");
+    std::fs::write(&toml, "").unwrap();
+    let out_dir = dir.path().join("demo");
+    for folder in [&missing, &empty, &toml] {
+        let f = folder.to_str().unwrap();
+        let check = within(Duration::from_secs(60), &["library", "check", f]);
+        let flag = within(
+            Duration::from_secs(60),
+            &["demo", "--library", f, "--out", out_dir.to_str().unwrap()],
+        );
+        let (a, b) = (
+            String::from_utf8_lossy(&check.stderr),
+            String::from_utf8_lossy(&flag.stderr),
+        );
+        assert_eq!(check.status.code(), Some(66), "{a}");
+        assert_eq!(flag.status.code(), Some(66), "{b}");
+        let why = |s: &str| {
+            s.lines()
+                .last()
+                .and_then(|l| l.strip_prefix("marionette: "))
+                .and_then(|l| l.split_once(": "))
+                .map(|(_, w)| w.to_owned())
+        };
+        assert_eq!(why(&a), why(&b), "{a}\n{b}");
+        // A folder is never offered as the place to write a library into.
+        assert!(!a.contains(&format!("--out {f}")), "{a}");
+    }
+}
+
+#[test]
+fn a_walk_path_too_long_to_walk_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let paths = dir.path().join("paths.json");
+    // Back and forth across 90 m, 2,000 times: 360 km.
+    let points: Vec<[f64; 2]> = (0..4000)
+        .map(|i| [if i % 2 == 0 { -45.0 } else { 45.0 }, 0.0])
+        .collect();
+    std::fs::write(
+        &paths,
+        serde_json::json!({"paths": [{"points": points, "speed_mps": 1.0}]}).to_string(),
+    )
+    .unwrap();
+    let out = within(
+        Duration::from_secs(10),
+        &["eval", "walk", "--paths", paths.to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("a path on the table is at most 100 m"),
+        "{err}"
+    );
+}
+
+#[test]
+fn clips_whose_names_make_one_sheet_name_get_a_sheet_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let lib = library_with(
+        dir.path(),
+        "[posing]\nclips = [\"sub/pose.bvh\", \"sub_pose.bvh\"]\n",
+    );
+    let lib_dir = Path::new(&lib);
+    std::fs::create_dir(lib_dir.join("sub")).unwrap();
+    std::fs::copy(lib_dir.join("bow_a.bvh"), lib_dir.join("sub/pose.bvh")).unwrap();
+    std::fs::copy(lib_dir.join("bow_deep.bvh"), lib_dir.join("sub_pose.bvh")).unwrap();
+    let sheets = dir.path().join("sheets");
+    let out = within(
+        Duration::from_secs(120),
+        &[
+            "contact-sheet",
+            "--library",
+            &lib,
+            "--out",
+            sheets.to_str().unwrap(),
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&sheets)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["sub_pose-2.png", "sub_pose.png"]);
+}

@@ -365,6 +365,14 @@ fn broken_files_are_refused_with_the_reason() {
             "would have over 400000 vertices",
         ),
         (
+            "a vertex far from its origin",
+            with(&|j, b| {
+                let o = at(j, position_acc);
+                b[o..o + 4].copy_from_slice(&3e38f32.to_le_bytes());
+            }),
+            "a vertex 3e38 units from its origin",
+        ),
+        (
             "a buffer outside its folder",
             {
                 let mut j = json.clone();
@@ -846,7 +854,19 @@ fn mesh_roles_name_joints_for_roles_and_a_wrong_one_is_refused() {
     assert_eq!(r.status.code(), Some(65), "{err}");
     assert!(
         err.contains(
-            "mascot.glb: mesh_roles: head = \"Skull\": the skeleton has no joint of that name"
+            "mascot.glb: mesh_roles: head = `Skull`: the skeleton has no joint of that name"
+        ),
+        "{err}"
+    );
+    // Two roles given one joint: refused, naming both.
+    let r = run(
+        "[character]\nmesh = \"mascot.glb\"\n[character.mesh_roles]\nhead = \"Skeleton_neck_joint_1\"\npelvis = \"Skeleton_neck_joint_1\"\n",
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(65), "{err}");
+    assert!(
+        err.contains(
+            "head and pelvis both name `Skeleton_neck_joint_1`: each role needs a joint of its own"
         ),
         "{err}"
     );
