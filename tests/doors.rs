@@ -448,3 +448,58 @@ fn clips_whose_names_make_one_sheet_name_get_a_sheet_each() {
     names.sort();
     assert_eq!(names, ["sub_pose-2.png", "sub_pose.png"]);
 }
+
+#[test]
+fn frames_are_never_written_through_a_link_and_no_scores_keep_a_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let victim = dir.path().join("victim");
+    std::fs::create_dir(&victim).unwrap();
+    std::fs::write(victim.join("frame-00000.png"), "keep").unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    std::os::unix::fs::symlink(&victim, out_dir.join("frames")).unwrap();
+    let rec = common::data_dir().join("tracking-ids.evemu");
+    let out = within(
+        Duration::from_secs(300),
+        &[
+            "replay",
+            rec.to_str().unwrap(),
+            "--headless",
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--fps",
+            "1",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(73), "{err}");
+    assert!(err.contains("is a symbolic link"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&victim).unwrap().collect();
+    assert_eq!(left.len(), 1);
+    assert_eq!(
+        std::fs::read_to_string(victim.join("frame-00000.png")).unwrap(),
+        "keep"
+    );
+    // author-library from a folder of no scores leaves the library there.
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let lib = library_with(dir.path(), "[posing]\nclips = [\"bow_a.bvh\"]\n");
+    let before = std::fs::read(Path::new(&lib).join("library.toml")).unwrap();
+    let out = within(
+        Duration::from_secs(60),
+        &[
+            "author-library",
+            "--src",
+            empty.to_str().unwrap(),
+            "--out",
+            &lib,
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(66), "{err}");
+    assert!(err.contains("holds no scores"), "{err}");
+    assert_eq!(
+        std::fs::read(Path::new(&lib).join("library.toml")).unwrap(),
+        before
+    );
+}

@@ -356,7 +356,8 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             let n = crate::tools::author::author_library(&src, &out).map_err(|e| {
                 let code = match &e {
                     crate::tools::author::compile::AuthorError::Write { .. } => exit::CANTCREAT,
-                    crate::tools::author::compile::AuthorError::List { .. } => exit::NOINPUT,
+                    crate::tools::author::compile::AuthorError::List { .. }
+                    | crate::tools::author::compile::AuthorError::NoScores(_) => exit::NOINPUT,
                     _ => exit::DATAERR,
                 };
                 Failure::new(code, e)

@@ -370,6 +370,21 @@ fn open_output(
     (width, height): (u32, u32),
     samples: u32,
 ) -> Result<Headless, HeadlessError> {
+    // Frames are written and old ones removed only in a folder of the
+    // output's own: a `frames` that links elsewhere is refused, what it
+    // links to left as it was.
+    if dir
+        .join("frames")
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+    {
+        return Err(HeadlessError::Write {
+            path: dir.join("frames"),
+            source: std::io::Error::other(
+                "it is a symbolic link: frames are written only into a folder of the output's own; remove the link",
+            ),
+        });
+    }
     std::fs::create_dir_all(dir.join("frames")).map_err(|source| HeadlessError::Write {
         path: dir.join("frames"),
         source,

@@ -290,6 +290,9 @@ pub enum AuthorError {
     },
     #[error("{0}")]
     Conflict(String),
+    /// No score to compile: the library already there is kept.
+    #[error("{} holds no scores (*.toml): nothing written, the library there kept", .0.display())]
+    NoScores(PathBuf),
 }
 
 /// The compiled library: file name → BVH text, plus `library.toml`.
@@ -309,6 +312,9 @@ pub fn compile(src: &Path) -> Result<Compiled, AuthorError> {
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
     paths.sort();
+    if paths.is_empty() {
+        return Err(AuthorError::NoScores(src.to_owned()));
+    }
     let skel = rig::skeleton();
     let translates: Vec<bool> = (0..skel.len()).map(|i| i == j::HIPS).collect();
     let mut files = BTreeMap::new();
