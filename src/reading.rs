@@ -88,7 +88,7 @@ pub fn escape_controls(text: &str) -> String {
 
 /// A TOML error as one message that repeats no more of the file than
 /// [`quote`] does: where (line and column), what the parser said (its
-/// control characters escaped, cut), and the text it stopped at. The
+/// control characters escaped, cut), and the line it stopped on. The
 /// parser's own rendering shows the whole line, which can be megabytes.
 #[must_use]
 pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
@@ -100,11 +100,17 @@ pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
     let before = text.get(..start).unwrap_or("");
     let line = before.matches('\n').count() + 1;
     let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    let at = text.get(start..span.end.min(text.len())).unwrap_or("");
+    // The line it stopped on names the key; quoted, it is cut.
+    let rest = text.get(start..).unwrap_or("");
+    let at =
+        before.rsplit('\n').next().unwrap_or("").to_owned() + rest.split('\n').next().unwrap_or("");
     if at.trim().is_empty() {
         format!("line {line}, column {column}: {said}")
     } else {
-        format!("line {line}, column {column}, at {}: {said}", quote(at))
+        format!(
+            "line {line}, column {column}, in {}: {said}",
+            quote(at.trim())
+        )
     }
 }
 

@@ -179,7 +179,7 @@ clips = ["002_05.bvh#900-2000", "002_05.bvh#fast", "002_05.bvh#50-40", "nothere.
     );
     let text = Library::load(dir.path()).unwrap_err().to_string();
     for want in [
-        "frame 2000 is past the end of 002_05.bvh (927 frames",
+        "frame 2000 is past the end of `002_05.bvh` (927 frames",
         "`#fast` is not a frame range; write it as FIRST-LAST",
         "the frame range 50-40 must end after it begins",
         "nothere.bvh",
