@@ -81,16 +81,10 @@ fn devices_pipes_and_folders_given_as_inputs_are_refused_at_once() {
     }
 }
 
-#[test]
-fn an_output_that_is_a_link_is_refused_and_what_it_points_to_kept() {
-    let dir = tempfile::tempdir().unwrap();
-    let precious = dir.path().join("precious.txt");
-    std::fs::write(&precious, "keep").unwrap();
-    let out_dir = dir.path().join("out");
-    std::fs::create_dir(&out_dir).unwrap();
-    std::os::unix::fs::symlink(&precious, out_dir.join("summary.json")).unwrap();
+/// A short real recording replayed headless into `out_dir`.
+fn replay_headless_into(out_dir: &Path) -> Output {
     let rec = common::data_dir().join("tracking-ids.evemu");
-    let out = within(
+    within(
         Duration::from_secs(300),
         &[
             "replay",
@@ -101,7 +95,18 @@ fn an_output_that_is_a_link_is_refused_and_what_it_points_to_kept() {
             "--fps",
             "1",
         ],
-    );
+    )
+}
+
+#[test]
+fn an_output_that_is_a_link_is_refused_and_what_it_points_to_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let precious = dir.path().join("precious.txt");
+    std::fs::write(&precious, "keep").unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    std::os::unix::fs::symlink(&precious, out_dir.join("summary.json")).unwrap();
+    let out = replay_headless_into(&out_dir);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{err}");
     assert!(err.contains("a symbolic link"), "{err}");
@@ -458,19 +463,7 @@ fn frames_are_never_written_through_a_link_and_no_scores_keep_a_library() {
     let out_dir = dir.path().join("out");
     std::fs::create_dir(&out_dir).unwrap();
     std::os::unix::fs::symlink(&victim, out_dir.join("frames")).unwrap();
-    let rec = common::data_dir().join("tracking-ids.evemu");
-    let out = within(
-        Duration::from_secs(300),
-        &[
-            "replay",
-            rec.to_str().unwrap(),
-            "--headless",
-            "--out",
-            out_dir.to_str().unwrap(),
-            "--fps",
-            "1",
-        ],
-    );
+    let out = replay_headless_into(&out_dir);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(73), "{err}");
     assert!(err.contains("is a symbolic link"), "{err}");

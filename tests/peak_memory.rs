@@ -48,12 +48,7 @@ fn inspect_of_a_40_mb_bvh_peaks_under_four_times_its_size() {
     assert!(read + 1 >= n as u64 && read <= n as u64, "{v}");
     // The largest resident set of the children this process waited for:
     // the one above.
-    // SAFETY: rusage is plain integers, for which zero is a value.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: getrusage writes only the struct it is given.
-    let done = unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
-    assert_eq!(done, 0);
-    let peak = usage.ru_maxrss as f64 * 1024.0;
+    let peak = common::children_peak_bytes();
     eprintln!(
         "inspect of {:.1} MB: peak {:.1} MB ({:.2}x)",
         size / 1e6,

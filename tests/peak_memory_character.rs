@@ -29,12 +29,7 @@ fn inspect_of_the_largest_shared_character_peaks_near_its_measured_figure() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // SAFETY: rusage is plain integers, for which zero is a value.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: getrusage writes only the struct it is given.
-    let done = unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
-    assert_eq!(done, 0);
-    let peak = usage.ru_maxrss as f64 * 1024.0;
+    let peak = common::children_peak_bytes();
     eprintln!(
         "inspect of {} ({:.1} MB): peak {:.1} MB",
         largest.display(),

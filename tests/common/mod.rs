@@ -186,3 +186,15 @@ pub fn pixels_apart(a: &[u8], b: &[u8], by: u8) -> usize {
         .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > by))
         .count()
 }
+
+/// The largest resident set (bytes) of the children this process has
+/// waited for: in a test binary of one test, that test's child.
+#[must_use]
+pub fn children_peak_bytes() -> f64 {
+    // SAFETY: rusage is plain integers, for which zero is a value.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: getrusage writes only the struct it is given.
+    let done = unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
+    assert_eq!(done, 0);
+    usage.ru_maxrss as f64 * 1024.0
+}
