@@ -258,18 +258,7 @@ impl Library {
             )]));
         }
         let mut actions = action_defs(&file, &mut problems);
-        // An action is a motion: a clip of one frame has none to learn.
-        for a in &actions {
-            for c in &a.clips {
-                if clips.get(c).is_some_and(|clip| clip.frames.len() < 2) {
-                    problems.push(format!(
-                        "action {}: clip {} has one frame; an action's clips show the motion, two frames at least",
-                        quote(&a.name),
-                        quote(c)
-                    ));
-                }
-            }
-        }
+        one_frame_clips(&actions, &clips, &mut problems);
         let mirrored = mirror_actions(&actions, &file, &mut clips, &mut problems);
         actions.extend(mirrored);
         if !problems.is_empty() {
@@ -545,6 +534,26 @@ fn action_defs(file: &LibraryFile, problems: &mut Vec<String>) -> Vec<ActionDef>
         }
     }
     actions
+}
+
+/// An action is a motion: a clip of one frame has none to learn, and is
+/// refused (said in `problems`).
+fn one_frame_clips(
+    actions: &[ActionDef],
+    clips: &BTreeMap<String, Clip>,
+    problems: &mut Vec<String>,
+) {
+    for a in actions {
+        for c in &a.clips {
+            if clips.get(c).is_some_and(|clip| clip.frames.len() < 2) {
+                problems.push(format!(
+                    "action {}: clip {} has one frame; an action's clips show the motion, two frames at least",
+                    quote(&a.name),
+                    quote(c)
+                ));
+            }
+        }
+    }
 }
 
 /// The mirror images of the `actions` whose entry in `file` asks for

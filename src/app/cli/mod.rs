@@ -273,14 +273,7 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
         } => motion::library_init(&src, &out, force, copy_clips),
         Command::Library {
             what: LibraryCommand::Check { dir, json },
-        } => {
-            // The same folder gets the same answer here as under --library.
-            if let Some(why) = crate::app::character::library_problem(config, &dir, "library check")
-            {
-                return Err(Failure::new(exit::NOINPUT, why));
-            }
-            motion::library_check(&dir, json)
-        }
+        } => motion::library_check(config, &dir, json),
         Command::Eval {
             what:
                 EvalCommand::Walk {

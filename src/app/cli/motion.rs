@@ -347,8 +347,16 @@ fn copy_takes(
     Ok(plan.posing.len())
 }
 
-pub(super) fn library_check(dir: &Path, json: bool) -> Result<(), Failure> {
+pub(super) fn library_check(
+    config: &crate::app::config::Config,
+    dir: &Path,
+    json: bool,
+) -> Result<(), Failure> {
     use crate::character::library::Library;
+    // The same folder gets the same answer here as under --library.
+    if let Some(why) = crate::app::character::library_problem(config, dir, "library check") {
+        return Err(Failure::new(exit::NOINPUT, why));
+    }
     let lib = Library::load(dir).map_err(|e| Failure::new(exit::DATAERR, e))?;
     let actions = crate::control::character::Character::action_models(&lib);
     let mut stdout = std::io::stdout();

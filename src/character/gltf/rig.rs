@@ -85,7 +85,19 @@ struct Joints {
 }
 
 impl Joints {
-    fn new(file: &File) -> Self {
+    /// The skins' joints in order; refused past [`MAX_JOINTS`].
+    fn new(file: &File) -> Result<Self, GltfError> {
+        let this = Self::ordered(file);
+        if this.order.len() > MAX_JOINTS {
+            return Err(file.data_error(format!(
+                "its skins have {} joints, over the {MAX_JOINTS} marionette reads (a humanoid rig has tens to a few hundred)",
+                this.order.len()
+            )));
+        }
+        Ok(this)
+    }
+
+    fn ordered(file: &File) -> Self {
         let n = file.doc.nodes().len();
         let mut is_joint = vec![false; n];
         for skin in file.doc.skins() {
@@ -364,13 +376,7 @@ pub(super) fn figure(
     if file.doc.skins().len() == 0 {
         return Err(GltfError::NoSkin { path });
     }
-    let joints = Joints::new(file);
-    if joints.order.len() > MAX_JOINTS {
-        return Err(file.data_error(format!(
-            "its skins have {} joints, over the {MAX_JOINTS} marionette reads (a humanoid rig has tens to a few hundred)",
-            joints.order.len()
-        )));
-    }
+    let joints = Joints::new(file)?;
     let mut notes = Vec::new();
     let world = bind_or_node_pose(file, &joints, &mut notes)?;
     if joints.order.len() < MIN_JOINTS {
