@@ -11,12 +11,14 @@
 //! one-bone arm pointed along the library's and swung up by the least
 //! turn that keeps its hand off it); a joint the rig hangs elsewhere (feet from the root) is
 //! hung on its limb; nothing it carries low (a cape, a tail, a shin) goes
-//! under the floor.
+//! under the floor, nor its head: a bow deeper than its head allows (a
+//! chibi's) is turned back up about the pelvis (`upright`).
 
 use glam::{DMat4, DQuat, DVec3};
 
 use super::Figure;
-use super::limbs::{end_points, foot_points, low_points, toward, two_bone};
+use super::limbs::{end_points, foot_points, low_points, near_points, toward, two_bone};
+use super::upright::Upright;
 use crate::character::body::{facing, leg_length_posed};
 use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
@@ -74,10 +76,20 @@ const FLATTEN_STEPS: u8 = 8;
 /// before it is lifted (rad, about 23 degrees).
 const FLATTEN_MAX: f64 = 0.4;
 
+/// The most a hand is turned about its wrist to keep what it holds off
+/// the floor before it is lifted (rad, a quarter turn: a sword hanging
+/// from it held level).
+const HAND_TURN_MAX: f64 = std::f64::consts::FRAC_PI_2;
+
 /// How high a foot rises over its standing height (library metres)
 /// before it goes where the library's goes from the hip rather than
 /// where it stands (see `Drive::foot_goal`).
 const RAISED_BLEND_M: f64 = 0.3;
+
+/// How near the floor (m) a hand's points come before all it carries is
+/// looked at (`limbs::near_points`): more than the points kept for it
+/// miss by (7.7 mm, a knight's shield rim).
+const NEAR_M: f64 = 0.05;
 
 /// How near its standing height (library metres) the library's ankle is
 /// for the figure's foot on that side to stand (see `Drive::stand`).
@@ -122,12 +134,18 @@ pub struct Drive {
     /// Each limb end's mesh points (rest pose; feet, then hands, as
     /// [`LIMBS`]) with the joint carrying each (see `limbs::end_points`).
     ends: [Vec<super::Point>; 4],
+    /// The hands' points looked at where one comes within [`NEAR_M`] of
+    /// the floor (see `limbs::near_points`; none for the feet).
+    near: [Vec<super::Point>; 4],
     /// Each limb of [`LIMBS`]: one bone from its root to its end (its
     /// middle made up).
     one_bone: [bool; 4],
     /// Mesh points the figure carries low at rest off its legs (a cape, a
     /// skirt, a tail), each with its joint: none goes under the floor.
     low: Vec<super::Point>,
+    /// The library's upper body turned back up where the figure's head
+    /// would go under the floor.
+    upright: Upright,
     fig_roles: RoleMap,
     lib_roles: RoleMap,
 }
@@ -180,9 +198,17 @@ impl Drive {
                 )
             }),
             planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
+            near: LIMBS.map(|(_, _, r)| {
+                if matches!(r, Role::LeftHand | Role::RightHand) {
+                    near_points(fig, fig.roles.get(r))
+                } else {
+                    Vec::new()
+                }
+            }),
             one_bone: LIMBS
                 .map(|(_, b, _)| fig.made_up.get(fig.roles.get(b)).copied().unwrap_or(false)),
             low: low_points(fig),
+            upright: Upright::new(lib, lib_roles, end_points(fig, fig.roles.get(Role::Head))),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
             rest: fig
@@ -270,6 +296,26 @@ impl Drive {
         } else {
             self.place(fig, lib, &free, raise)
         };
+        // A bow that would put the head under the floor: the trunk turned
+        // back up (the legs as they were, so `raise` holds).
+        let head_lowest = |w: &[DMat4]| {
+            let skin = self.skinning(w);
+            self.upright
+                .points
+                .iter()
+                .map(|p| p.now(&skin).y)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let turned = if head_lowest(&w) < 0.0 {
+            self.upright
+                .turned(lib, |l| head_lowest(&self.place(fig, l, &free, raise)))
+        } else {
+            None
+        };
+        let (lib, w) = match &turned {
+            Some(t) => (t, self.place(fig, t, &free, raise)),
+            None => (lib, w),
+        };
         let mut lift = [0.0f64; 4];
         let mut turn = [DQuat::IDENTITY; 4];
         let mut fixed = self.reach(fig, lib, &w, lift, turn);
@@ -279,7 +325,9 @@ impl Drive {
         // library's, pointed as steeply, reaches lower), by at most
         // `FLATTEN_MAX`; what is left under lifts it by as much (the leg
         // bends), once more if need be. A hand under the floor (long arms
-        // in a crouch) is lifted by as much.
+        // in a crouch, a sword it holds) is first turned about its wrist
+        // by at most `HAND_TURN_MAX` as a foot is, then lifted by what is
+        // left under.
         for pass in 0..3 {
             let mut under = false;
             let skin = self.skinning(&posed);
@@ -304,13 +352,14 @@ impl Drive {
                     let shoulder = posed[self.fig_roles.get(LIMBS[k].0)].w_axis.truncate();
                     let chest = posed[self.fig_roles.get(Role::Chest)].w_axis.truncate();
                     turn[k] = swing_clear(&points, shoulder, ankle, chest) * turn[k];
-                } else if k < 2 && pass == 0 && axis.length() > 1e-9 {
+                } else if pass == 0 && axis.length() > 1e-9 {
                     // Turned towards raising the lowest point: the least
                     // turn that brings every point onto the floor, else
                     // the one that leaves the lowest highest (raising the
                     // toes lowers the heel).
                     let axis = axis.normalize();
-                    let angle = flatter(&points, ankle, axis, low.y);
+                    let most = if k < 2 { FLATTEN_MAX } else { HAND_TURN_MAX };
+                    let angle = flatter(&points, (ankle, axis), low.y, most);
                     turn[k] = DQuat::from_axis_angle(axis, angle) * turn[k];
                 } else {
                     lift[k] -= low.y;
@@ -323,11 +372,13 @@ impl Drive {
             posed = self.place(fig, lib, &fixed, raise);
         }
         // A limb too short to reach where it is lifted to (a stride longer
-        // than the legs, scaled): the whole figure rises by what is left.
+        // than the legs, scaled), a head no turn of the trunk lifts: the
+        // whole figure rises by what is left.
         let skin = self.skinning(&posed);
         let low = (0..LIMBS.len())
             .flat_map(|k| self.end_now(&skin, k))
             .chain(self.low.iter().map(|p| p.now(&skin)))
+            .chain(self.upright.points.iter().map(|p| p.now(&skin)))
             .map(|p| p.y)
             .fold(0.0f64, f64::min);
         if low < -1e-4 {
@@ -350,15 +401,19 @@ impl Drive {
 
     /// Where limb `k`'s end's mesh points are for skinning matrices
     /// `skin` (from [`Self::skinning`] of a posture, made once for all
-    /// four limbs).
+    /// four limbs): a hand near the floor by all it carries.
     fn end_now(&self, skin: &[DMat4], k: usize) -> Vec<DVec3> {
-        self.ends[k].iter().map(|p| p.now(skin)).collect()
+        let kept: Vec<DVec3> = self.ends[k].iter().map(|p| p.now(skin)).collect();
+        if !self.near[k].is_empty() && kept.iter().any(|p| p.y < NEAR_M) {
+            return self.near[k].iter().map(|p| p.now(skin)).collect();
+        }
+        kept
     }
 
     /// The joint turns that put each limb's end where the library has it
-    /// (raised by `lift`, the feet turned by `turn`, world turns about
-    /// the ankles), from the posture `w` turned as the
-    /// library's.
+    /// (raised by `lift`, the ends turned by `turn`, world turns about
+    /// the ankles and wrists; a one-bone arm's about its shoulder), from
+    /// the posture `w` turned as the library's.
     fn reach(
         &self,
         fig: &Figure,
@@ -390,6 +445,11 @@ impl Drive {
             // point as the library's, whatever their proportions) unless
             // its hand must be lifted off the floor.
             if k >= 2 && lift[k] <= 0.0 && !self.one_bone[k] {
+                // Only turned about its wrist, if at all.
+                if turn[k] != DQuat::IDENTITY {
+                    let (_, r, _) = w[fc].to_scale_rotation_translation();
+                    fixed[fc] = Some((turn[k] * r).normalize());
+                }
                 continue;
             }
             if self.one_bone[k] {
@@ -415,10 +475,9 @@ impl Drive {
                 let rot = |m: &DMat4| m.to_scale_rotation_translation().1;
                 fixed[fa] = Some((ta * rot(&w[fa])).normalize());
                 fixed[fb] = Some((tb * ta * rot(&w[fb])).normalize());
-                // The end keeps the turn the library gave it (a foot
-                // turned by `turn` off the floor).
-                let end = if k < 2 { turn[k] } else { DQuat::IDENTITY };
-                fixed[fc] = Some((end * rot(&w[fc])).normalize());
+                // The end keeps the turn the library gave it (a foot or
+                // hand turned by `turn` off the floor).
+                fixed[fc] = Some((turn[k] * rot(&w[fc])).normalize());
             }
         }
         fixed
@@ -530,9 +589,6 @@ impl Drive {
     }
 }
 
-/// The least turn about `shoulder` that brings every point of `points`
-/// (a one-bone arm's hand, posed) onto the floor: the arm swung up
-/// towards where it reaches along the floor, or out from the chest where
 /// Every fifth posture of the library's clips (world), and how high its
 /// ankles stand: the lower one's median over them (a rest pose may stand
 /// otherwise).
@@ -693,12 +749,12 @@ fn hip_wide(
     DVec3::new(d.x, 0.0, 0.0)
 }
 
-/// How far to turn a foot's `points` about its `ankle` and `axis` (up to
-/// [`FLATTEN_MAX`], in [`FLATTEN_STEPS`]) to raise the lowest, now at
-/// `low_y`: the least turn that brings every point onto the floor, else
-/// the one that leaves the lowest highest (raising the toes lowers the
-/// heel).
-fn flatter(points: &[DVec3], ankle: DVec3, axis: DVec3, low_y: f64) -> f64 {
+/// How far to turn a foot's or hand's `points` about its `ankle` and
+/// `axis` (up to `most`, in [`FLATTEN_STEPS`]) to raise the lowest, now
+/// at `low_y`: the least turn that brings every point onto the floor,
+/// else the one that leaves the lowest highest (raising the toes lowers
+/// the heel).
+fn flatter(points: &[DVec3], (ankle, axis): (DVec3, DVec3), low_y: f64, most: f64) -> f64 {
     let low_after = |angle: f64| {
         let q = DQuat::from_axis_angle(axis, angle);
         points
@@ -709,7 +765,7 @@ fn flatter(points: &[DVec3], ankle: DVec3, axis: DVec3, low_y: f64) -> f64 {
     };
     let mut best = (0.0, low_y);
     for step in 1..=FLATTEN_STEPS {
-        let angle = FLATTEN_MAX * f64::from(step) / f64::from(FLATTEN_STEPS);
+        let angle = most * f64::from(step) / f64::from(FLATTEN_STEPS);
         let y = low_after(angle);
         if y > best.1 + 1e-6 {
             best = (angle, y);
@@ -721,6 +777,9 @@ fn flatter(points: &[DVec3], ankle: DVec3, axis: DVec3, low_y: f64) -> f64 {
     best.0
 }
 
+/// The least turn about `shoulder` that brings every point of `points`
+/// (a one-bone arm's hand, posed) onto the floor: the arm swung up
+/// towards where it reaches along the floor, or out from the chest where
 /// it hangs straight down; at most to the horizontal.
 fn swing_clear(points: &[DVec3], shoulder: DVec3, hand: DVec3, chest: DVec3) -> DQuat {
     let arm = hand - shoulder;

@@ -49,6 +49,40 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<Point> {
     if fig.made_up.get(end).copied().unwrap_or(false) {
         return made_up_end_points(fig, end);
     }
+    spread(carried_by_end(fig, end), fig.rest[end].w_axis.truncate())
+}
+
+/// The most mesh points of a hand looked at near the floor (see
+/// [`near_points`]).
+const NEAR_MAX: usize = 8192;
+
+/// The mesh points a hand carries, as [`end_points`] picks them, looked
+/// at when it is near the floor: every one, or where there are more than
+/// [`NEAR_MAX`], [`end_points`]'s and as many more spread over them; none
+/// where [`end_points`] left none out. [`end_points`] keeps the furthest
+/// out in directions about 22 degrees apart: a broad shield's rim turned
+/// between two of them goes lower than any (7.7 mm, a knight's in a
+/// crouch).
+pub(super) fn near_points(fig: &Figure, end: usize) -> Vec<Point> {
+    if fig.made_up.get(end).copied().unwrap_or(false) {
+        return Vec::new();
+    }
+    let all = carried_by_end(fig, end);
+    if all.len() <= KEPT {
+        return Vec::new();
+    }
+    if all.len() <= NEAR_MAX {
+        return all;
+    }
+    let step = all.len().div_ceil(NEAR_MAX - KEPT);
+    let mut near: Vec<Point> = all.iter().step_by(step).copied().collect();
+    near.extend(spread(all, fig.rest[end].w_axis.truncate()));
+    near
+}
+
+/// The mesh points that a limb's `end`, the unmapped joints beside it or
+/// the unmapped joints below them carry most, each with that joint.
+fn carried_by_end(fig: &Figure, end: usize) -> Vec<Point> {
     let mapped: Vec<usize> = Role::ALL.iter().map(|r| fig.roles.get(*r)).collect();
     let mut ours = vec![false; fig.skeleton.len()];
     ours[end] = true;
@@ -68,21 +102,23 @@ pub(super) fn end_points(fig: &Figure, end: usize) -> Vec<Point> {
             }
         }
     }
-    let all: Vec<Point> = carried_blended(&fig.parts)
+    carried_blended(&fig.parts)
         .filter(|p| ours.get(p.joint).copied().unwrap_or(false))
-        .collect();
-    spread(all, fig.rest[end].w_axis.truncate())
+        .collect()
 }
+
+/// How many points [`spread`] keeps at most.
+const KEPT: usize = 418;
 
 /// At most 256 of `all` spread over them, the 64 furthest from `from`
 /// (the tip of a sword in a hand, a toe cap) and the furthest out in each
 /// of 98 directions (what goes lowest however the part turns), whatever
 /// the spread left out.
 fn spread(mut all: Vec<Point>, from: DVec3) -> Vec<Point> {
-    if all.len() <= 418 {
+    if all.len() <= KEPT {
         return all;
     }
-    let mut out: Vec<Point> = Vec::with_capacity(418);
+    let mut out: Vec<Point> = Vec::with_capacity(KEPT);
     for x in -2..=2i32 {
         for y in -2..=2i32 {
             for z in -2..=2i32 {

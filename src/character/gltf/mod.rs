@@ -15,6 +15,7 @@ mod places;
 mod read;
 mod rig;
 mod texture;
+mod upright;
 
 pub use drive::Drive;
 pub use geometry::Geometry;
