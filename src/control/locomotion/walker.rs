@@ -49,6 +49,13 @@ const STALLED_S: f64 = 2.0;
 /// step, the target's 0.3).
 const START_ROOM_S: f64 = 1.5;
 
+/// How far along the path ahead (m) a nearer segment is looked for (see
+/// `Walker::follow`).
+const LOOK_AHEAD_M: f64 = 0.6;
+
+/// How far apart (m) the points a finger's path keeps are, at least.
+const PATH_STEP_M: f64 = 0.03;
+
 /// The most points a path keeps (ahead of the character and behind).
 const MAX_PATH_POINTS: usize = 1024;
 
@@ -191,11 +198,16 @@ impl Walker {
             }
         }
         self.last_finger = Some((p, t));
-        let last = *self.path.last().expect("a path has its start");
-        if (p - last).length() > 0.03 {
+        // The last point follows the finger until it is 3 cm past the
+        // point before it; there it stays, and a new last point follows.
+        // (A finger slower than 3 cm a frame dragged one straight segment
+        // from where the walk began: a path that turned back was cut
+        // short where the character stood.)
+        let n = self.path.len();
+        if n >= 2 && (self.path[n - 1] - self.path[n - 2]).length() <= PATH_STEP_M {
+            self.path[n - 1] = p;
+        } else {
             self.path.push(p);
-        } else if self.path.len() > 1 {
-            *self.path.last_mut().expect("checked") = p;
         }
         if self.path.len() > MAX_PATH_POINTS {
             // A finger that keeps going far ahead of the walk: every other
@@ -343,6 +355,26 @@ impl Walker {
                 break;
             }
         }
+        // A path that turns back on itself: the turn's segments lie
+        // beside a character that turned round short of its apex, farther
+        // than the way back a little ahead. Stuck on the turn, the path
+        // ahead began behind it and the walk stood still (a turn-back
+        // dragged at 0.4 m/s stopped 1.1 m short). The nearest segment
+        // within `LOOK_AHEAD_M` of the path ahead is taken.
+        let (mut best, (_, mut best_d)) = (self.seg, self.nearest());
+        let (from, mut ahead) = (self.seg, 0.0);
+        for k in from + 1..self.path.len().saturating_sub(1) {
+            ahead += (self.path[k] - self.path[k - 1]).length();
+            if ahead > LOOK_AHEAD_M {
+                break;
+            }
+            self.seg = k;
+            let (_, d) = self.nearest();
+            if d < best_d - 1e-9 {
+                (best, best_d) = (k, d);
+            }
+        }
+        self.seg = best;
         if self.seg >= KEPT_BEHIND {
             self.dropped_m += path_length(&self.path[..=self.seg]);
             self.path.drain(..self.seg);
