@@ -296,22 +296,7 @@ impl Drive {
         } else {
             self.place(fig, lib, &free, raise)
         };
-        // A bow that would put the head under the floor: the trunk turned
-        // back up (the legs as they were, so `raise` holds).
-        let head_lowest = |w: &[DMat4]| {
-            let skin = self.skinning(w);
-            self.upright
-                .points
-                .iter()
-                .map(|p| p.now(&skin).y)
-                .fold(f64::INFINITY, f64::min)
-        };
-        let turned = if head_lowest(&w) < 0.0 {
-            self.upright
-                .turned(lib, |l| head_lowest(&self.place(fig, l, &free, raise)))
-        } else {
-            None
-        };
+        let turned = self.turned_up(fig, lib, &w, raise);
         let (lib, w) = match &turned {
             Some(t) => (t, self.place(fig, t, &free, raise)),
             None => (lib, w),
@@ -387,6 +372,33 @@ impl Drive {
             }
         }
         posed
+    }
+
+    /// A bow that would put the head under the floor (the figure placed
+    /// by `w`, standing `raise` off the library's): the library's posture
+    /// with the trunk turned back up, the legs as they were (so `raise`
+    /// holds).
+    fn turned_up(
+        &self,
+        fig: &Figure,
+        lib: &WorldPose,
+        w: &[DMat4],
+        raise: DVec3,
+    ) -> Option<WorldPose> {
+        let head_lowest = |w: &[DMat4]| {
+            let skin = self.skinning(w);
+            self.upright
+                .points
+                .iter()
+                .map(|p| p.now(&skin).y)
+                .fold(f64::INFINITY, f64::min)
+        };
+        if head_lowest(w) >= 0.0 {
+            return None;
+        }
+        let free = vec![None; fig.rest.len()];
+        self.upright
+            .turned(lib, |l| head_lowest(&self.place(fig, l, &free, raise)))
     }
 
     /// The height of foot `k`'s lowest mesh point (0 left, 1 right) in
