@@ -143,15 +143,18 @@ fn spread(mut all: Vec<Point>, from: DVec3) -> Vec<Point> {
     out
 }
 
-/// A foot's points and the points of the leg above it that stand as low
-/// as the ankle at rest (a shin's mesh that reaches past the ankle, a
-/// trouser cuff).
+/// A foot's points and the points of its shin below the knee at rest (a
+/// shin's mesh that reaches past the ankle, a trouser cuff, a robot's
+/// shin plate that a low kick or a lunge brings to the floor: 29.7 mm
+/// into it when only the shin below half the ankle's height was kept
+/// off).
 pub(super) fn foot_points(fig: &Figure, foot: usize, shin: usize) -> Vec<Point> {
     let mut points = end_points(fig, foot);
     let ankle = fig.rest[foot].w_axis.truncate();
+    let knee = fig.rest[shin].w_axis.y;
     if shin != foot && !fig.made_up.get(shin).copied().unwrap_or(false) {
         let low: Vec<Point> = carried_blended(&fig.parts)
-            .filter(|p| p.joint == shin && p.at.y < 0.5 * ankle.y)
+            .filter(|p| p.joint == shin && p.at.y < knee)
             .collect();
         points.extend(spread(low, ankle));
     }
