@@ -289,8 +289,13 @@ impl Walker {
 
     /// The nearest point of the current segment to the root.
     fn nearest(&self) -> (DVec3, f64) {
-        let a = self.path[self.seg];
-        let b = self.path[(self.seg + 1).min(self.path.len() - 1)];
+        self.nearest_on(self.seg)
+    }
+
+    /// The nearest point of segment `seg` to the root, and how far it is.
+    fn nearest_on(&self, seg: usize) -> (DVec3, f64) {
+        let a = self.path[seg];
+        let b = self.path[(seg + 1).min(self.path.len() - 1)];
         let ab = b - a;
         let s = if ab.length_squared() > 1e-12 {
             ((self.root - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
@@ -348,12 +353,11 @@ impl Walker {
     fn follow(&mut self) {
         while self.seg + 2 < self.path.len() {
             let (_, now) = self.nearest();
-            self.seg += 1;
-            let (_, next) = self.nearest();
+            let (_, next) = self.nearest_on(self.seg + 1);
             if next > now + 1e-9 {
-                self.seg -= 1;
                 break;
             }
+            self.seg += 1;
         }
         // A path that turns back on itself: the turn's segments lie
         // beside a character that turned round short of its apex, farther
@@ -362,14 +366,13 @@ impl Walker {
         // dragged at 0.4 m/s stopped 1.1 m short). The nearest segment
         // within `LOOK_AHEAD_M` of the path ahead is taken.
         let (mut best, (_, mut best_d)) = (self.seg, self.nearest());
-        let (from, mut ahead) = (self.seg, 0.0);
-        for k in from + 1..self.path.len().saturating_sub(1) {
+        let mut ahead = 0.0;
+        for k in self.seg + 1..self.path.len().saturating_sub(1) {
             ahead += (self.path[k] - self.path[k - 1]).length();
             if ahead > LOOK_AHEAD_M {
                 break;
             }
-            self.seg = k;
-            let (_, d) = self.nearest();
+            let (_, d) = self.nearest_on(k);
             if d < best_d - 1e-9 {
                 (best, best_d) = (k, d);
             }
