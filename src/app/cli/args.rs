@@ -297,8 +297,10 @@ pub(super) enum EvalCommand {
     },
     /// Walking where a finger leads: drag the pelvis along floor paths
     /// through the controller (touch frames from the home view) and print
-    /// one JSON object (paths, followed, arrival_cm, deviation_cm, skate_mm,
-    /// skate_max_mm, pops, start_s, rows; with --layer, layered)
+    /// one JSON object (paths, followed, arrival_cm, arrival_worst_cm,
+    /// deviation_cm, skate_mm, skate_max_mm, pops, start_s, start_worst_s,
+    /// speed_ratio, stood, families: a row per family, rows: one per path;
+    /// with --layer, layered)
     Walk {
         /// Library folder (with library.toml) [default: the configuration's
         /// character.library, else the shipped library]
@@ -306,15 +308,23 @@ pub(super) enum EvalCommand {
         library: Option<PathBuf>,
         /// JSON file of paths: {"paths": [{"points": [[x, z], ...],
         /// "speed_mps": v}]}, metres in the character's frame (x to its
-        /// right, z ahead) from its pelvis [default: random curves]
+        /// right, z ahead) from its pelvis, optionally "pauses": [[m, s],
+        /// ...] where the finger stops and "family" [default: random paths
+        /// of --family]
         #[arg(long)]
         paths: Option<PathBuf>,
-        /// Seed of the random curves
+        /// Seed of the random paths
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// How many random curves
-        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        /// How many random paths (of all families: taken in turn)
+        #[arg(long, default_value_t = 28, value_parser = clap::value_parser!(u32).range(1..=1000))]
         count: u32,
+        /// The family of random paths: curve (smooth, 0.6-1.4 m/s),
+        /// turn_back, loop, zig_zag (0.3-2 m/s), stop_and_go (stops of 1.5-3
+        /// s on the way), slow (0.3-0.6 m/s), fast (1.5-2 m/s), or all in
+        /// turn
+        #[arg(long, default_value = "all", value_parser = ["all", "curve", "turn_back", "loop", "zig_zag", "stop_and_go", "slow", "fast"])]
+        family: String,
         /// An action of the arms or head that a second finger drags over
         /// each walk (layered on the upper body); its figures are printed
         /// as `layered` (started, part_cm, part_max_cm, shown_cm)

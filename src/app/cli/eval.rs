@@ -238,17 +238,21 @@ pub(super) fn eval_character(mesh: &Path, library: &Path) -> Result<(), Failure>
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
+/// `eval walk`: the paths of `paths`, else `count` random ones of
+/// `family` ("all": every family in turn) drawn from `seed`.
 pub(super) fn eval_walk(
     library: &Path,
     paths: Option<&Path>,
-    seed: u64,
-    count: u32,
+    (seed, count, family): (u64, u32, &str),
     layer: Option<&str>,
 ) -> Result<(), Failure> {
     use crate::tools::eval::walk;
-    let paths = match paths {
-        Some(file) => walk::read_paths(file).map_err(|e| Failure::new(exit::DATAERR, e))?,
-        None => walk::random_paths(seed, count as usize),
+    let paths = match (paths, family) {
+        (Some(file), _) => walk::read_paths(file).map_err(|e| Failure::new(exit::DATAERR, e))?,
+        // The curves of earlier figures, drawn as they were.
+        (None, "curve") => walk::random_curves(seed, count as usize),
+        (None, "all") => walk::random_paths(seed, count as usize, &walk::FAMILIES),
+        (None, one) => walk::random_paths(seed, count as usize, &[one]),
     };
     let ch = crate::app::character::load(library)?;
     if ch.gait.is_empty() {

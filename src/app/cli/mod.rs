@@ -281,13 +281,13 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     paths,
                     seed,
                     count,
+                    family,
                     layer,
                 },
         } => eval::eval_walk(
             &chosen_library(config, library)?,
             paths.as_deref(),
-            seed,
-            count,
+            (seed, count, &family),
             layer.as_deref(),
         ),
         Command::Eval {

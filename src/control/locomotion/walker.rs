@@ -13,6 +13,10 @@ use crate::character::body::{facing_yaw, wrap};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
 
+/// A finger ahead of the walk is caught up with in this long (s): the
+/// walk goes at least as fast as that takes.
+const CATCH_UP_S: f64 = 1.0;
+
 /// How often a better frame is looked for (s).
 const SEARCH_S: f64 = 0.1;
 
@@ -114,6 +118,8 @@ pub struct Walker {
     speed: f64,
     search_in: f64,
     walked_s: f64,
+    /// How far the root has gone over the floor (m).
+    travelled_m: f64,
     done: bool,
 }
 
@@ -164,6 +170,7 @@ impl Walker {
             stalled_s: 0.0,
             dropped_m: 0.0,
             walked_s: 0.0,
+            travelled_m: 0.0,
             done: false,
         };
         let query = walker.query(&current);
@@ -390,8 +397,13 @@ impl Walker {
         self.walked_s += dt;
         self.follow();
         if self.leading {
+            // As fast as the finger goes, or as it takes to catch up with
+            // it in `CATCH_UP_S` (a finger that stopped ahead is walked
+            // to, not crept up on).
+            let catch_up = self.remaining() / CATCH_UP_S;
             self.speed = self
                 .finger_speed
+                .max(catch_up)
                 .clamp(gait.low_speed() * 0.8, gait.top_speed() * 1.1);
         }
         self.search(gait, dt);
@@ -401,9 +413,17 @@ impl Walker {
         let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
         let mut remaining = self.remaining();
         let finger_done = !self.leading || self.still_s > 0.3;
-        if finger_done && remaining < STRIDE_M && wrap(to.x.atan2(to.z)).abs() > 1.0 {
-            // The end is close beside or behind: turning round it would
-            // circle it. The walk ends here.
+        if finger_done
+            && remaining < STRIDE_M
+            && self.travelled_m >= STRIDE_M
+            && wrap(to.x.atan2(to.z)).abs() > 1.0
+        {
+            // The end is close beside or behind a walk that went past it:
+            // turning round it would circle it. The walk ends here. (A
+            // walk that has not gone a stride turns to a finger that
+            // stopped behind it: ended here it stood where it began, and
+            // the finger out of posing's reach started it again and
+            // again.)
             let end = self.root;
             self.path.truncate(self.seg + 1);
             self.path.push(end);
@@ -415,6 +435,7 @@ impl Walker {
             0.0
         };
         self.root += DQuat::from_rotation_y(self.yaw) * step;
+        self.travelled_m += step.length();
         self.yaw = wrap(self.yaw + turn + steer);
         // Time moves on.
         self.pos = advance(gait, self.pos, dt);

@@ -6,6 +6,7 @@
 //! - [`separation`]: how far apart the actions are, next to the drags' spread.
 //! - [`character`]: a skinned figure playing a library's clips.
 //! - [`walk`]: the pelvis dragged along floor paths, walked.
+//! - [`walk_paths`]: those paths, read from a file or drawn by family.
 //! - [`layer`]: a second finger's action laid over those walks.
 
 pub mod actions;
@@ -15,3 +16,4 @@ pub mod live;
 pub mod posing;
 pub mod separation;
 pub mod walk;
+pub mod walk_paths;

@@ -4,16 +4,20 @@
 //! path's point at the pelvis's standing height, as the picture shows it
 //! then), and the walk is judged: did it reach the path's end, how far
 //! from it did it settle, how far did it stray from the path, did planted
-//! feet slide, did joints pop, how soon did it step.
+//! feet slide, did joints pop, how soon did it step, how fast did it go
+//! for the finger's speed, did it stand where the finger stopped; a row
+//! for each family of paths (see [`super::walk_paths`]).
 
-use std::path::Path;
 use std::sync::Arc;
 
 use glam::DVec3;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
+use super::walk_paths::world_points;
+pub use super::walk_paths::{
+    FAMILIES, WalkPath, check_paths, random_curves, random_paths, read_paths,
+};
 use crate::character::roles::Role;
-use crate::control::action::trials::Lcg;
 use crate::control::character::Character;
 use crate::control::controller::{Controller, Mode, Settings};
 use crate::control::locomotion::walker::{path_length, point_along};
@@ -28,32 +32,31 @@ const HZ: f64 = 30.0;
 /// A path's end reached within this distance (m) counts as followed.
 pub const FOLLOWED_M: f64 = 0.3;
 
-/// The most paths a file may hold, and points a path.
-const MAX_PATHS: usize = 1000;
-const MAX_POINTS: usize = 10_000;
-/// The longest path (m): a table shows a few metres of floor.
-const MAX_PATH_M: f64 = 100.0;
-/// The most walking all paths may take together (s, each at its speed).
-const MAX_WALKING_S: f64 = 600.0;
+/// A walk's speed along the path is measured from this long after its
+/// first step (s, under way)...
+const SPEED_FROM_S: f64 = 0.5;
+/// ...until it is this far from the path's end (m, a stride: where it
+/// slows to stand)...
+const SPEED_UNTIL_M: f64 = 0.6;
+/// ...over at least this long (s).
+const SPEED_OVER_S: f64 = 0.5;
+/// How far back and ahead along the path (m) the pelvis's place on it is
+/// looked for, from where it was (a path that crosses itself is followed
+/// in order).
+const ALONG_BACK_M: f64 = 0.1;
+const ALONG_AHEAD_M: f64 = 0.8;
 
-/// A path to walk: floor points in metres in the character's frame (x to
-/// its right, z ahead), from its pelvis, and the finger's speed along it.
-#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct WalkPath {
-    pub points: Vec<[f64; 2]>,
-    pub speed_mps: f64,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PathsFile {
-    paths: Vec<WalkPath>,
-}
+/// A character stands where the finger stopped when, before the finger
+/// moves on, neither foot has moved more than this (m) over
+/// [`STOOD_OVER_S`] with its pelvis within [`FOLLOWED_M`] of the finger
+/// (the finger still holds the pelvis: posing leans it there).
+const STOOD_M: f64 = 0.01;
+const STOOD_OVER_S: f64 = 0.2;
 
 /// One path's figures.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct WalkRow {
+    pub family: String,
     pub length_m: f64,
     pub speed_mps: f64,
     pub followed: bool,
@@ -69,161 +72,94 @@ pub struct WalkRow {
     /// From the finger leaving posing's reach to the first step (s); -1
     /// if the character never stepped.
     pub start_s: f64,
+    /// The character's speed over the floor over the finger's, from
+    /// along the path (how fast its place on the path moves on), from
+    /// [`SPEED_FROM_S`] after its first step until [`SPEED_UNTIL_M`] from
+    /// the end; none where that is shorter than [`SPEED_OVER_S`] or the
+    /// finger stopped on the way.
+    pub speed_ratio: Option<f64>,
+    /// Whether the library has a gait as fast as the finger (its fastest
+    /// locomotion clip's steady speed is the finger's or more): only then
+    /// is `speed_ratio` a fair figure of the walk.
+    pub in_gait: bool,
+    /// Of the finger's stops, the share at whose end the character stood
+    /// by the finger; none where it did not stop.
+    pub stood: Option<f64>,
     /// The action a second finger laid over the walk, if one was asked.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub layered: Option<LayerRow>,
 }
 
-/// What `eval walk` prints.
+/// The figures of a set of walks (all, or a family's).
 #[derive(Clone, Debug, Default, Serialize)]
-pub struct WalkReport {
+pub struct FamilyRow {
+    pub family: String,
     pub paths: usize,
     pub followed: f64,
     pub arrival_cm: f64,
+    pub arrival_worst_cm: f64,
+    pub deviation_cm: f64,
+    pub skate_mm: f64,
+    pub skate_max_mm: f64,
+    pub pops: usize,
+    /// Mean over the walks that stepped.
+    pub start_s: f64,
+    /// The slowest walk's first step.
+    pub start_worst_s: f64,
+    /// Mean over the walks measured whose finger the library has a gait
+    /// for (`in_gait`), and their range.
+    pub speed_ratio: Option<f64>,
+    pub speed_ratio_range: Option<[f64; 2]>,
+    /// Over every stop of the finger.
+    pub stood: Option<f64>,
+}
+
+/// What `eval walk` prints: every walk's figures together, a row per
+/// family of paths, and each walk's row.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct WalkReport {
+    /// The library's slowest and fastest locomotion clips' steady speeds
+    /// (m/s).
+    pub gait_mps: [f64; 2],
+    pub paths: usize,
+    pub followed: f64,
+    pub arrival_cm: f64,
+    pub arrival_worst_cm: f64,
     pub deviation_cm: f64,
     pub skate_mm: f64,
     pub skate_max_mm: f64,
     pub pops: usize,
     pub start_s: f64,
+    pub start_worst_s: f64,
+    pub speed_ratio: Option<f64>,
+    pub speed_ratio_range: Option<[f64; 2]>,
+    pub stood: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub layered: Option<LayerReport>,
+    pub families: Vec<FamilyRow>,
     pub rows: Vec<WalkRow>,
 }
 
-/// Read a paths file: `{"paths": [{"points": [[x, z], ...], "speed_mps": v}]}`.
-/// The error names the file and, for a bad number, the path and point.
-pub fn read_paths(file: &Path) -> Result<Vec<WalkPath>, String> {
-    let text = crate::reading::read_text(file, 64 << 20).map_err(|e| match e {
-        crate::reading::ReadError::TooLarge { said, .. } => format!(
-            "{}: {said} bytes; a paths file holds at most 64 MB",
-            file.display()
-        ),
-        e => format!("cannot read {}: {e}", file.display()),
-    })?;
-    let parsed: PathsFile = serde_json::from_str(&text).map_err(|e| {
-        format!(
-            "{}: not a paths file ({}); expected {{\"paths\": [{{\"points\": [[x, z], ...], \"speed_mps\": v}}]}}",
-            file.display(),
-            crate::reading::parser_message(&e.to_string())
-        )
-    })?;
-    check_paths(&parsed.paths).map_err(|why| format!("{}: {why}", file.display()))?;
-    Ok(parsed.paths)
-}
-
-/// Every path usable: some paths, each of 2 or more finite points that go
-/// somewhere, at a speed a finger can drag.
-pub fn check_paths(paths: &[WalkPath]) -> Result<(), String> {
-    if paths.is_empty() {
-        return Err("no paths: give at least one".into());
+/// How far along the polyline `pts` (m) its nearest point to `p` is,
+/// looked for from [`ALONG_BACK_M`] behind `was` to [`ALONG_AHEAD_M`]
+/// ahead of it.
+fn along_path(pts: &[DVec3], p: DVec3, was: f64) -> f64 {
+    let mut start = 0.0;
+    let mut best = (f64::INFINITY, was);
+    for w in pts.windows(2) {
+        let ab = w[1] - w[0];
+        let l = ab.length();
+        let (lo, hi) = (was - ALONG_BACK_M - start, was + ALONG_AHEAD_M - start);
+        if l > 1e-12 && hi >= 0.0 && lo <= l {
+            let s = ((p - w[0]).dot(ab) / (l * l) * l).clamp(lo.max(0.0), hi.min(l));
+            let d = (p - (w[0] + ab * (s / l))).length();
+            if d < best.0 {
+                best = (d, start + s);
+            }
+        }
+        start += l;
     }
-    if paths.len() > MAX_PATHS {
-        return Err(format!("{} paths; at most {MAX_PATHS}", paths.len()));
-    }
-    let mut walking_s = 0.0;
-    for (i, p) in paths.iter().enumerate() {
-        let n = i + 1;
-        if !(p.speed_mps.is_finite() && p.speed_mps > 0.05 && p.speed_mps <= 5.0) {
-            return Err(format!(
-                "path {n}: speed_mps = {} must be above 0.05 and at most 5",
-                p.speed_mps
-            ));
-        }
-        if p.points.len() < 2 || p.points.len() > MAX_POINTS {
-            return Err(format!(
-                "path {n}: {} points; a path has 2 to {MAX_POINTS}",
-                p.points.len()
-            ));
-        }
-        if let Some((k, q)) = p
-            .points
-            .iter()
-            .enumerate()
-            .find(|(_, q)| !q.iter().all(|v| v.is_finite() && v.abs() <= 100.0))
-        {
-            return Err(format!(
-                "path {n}, point {}: {q:?} is not a floor point in metres (finite, within 100 m)",
-                k + 1
-            ));
-        }
-        let length = path_length(&world_points(p));
-        if length < 0.05 {
-            return Err(format!("path {n}: its points do not go anywhere"));
-        }
-        if length > MAX_PATH_M {
-            return Err(format!(
-                "path {n}: {length:.0} m long; a path on the table is at most {MAX_PATH_M} m"
-            ));
-        }
-        walking_s += length / p.speed_mps;
-    }
-    if walking_s > MAX_WALKING_S {
-        return Err(format!(
-            "the paths take {walking_s:.0} s to walk; at most {MAX_WALKING_S} s in all"
-        ));
-    }
-    Ok(())
-}
-
-/// Random smooth curves over the floor in view of the home camera, setting
-/// off across it, with finger speeds from a slow drag to a quick one; the
-/// same for a seed.
-#[must_use]
-pub fn random_paths(seed: u64, n: usize) -> Vec<WalkPath> {
-    let across = home_across();
-    let mut rng = Lcg(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d);
-    let mut out = Vec::with_capacity(n);
-    while out.len() < n {
-        // Setting off across the view (to the screen's right or left,
-        // within 35 degrees): a drag up or down the screen from the home
-        // view moves the pelvis up or down rather than walking.
-        let side = if rng.unit() < 0.5 {
-            0.0
-        } else {
-            std::f64::consts::PI
-        };
-        let mut heading = across + side + rng.range(-0.6, 0.6);
-        let total = rng.range(1.2, 3.0);
-        let bend = rng.range(-0.5, 0.5);
-        let mut p = [0.0f64, 0.0];
-        let mut points = vec![p];
-        let mut s = 0.0;
-        while s < total {
-            heading += bend * 0.25 + rng.range(-0.15, 0.15);
-            p = [p[0] + 0.25 * heading.sin(), p[1] + 0.25 * heading.cos()];
-            points.push(p);
-            s += 0.25;
-        }
-        // In view: across the floor, not behind the camera.
-        if points
-            .iter()
-            .all(|q| q[0].abs() <= 2.0 && (-2.5..=1.5).contains(&q[1]))
-        {
-            let speed_mps = rng.range(0.6, 1.4);
-            out.push(WalkPath { points, speed_mps });
-        }
-    }
-    out
-}
-
-/// Which way the home view's screen right goes over the floor, as a
-/// heading in the character's frame (radians from ahead, towards its
-/// right), the character standing at the origin facing +Z.
-fn home_across() -> f64 {
-    let cam = crate::control::rig::Rig::new(1280.0, 720.0).camera();
-    let ahead = (cam.target - cam.eye).with_y(0.0);
-    let right = ahead.cross(glam::DVec3::Y);
-    // World (dx, dz) is (-x, z) in the character's frame.
-    (-right.x).atan2(right.z)
-}
-
-/// The path's points on the floor, the character at the origin facing +Z
-/// (its right is -X).
-fn world_points(p: &WalkPath) -> Vec<DVec3> {
-    p.points
-        .iter()
-        .map(|q| DVec3::new(-(q[0] - p.points[0][0]), 0.0, q[1] - p.points[0][1]))
-        .collect()
+    best.1
 }
 
 /// Distance from `p` to the polyline `pts` (m).
@@ -246,28 +182,89 @@ fn off_path(pts: &[DVec3], p: DVec3) -> f64 {
 #[must_use]
 pub fn eval_walk(ch: &Arc<Character>, paths: &[WalkPath], layer: Option<usize>) -> WalkReport {
     let rows: Vec<WalkRow> = paths.iter().map(|p| walk_one(ch, p, layer)).collect();
+    let all = summary("all", &rows.iter().collect::<Vec<_>>());
+    let mut families: Vec<&str> = Vec::new();
+    for r in &rows {
+        if !families.contains(&r.family.as_str()) {
+            families.push(&r.family);
+        }
+    }
+    let families = families
+        .into_iter()
+        .map(|f| {
+            summary(
+                f,
+                &rows.iter().filter(|r| r.family == f).collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    let r3 = |v: f64| (v * 1000.0).round() / 1000.0;
+    WalkReport {
+        gait_mps: if ch.gait.is_empty() {
+            [0.0; 2]
+        } else {
+            [r3(ch.gait.low_speed()), r3(ch.gait.top_speed())]
+        },
+        paths: all.paths,
+        followed: all.followed,
+        arrival_cm: all.arrival_cm,
+        arrival_worst_cm: all.arrival_worst_cm,
+        deviation_cm: all.deviation_cm,
+        skate_mm: all.skate_mm,
+        skate_max_mm: all.skate_max_mm,
+        pops: all.pops,
+        start_s: all.start_s,
+        start_worst_s: all.start_worst_s,
+        speed_ratio: all.speed_ratio,
+        speed_ratio_range: all.speed_ratio_range,
+        stood: all.stood,
+        layered: layer.map(|a| {
+            let played: Vec<&LayerRow> = rows.iter().filter_map(|r| r.layered.as_ref()).collect();
+            summarise(&ch.actions[a].def.name, &played)
+        }),
+        families,
+        rows,
+    }
+}
+
+/// The figures of `rows` together, named `family`.
+fn summary(family: &str, rows: &[&WalkRow]) -> FamilyRow {
     let n = rows.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&WalkRow) -> f64| rows.iter().map(f).sum::<f64>() / n;
+    let mean = |f: &dyn Fn(&WalkRow) -> f64| rows.iter().map(|r| f(r)).sum::<f64>() / n;
+    let most = |f: &dyn Fn(&WalkRow) -> f64| rows.iter().map(|r| f(r)).fold(0.0, f64::max);
     let starts: Vec<f64> = rows
         .iter()
         .map(|r| r.start_s)
         .filter(|s| *s >= 0.0)
         .collect();
+    let ratios: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.in_gait)
+        .filter_map(|r| r.speed_ratio)
+        .collect();
+    let stops: Vec<f64> = rows.iter().filter_map(|r| r.stood).collect();
     let r3 = |v: f64| (v * 1000.0).round() / 1000.0;
-    WalkReport {
+    let mean_of = |v: &[f64]| (!v.is_empty()).then(|| r3(v.iter().sum::<f64>() / v.len() as f64));
+    FamilyRow {
+        family: family.into(),
         paths: rows.len(),
         followed: r3(rows.iter().filter(|r| r.followed).count() as f64 / n),
         arrival_cm: r3(mean(&|r| r.arrival_cm)),
+        arrival_worst_cm: r3(most(&|r| r.arrival_cm)),
         deviation_cm: r3(mean(&|r| r.deviation_cm)),
         skate_mm: r3(mean(&|r| r.skate_mm)),
-        skate_max_mm: r3(rows.iter().map(|r| r.skate_max_mm).fold(0.0, f64::max)),
+        skate_max_mm: r3(most(&|r| r.skate_max_mm)),
         pops: rows.iter().map(|r| r.pops).sum(),
-        start_s: r3(starts.iter().sum::<f64>() / starts.len().max(1) as f64),
-        layered: layer.map(|a| {
-            let played: Vec<&LayerRow> = rows.iter().filter_map(|r| r.layered.as_ref()).collect();
-            summarise(&ch.actions[a].def.name, &played)
+        start_s: mean_of(&starts).unwrap_or(0.0),
+        start_worst_s: r3(starts.iter().copied().fold(0.0, f64::max)),
+        speed_ratio: mean_of(&ratios),
+        speed_ratio_range: (!ratios.is_empty()).then(|| {
+            [
+                r3(ratios.iter().copied().fold(f64::INFINITY, f64::min)),
+                r3(ratios.iter().copied().fold(0.0, f64::max)),
+            ]
         }),
-        rows,
+        stood: mean_of(&stops),
     }
 }
 
@@ -320,9 +317,10 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
     let start = f64::from(k) * dt;
     let mut lifted = false;
     let mut after_lift = 0.0;
+    let mut was_still: Option<DVec3> = None;
     loop {
         let t = f64::from(k + 1) * dt;
-        let s = (t - start) * path.speed_mps;
+        let (s, still) = path.finger_at(t - start);
         let mut contacts = Vec::new();
         if let Some((phase, at)) = second
             .as_mut()
@@ -340,6 +338,14 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
             {
                 watch.left_reach = Some(t);
             }
+            // A stop: does the character stand by the finger before it
+            // moves on?
+            match (was_still, still) {
+                (Some(q), true) => watch.stopped(table.ctl(), q),
+                (Some(_), false) => watch.stop_ended(),
+                _ => {}
+            }
+            was_still = still.then_some(p);
             lifted = s >= total;
         }
         let frames = if contacts.is_empty() {
@@ -364,7 +370,10 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
     let end = *pts.last().expect("a path has points");
     let arrival = (table.ctl().world().positions[pelvis_j].with_y(0.0) - end).length();
     let layered = second.map(SecondFinger::finish);
-    watch.row(path.speed_mps, total, arrival, layered)
+    let mut row = watch.row(path, total, arrival, layered);
+    row.family.clone_from(&path.family);
+    row.in_gait = !ch.gait.is_empty() && path.speed_mps <= ch.gait.top_speed();
+    row
 }
 
 /// What a walk's frames show: the motion's meter, the pelvis's way off
@@ -378,6 +387,18 @@ struct Watch<'a> {
     dev: (f64, usize),
     left_reach: Option<f64>,
     first_step: Option<f64>,
+    /// The pelvis's last places over the floor and the feet's (a frame
+    /// each, the newest last), enough for [`STOOD_OVER_S`].
+    recent: std::collections::VecDeque<[DVec3; 3]>,
+    /// How far along the path the pelvis is (m, see [`along_path`]), and
+    /// where and when the walk's speed began and ended being measured.
+    along: f64,
+    speed_from: Option<(f64, f64)>,
+    speed_until: Option<(f64, f64)>,
+    /// The finger's stops, at how many the character stood by it, and
+    /// whether it stands by it in the stop now.
+    stops: (usize, usize, bool),
+    dt: f64,
 }
 
 impl<'a> Watch<'a> {
@@ -391,7 +412,46 @@ impl<'a> Watch<'a> {
             dev: (0.0, 0),
             left_reach: None,
             first_step: None,
+            recent: std::collections::VecDeque::new(),
+            along: 0.0,
+            speed_from: None,
+            speed_until: None,
+            stops: (0, 0, false),
+            dt,
         }
+    }
+
+    /// The finger stands still at floor point `at`: whether the character
+    /// stands by it.
+    fn stopped(&mut self, ctl: &Controller, at: DVec3) {
+        let now = self.places(ctl);
+        let over = (STOOD_OVER_S / self.dt).round() as usize;
+        let moved = self
+            .recent
+            .iter()
+            .rev()
+            .nth(over)
+            .map_or(f64::INFINITY, |p| {
+                (now[1] - p[1]).length().max((now[2] - p[2]).length())
+            });
+        self.stops.2 |= moved <= STOOD_M && (now[0] - at).length() <= FOLLOWED_M;
+    }
+
+    /// The finger moves on after a stop.
+    fn stop_ended(&mut self) {
+        self.stops.0 += 1;
+        self.stops.1 += usize::from(self.stops.2);
+        self.stops.2 = false;
+    }
+
+    /// The pelvis's place over the floor, and the feet's.
+    fn places(&self, ctl: &Controller) -> [DVec3; 3] {
+        let w = ctl.world();
+        [
+            w.positions[self.pelvis].with_y(0.0),
+            w.positions[self.feet[0]],
+            w.positions[self.feet[1]],
+        ]
     }
 
     /// One frame at time `t` along path `pts`, the pelvis held until
@@ -400,6 +460,20 @@ impl<'a> Watch<'a> {
         let held = if lifted { vec![] } else { vec![Role::Pelvis] };
         self.meter.push(ctl.pose(), &held);
         let w = ctl.world();
+        let here = self.places(ctl);
+        self.along = along_path(pts, here[0], self.along);
+        if let Some(first) = self.first_step {
+            if self.speed_from.is_none() && t >= first + SPEED_FROM_S {
+                self.speed_from = Some((t, self.along));
+            }
+            if self.speed_until.is_none() && self.along >= path_length(pts) - SPEED_UNTIL_M {
+                self.speed_until = Some((t, self.along));
+            }
+        }
+        self.recent.push_back(here);
+        if self.recent.len() > 64 {
+            self.recent.pop_front();
+        }
         if self.first_step.is_none()
             && self.feet.iter().zip(&self.feet_rest).any(|(f, r)| {
                 let p = w.positions[*f];
@@ -414,18 +488,26 @@ impl<'a> Watch<'a> {
         }
     }
 
-    /// The row of a walk at `speed_mps` along a path `length_m` long, the
-    /// pelvis ending `arrival` from its end, with the layered action's row.
+    /// The row of a walk along `path` (`length_m` long), the pelvis
+    /// ending `arrival` from its end, with the layered action's row.
     fn row(
         self,
-        speed_mps: f64,
+        path: &WalkPath,
         length_m: f64,
         arrival: f64,
         layered: Option<LayerRow>,
     ) -> WalkRow {
         let (dev_sum, dev_n) = self.dev;
         let m = self.meter.finish();
+        let speed_mps = path.speed_mps;
+        let speed = match (self.speed_from, self.speed_until) {
+            (Some((t0, a0)), Some((t1, a1))) if t1 - t0 >= SPEED_OVER_S => {
+                Some((a1 - a0) / (t1 - t0))
+            }
+            _ => None,
+        };
         WalkRow {
+            family: String::new(),
             length_m: (length_m * 1000.0).round() / 1000.0,
             speed_mps,
             followed: arrival <= FOLLOWED_M,
@@ -444,6 +526,11 @@ impl<'a> Watch<'a> {
                 (Some(a), Some(b)) => (b - a).max(0.0),
                 _ => -1.0,
             },
+            speed_ratio: speed
+                .filter(|_| path.pauses.is_empty())
+                .map(|v| (v / speed_mps * 1000.0).round() / 1000.0),
+            in_gait: false,
+            stood: (self.stops.0 > 0).then(|| self.stops.1 as f64 / self.stops.0 as f64),
             layered,
         }
     }
