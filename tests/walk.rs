@@ -32,16 +32,17 @@ fn the_default_library_walks_along_random_curves() {
     // The figures of docs/measurements.md (`marionette eval walk`, seed 1, 20 paths).
     assert_eq!(r.paths, 20);
     assert!(r.followed >= 0.95, "{r:?}");
-    // 1.0 followed, 10.9 cm from the end, 5.67 cm off the path, planted
-    // feet 1.05 mm per frame (worst step 8.70 mm: the target's 15 mm), no
-    // pop, stepping 0.235 s after the finger left reach (the target's
-    // 0.3 s).
-    assert!(r.arrival_cm <= 11.3, "{r:?}");
-    assert!(r.deviation_cm <= 6.4, "{r:?}");
+    // 1.0 followed, 11.7 cm from the end, 5.32 cm off the path, planted
+    // feet 1.07 mm per frame (worst step 8.70 mm: the target's 15 mm), no
+    // pop, stepping 0.185 s after the finger left reach (0.267 at the
+    // slowest: the target's 0.3 s).
+    assert!(r.arrival_cm <= 12.2, "{r:?}");
+    assert!(r.deviation_cm <= 5.8, "{r:?}");
     assert_eq!(r.pops, 0, "{r:?}");
-    assert!(r.skate_mm <= 1.1, "{r:?}");
+    assert!(r.skate_mm <= 1.12, "{r:?}");
     assert!(r.skate_max_mm <= 9.2, "{r:?}");
-    assert!(r.start_s > 0.15 && r.start_s <= 0.26, "{r:?}");
+    assert!(r.start_s > 0.15 && r.start_s <= 0.2, "{r:?}");
+    assert!(r.start_worst_s <= 0.3, "{r:?}");
 }
 
 #[test]
@@ -55,13 +56,13 @@ fn every_family_of_random_paths_is_walked_by_the_default_library() {
     assert_eq!(r.pops, 0, "{r:?}");
     let row = |f: &str| r.families.iter().find(|x| x.family == f).unwrap();
     for (family, arrival, worst, start) in [
-        ("curve", 10.3, 14.2, 0.33),
-        ("turn_back", 13.4, 17.1, 0.33),
-        ("loop", 8.3, 11.9, 0.37),
-        ("zig_zag", 5.0, 8.0, 0.37),
-        ("stop_and_go", 8.8, 16.4, 0.33),
-        ("slow", 8.7, 13.2, 0.33),
-        ("fast", 9.4, 12.0, 0.33),
+        ("curve", 11.2, 14.2, 0.23),
+        ("turn_back", 14.0, 17.1, 0.27),
+        ("loop", 8.5, 12.6, 0.27),
+        ("zig_zag", 9.6, 21.8, 0.27),
+        ("stop_and_go", 7.8, 12.7, 0.27),
+        ("slow", 10.4, 14.7, 0.23),
+        ("fast", 10.4, 12.0, 0.27),
     ] {
         let f = row(family);
         eprintln!("{f:?}");
@@ -73,9 +74,9 @@ fn every_family_of_random_paths_is_walked_by_the_default_library() {
         assert!(f.skate_max_mm <= 9.3 && f.skate_mm <= 1.3, "{f:?}");
     }
     // Speed along the path for the finger's, where the library has a
-    // gait that fast: from 0.89 (turn-backs) to 1.27 (slow zig-zags).
+    // gait that fast: from 0.89 (turn-backs) to 1.21 (slow zig-zags).
     let [lo, hi] = r.speed_ratio_range.unwrap();
-    assert!(lo >= 0.86 && hi <= 1.3, "{r:?}");
+    assert!(lo >= 0.86 && hi <= 1.24, "{r:?}");
     assert!(row("fast").speed_ratio.is_none(), "no gait that fast");
     assert!(
         r.rows
@@ -97,15 +98,15 @@ fn the_default_library_follows_turn_backs_loops_and_zig_zags() {
     let ch = common::character();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/walk-families");
     for (file, arrival) in [
-        ("turn_back_slow", 8.3),
-        ("turn_back_mid", 6.7),
-        ("turn_back_fast", 3.4),
-        ("loop_slow", 12.7),
-        ("loop_mid", 14.3),
-        ("loop_fast", 14.5),
-        ("zigzag_slow", 3.6),
-        ("zigzag_mid", 11.0),
-        ("zigzag_fast", 12.5),
+        ("turn_back_slow", 6.8),
+        ("turn_back_mid", 6.9),
+        ("turn_back_fast", 4.5),
+        ("loop_slow", 8.4),
+        ("loop_mid", 13.2),
+        ("loop_fast", 15.2),
+        ("zigzag_slow", 3.9),
+        ("zigzag_mid", 9.4),
+        ("zigzag_fast", 15.0),
     ] {
         let paths =
             marionette::tools::eval::walk::read_paths(&dir.join(format!("{file}.json"))).unwrap();
@@ -246,9 +247,9 @@ fn a_wave_dragged_while_walking_plays_on_the_upper_body_and_the_legs_keep_walkin
         r.skate_mm, r.skate_max_mm, r.pops, alone.skate_mm, alone.skate_max_mm
     );
     // The figures of docs/measurements.md (`marionette eval walk --layer wave_left`): the
-    // wave played over every walk; the hand 1.40 cm on average, 2.98 at
+    // wave played over every walk; the hand 1.41 cm on average, 2.98 at
     // most, from where the wave alone puts it in the character's frame
-    // (3.38 cm as shown, tracked); the legs' contacts kept: 0.82 mm a
+    // (3.39 cm as shown, tracked); the legs' contacts kept: 0.84 mm a
     // frame, no pop, the worst step the walk's own.
     assert_eq!(l.started, 1.0, "{l:?}");
     assert!(l.part_max_cm <= 3.3, "{l:?}");

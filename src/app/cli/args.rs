@@ -325,6 +325,10 @@ pub(super) enum EvalCommand {
         /// turn
         #[arg(long, default_value = "all", value_parser = ["all", "curve", "turn_back", "loop", "zig_zag", "stop_and_go", "slow", "fast"])]
         family: String,
+        /// Write the paths walked to this file, as --paths reads them (to
+        /// walk one again alone)
+        #[arg(long, value_name = "FILE.json")]
+        save_paths: Option<PathBuf>,
         /// An action of the arms or head that a second finger drags over
         /// each walk (layered on the upper body); its figures are printed
         /// as `layered` (started, part_cm, part_max_cm, shown_cm)

@@ -239,10 +239,11 @@ pub(super) fn eval_character(mesh: &Path, library: &Path) -> Result<(), Failure>
 }
 
 /// `eval walk`: the paths of `paths`, else `count` random ones of
-/// `family` ("all": every family in turn) drawn from `seed`.
+/// `family` ("all": every family in turn) drawn from `seed`; written to
+/// `save` as a paths file, if given.
 pub(super) fn eval_walk(
     library: &Path,
-    paths: Option<&Path>,
+    (paths, save): (Option<&Path>, Option<&Path>),
     (seed, count, family): (u64, u32, &str),
     layer: Option<&str>,
 ) -> Result<(), Failure> {
@@ -254,6 +255,11 @@ pub(super) fn eval_walk(
         (None, "all") => walk::random_paths(seed, count as usize, &walk::FAMILIES),
         (None, one) => walk::random_paths(seed, count as usize, &[one]),
     };
+    if let Some(out) = save {
+        let text = serde_json::to_string_pretty(&serde_json::json!({ "paths": paths }))
+            .map_err(|e| Failure::new(exit::FAILURE, e))?;
+        super::write_atomically(out, &text)?;
+    }
     let ch = crate::app::character::load(library)?;
     if ch.gait.is_empty() {
         tracing::warn!(library = %library.display(), "the library has no locomotion clips: the character will not walk");

@@ -282,11 +282,12 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     seed,
                     count,
                     family,
+                    save_paths,
                     layer,
                 },
         } => eval::eval_walk(
             &chosen_library(config, library)?,
-            paths.as_deref(),
+            (paths.as_deref(), save_paths.as_deref()),
             (seed, count, &family),
             layer.as_deref(),
         ),

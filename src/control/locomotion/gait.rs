@@ -43,6 +43,9 @@ pub struct GaitFrame {
     /// Whether each foot (left, right) stands on the floor here: low and
     /// nearly still.
     pub contacts: [bool; 2],
+    /// How soon a foot leaves the floor from here in its clip (s; 0 where
+    /// one is off it, infinite where none leaves it again).
+    pub lift_in_s: f64,
     /// What a walk is matched on (see the module).
     pub features: [f64; FEATURES],
 }
@@ -136,8 +139,18 @@ impl Gait {
                     step: step.with_y(0.0),
                     turn: wrap(yaw[next] - yaw[k]),
                     contacts,
+                    lift_in_s: f64::INFINITY,
                     features,
                 });
+            }
+            let mut lift_in = f64::INFINITY;
+            for f in gait.frames[first..].iter_mut().rev() {
+                lift_in = if f.contacts.iter().all(|c| *c) {
+                    lift_in + dt
+                } else {
+                    0.0
+                };
+                f.lift_in_s = lift_in;
             }
             speeds.sort_by(f64::total_cmp);
             let speed = speeds[speeds.len() / 2];
@@ -179,20 +192,23 @@ impl Gait {
     /// over.
     #[must_use]
     pub fn best(&self, query: &[f64; FEATURES], weights: &[f64; FEATURES]) -> Option<(usize, f64)> {
-        self.best_left(query, weights, 0.0)
+        self.best_left(query, weights, 0.0, f64::INFINITY)
     }
 
     /// [`Self::best`] among the frames with at least `room_s` seconds of
     /// their clip after them (a walk that starts does not start in a
-    /// clip's stop); with none such, among them all.
+    /// clip's stop) from which a foot leaves the floor within `lift_s`
+    /// (nor in the stand a clip begins with); with none such, among those
+    /// with room; with none, among them all.
     #[must_use]
     pub fn best_with_room(
         &self,
         query: &[f64; FEATURES],
         weights: &[f64; FEATURES],
-        room_s: f64,
+        (room_s, lift_s): (f64, f64),
     ) -> Option<(usize, f64)> {
-        self.best_left(query, weights, room_s)
+        self.best_left(query, weights, room_s, lift_s)
+            .or_else(|| self.best_left(query, weights, room_s, f64::INFINITY))
             .or_else(|| self.best(query, weights))
     }
 
@@ -201,12 +217,13 @@ impl Gait {
         query: &[f64; FEATURES],
         weights: &[f64; FEATURES],
         room_s: f64,
+        lift_s: f64,
     ) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         for (i, f) in self.frames.iter().enumerate() {
             let c = &self.clips[f.clip];
             let left = (c.first + c.len).saturating_sub(i + 1);
-            if left == 0 || (left as f64) * c.frame_time < room_s {
+            if left == 0 || (left as f64) * c.frame_time < room_s || f.lift_in_s > lift_s {
                 continue;
             }
             let cost = cost(&f.features, query, weights);

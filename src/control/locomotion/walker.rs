@@ -53,6 +53,13 @@ const STALLED_S: f64 = 2.0;
 /// step, the target's 0.3).
 const START_ROOM_S: f64 = 1.5;
 
+/// A walk starts from a frame from which a foot leaves the floor within
+/// this long (s): started in the stand a clip begins with, its first step
+/// came after the clip's own weight shift (0.37 s after the finger left
+/// posing's reach, the target's 0.3; within 0.1 s, a slow loop's walk
+/// ended 32 cm from its end).
+const START_LIFT_S: f64 = 0.15;
+
 /// How far along the path ahead (m) a nearer segment is looked for (see
 /// `Walker::follow`).
 const LOOK_AHEAD_M: f64 = 0.6;
@@ -175,7 +182,7 @@ impl Walker {
         };
         let query = walker.query(&current);
         walker.pos = gait
-            .best_with_room(&query, &WEIGHTS, START_ROOM_S)
+            .best_with_room(&query, &WEIGHTS, (START_ROOM_S, START_LIFT_S))
             .map_or(0.0, |(i, _)| i as f64);
         if let Some(f) = gait.frames.get(walker.pos as usize) {
             let c = &gait.clips[f.clip];
@@ -424,6 +431,11 @@ impl Walker {
             // stopped behind it: ended here it stood where it began, and
             // the finger out of posing's reach started it again and
             // again.)
+            tracing::debug!(
+                remaining_m = remaining,
+                bearing_deg = wrap(to.x.atan2(to.z)).to_degrees(),
+                "the path's end is beside or behind, within a stride: the walk ends here"
+            );
             let end = self.root;
             self.path.truncate(self.seg + 1);
             self.path.push(end);
@@ -442,6 +454,11 @@ impl Walker {
         self.blend_on(gait, dt);
         let speed_now = step.length() / dt.max(1e-6);
         if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
+            tracing::debug!(
+                remaining_m = remaining,
+                from_end_m = (*self.path.last().unwrap_or(&self.root) - self.root).length(),
+                "the walk arrives"
+            );
             self.done = true;
         }
         self.give_up(remaining, dt);
