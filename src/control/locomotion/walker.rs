@@ -64,6 +64,10 @@ const START_LIFT_S: f64 = 0.15;
 /// `Walker::follow`).
 const LOOK_AHEAD_M: f64 = 0.6;
 
+/// How much farther than it is steered (m) a walk looks along the path
+/// for the segment it is nearest (see `Walker::follow`).
+const STEER_SLACK_M: f64 = 0.3;
+
 /// How far apart (m) the points a finger's path keeps are, at least.
 const PATH_STEP_M: f64 = 0.03;
 
@@ -379,11 +383,18 @@ impl Walker {
         // ahead began behind it and the walk stood still (a turn-back
         // dragged at 0.4 m/s stopped 1.1 m short). The nearest segment
         // within `LOOK_AHEAD_M` of the path ahead is taken.
+        //
+        // A sharp corner (a zig-zag's) is cut by a walk steered at a point
+        // well past it: the character comes onto the next leg as far along
+        // as it was steered, so the look goes at least that far (a slow
+        // zig-zag's walk stood on the far leg, its path ahead beginning
+        // behind it, and gave up 2.7 m short).
+        let reach = LOOK_AHEAD_M.max(self.steer_ahead() + STEER_SLACK_M);
         let (mut best, (_, mut best_d)) = (self.seg, self.nearest());
         let mut ahead = 0.0;
         for k in self.seg + 1..self.path.len().saturating_sub(1) {
             ahead += (self.path[k] - self.path[k - 1]).length();
-            if ahead > LOOK_AHEAD_M {
+            if ahead > reach {
                 break;
             }
             let (_, d) = self.nearest_on(k);
@@ -397,6 +408,12 @@ impl Walker {
             self.path.drain(..self.seg);
             self.seg = 0;
         }
+    }
+
+    /// How far along the path ahead the walk is steered at (m): half a
+    /// second at its speed and 30 cm.
+    fn steer_ahead(&self) -> f64 {
+        self.speed.mul_add(0.5, 0.3)
     }
 
     /// Advance `dt` seconds: the posture to show.
@@ -416,7 +433,7 @@ impl Walker {
         self.search(gait, dt);
         // Root motion, from the frames playing (blended).
         let (step, turn) = self.motion(gait, dt);
-        let steer_to = self.along(self.speed.mul_add(0.5, 0.3));
+        let steer_to = self.along(self.steer_ahead());
         let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
         let mut remaining = self.remaining();
         let finger_done = !self.leading || self.still_s > 0.3;

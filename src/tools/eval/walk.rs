@@ -114,26 +114,16 @@ pub struct FamilyRow {
     pub stood: Option<f64>,
 }
 
-/// What `eval walk` prints: every walk's figures together, a row per
-/// family of paths, and each walk's row.
+/// What `eval walk` prints: every walk's figures together (`all`, its
+/// fields at the top of the JSON, family "all"), a row per family of
+/// paths, and each walk's row.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct WalkReport {
     /// The library's slowest and fastest locomotion clips' steady speeds
     /// (m/s).
     pub gait_mps: [f64; 2],
-    pub paths: usize,
-    pub followed: f64,
-    pub arrival_cm: f64,
-    pub arrival_worst_cm: f64,
-    pub deviation_cm: f64,
-    pub skate_mm: f64,
-    pub skate_max_mm: f64,
-    pub pops: usize,
-    pub start_s: f64,
-    pub start_worst_s: f64,
-    pub speed_ratio: Option<f64>,
-    pub speed_ratio_range: Option<[f64; 2]>,
-    pub stood: Option<f64>,
+    #[serde(flatten)]
+    pub all: FamilyRow,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub layered: Option<LayerReport>,
     pub families: Vec<FamilyRow>,
@@ -205,19 +195,7 @@ pub fn eval_walk(ch: &Arc<Character>, paths: &[WalkPath], layer: Option<usize>) 
         } else {
             [r3(ch.gait.low_speed()), r3(ch.gait.top_speed())]
         },
-        paths: all.paths,
-        followed: all.followed,
-        arrival_cm: all.arrival_cm,
-        arrival_worst_cm: all.arrival_worst_cm,
-        deviation_cm: all.deviation_cm,
-        skate_mm: all.skate_mm,
-        skate_max_mm: all.skate_max_mm,
-        pops: all.pops,
-        start_s: all.start_s,
-        start_worst_s: all.start_worst_s,
-        speed_ratio: all.speed_ratio,
-        speed_ratio_range: all.speed_ratio_range,
-        stood: all.stood,
+        all,
         layered: layer.map(|a| {
             let played: Vec<&LayerRow> = rows.iter().filter_map(|r| r.layered.as_ref()).collect();
             summarise(&ch.actions[a].def.name, &played)
