@@ -420,11 +420,12 @@ impl Walker {
     pub fn step(&mut self, gait: &Gait, sk: &Skeleton, dt: f64) -> Pose {
         self.walked_s += dt;
         self.follow();
+        let mut remaining = self.remaining();
         if self.leading {
             // As fast as the finger goes, or as it takes to catch up with
             // it in `CATCH_UP_S` (a finger that stopped ahead is walked
             // to, not crept up on).
-            let catch_up = self.remaining() / CATCH_UP_S;
+            let catch_up = remaining / CATCH_UP_S;
             self.speed = self
                 .finger_speed
                 .max(catch_up)
@@ -435,7 +436,6 @@ impl Walker {
         let (step, turn) = self.motion(gait, dt);
         let steer_to = self.along(self.steer_ahead());
         let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
-        let mut remaining = self.remaining();
         let finger_done = !self.leading || self.still_s > 0.3;
         if finger_done
             && remaining < STRIDE_M

@@ -72,9 +72,8 @@ pub struct WalkRow {
     /// From the finger leaving posing's reach to the first step (s); -1
     /// if the character never stepped.
     pub start_s: f64,
-    /// The character's speed over the floor over the finger's, from
-    /// along the path (how fast its place on the path moves on), from
-    /// [`SPEED_FROM_S`] after its first step until [`SPEED_UNTIL_M`] from
+    /// The character's speed along the path (how fast its place on the
+    /// path moves on) over the finger's, from [`SPEED_FROM_S`] after its first step until [`SPEED_UNTIL_M`] from
     /// the end; none where that is shorter than [`SPEED_OVER_S`] or the
     /// finger stopped on the way.
     pub speed_ratio: Option<f64>,
@@ -82,8 +81,8 @@ pub struct WalkRow {
     /// locomotion clip's steady speed is the finger's or more): only then
     /// is `speed_ratio` a fair figure of the walk.
     pub in_gait: bool,
-    /// Of the finger's stops, the share at whose end the character stood
-    /// by the finger; none where it did not stop.
+    /// Of the finger's stops, the share in which the character came to
+    /// stand by the finger before it went on; none where it did not stop.
     pub stood: Option<f64>,
     /// The action a second finger laid over the walk, if one was asked.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -141,7 +140,7 @@ fn along_path(pts: &[DVec3], p: DVec3, was: f64) -> f64 {
         let l = ab.length();
         let (lo, hi) = (was - ALONG_BACK_M - start, was + ALONG_AHEAD_M - start);
         if l > 1e-12 && hi >= 0.0 && lo <= l {
-            let s = ((p - w[0]).dot(ab) / (l * l) * l).clamp(lo.max(0.0), hi.min(l));
+            let s = ((p - w[0]).dot(ab) / l).clamp(lo.max(0.0), hi.min(l));
             let d = (p - (w[0] + ab * (s / l))).length();
             if d < best.0 {
                 best = (d, start + s);
@@ -283,8 +282,8 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         .into_iter()
         .map(|p| p + pelvis.with_y(0.0))
         .collect();
-    let mut watch = Watch::new(ch, table.ctl(), dt);
     let total = path_length(&pts);
+    let mut watch = Watch::new(ch, table.ctl(), dt, total);
     let screen = |table: &Stage, p: DVec3| {
         let at = table.rig().camera().project(p.with_y(pelvis.y));
         at.unwrap_or_default()
@@ -377,10 +376,13 @@ struct Watch<'a> {
     /// whether it stands by it in the stop now.
     stops: (usize, usize, bool),
     dt: f64,
+    /// The path's length (m).
+    length_m: f64,
 }
 
 impl<'a> Watch<'a> {
-    fn new(ch: &'a Character, ctl: &Controller, dt: f64) -> Self {
+    /// Watching `ch` walk a path `length_m` long, stepped every `dt`.
+    fn new(ch: &'a Character, ctl: &Controller, dt: f64, length_m: f64) -> Self {
         let feet = [Role::LeftFoot, Role::RightFoot].map(|r| ch.roles.get(r));
         Self {
             meter: Meter::new(&ch.lib.skeleton, &ch.roles, dt),
@@ -394,6 +396,7 @@ impl<'a> Watch<'a> {
             along: 0.0,
             speed_from: None,
             speed_until: None,
+            length_m,
             stops: (0, 0, false),
             dt,
         }
@@ -444,7 +447,7 @@ impl<'a> Watch<'a> {
             if self.speed_from.is_none() && t >= first + SPEED_FROM_S {
                 self.speed_from = Some((t, self.along));
             }
-            if self.speed_until.is_none() && self.along >= path_length(pts) - SPEED_UNTIL_M {
+            if self.speed_until.is_none() && self.along >= self.length_m - SPEED_UNTIL_M {
                 self.speed_until = Some((t, self.along));
             }
         }
