@@ -87,6 +87,11 @@ pub struct KioskConfig {
     /// Where to write the vital signs every minute in Prometheus text
     /// format (node_exporter's textfile collector); empty: nowhere.
     pub metrics_textfile: PathBuf,
+    /// The record of what visitors do (SQLite); empty: none.
+    pub visits: PathBuf,
+    /// Days of visits kept, and the most the record may take (MB).
+    pub visits_keep_days: f64,
+    pub visits_max_mb: f64,
 }
 
 impl Default for KioskConfig {
@@ -96,6 +101,9 @@ impl Default for KioskConfig {
             attract: PathBuf::new(),
             error_screen_s: 60.0,
             metrics_textfile: PathBuf::new(),
+            visits: PathBuf::from("/var/lib/marionette/visits.db"),
+            visits_keep_days: 365.0,
+            visits_max_mb: 256.0,
         }
     }
 }
@@ -186,16 +194,40 @@ impl Config {
                 0.0,
                 3_600.0,
             ),
+            (
+                "kiosk.visits_keep_days",
+                self.kiosk.visits_keep_days,
+                1.0,
+                36_500.0,
+            ),
+            (
+                "kiosk.visits_max_mb",
+                self.kiosk.visits_max_mb,
+                1.0,
+                1_000_000.0,
+            ),
         ])?;
-        let textfile = &self.kiosk.metrics_textfile;
-        if !textfile.as_os_str().is_empty() && !textfile.is_absolute() {
-            return Err(invalid(
+        for (key, path, e_g) in [
+            (
                 "kiosk.metrics_textfile",
-                format!(
-                    "must be an absolute path (node_exporter's textfile directory, e.g. \"/var/lib/prometheus/node-exporter/marionette.prom\") or empty, found {}",
-                    quote(&textfile.display().to_string())
-                ),
-            ));
+                &self.kiosk.metrics_textfile,
+                "node_exporter's textfile directory, e.g. \"/var/lib/prometheus/node-exporter/marionette.prom\"",
+            ),
+            (
+                "kiosk.visits",
+                &self.kiosk.visits,
+                "e.g. \"/var/lib/marionette/visits.db\"",
+            ),
+        ] {
+            if !path.as_os_str().is_empty() && !path.is_absolute() {
+                return Err(invalid(
+                    key,
+                    format!(
+                        "must be an absolute path ({e_g}) or empty, found {}",
+                        quote(&path.display().to_string())
+                    ),
+                ));
+            }
         }
         let t = &self.tracking;
         in_ranges(&[

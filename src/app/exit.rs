@@ -180,3 +180,20 @@ impl ExitStatus for LoadError {
         }
     }
 }
+
+impl ExitStatus for crate::app::visits::store::VisitsError {
+    /// 66 no such file; 65 a file that is not marionette's record, or of a
+    /// newer schema; 74 SQLite failing to read it.
+    fn exit_code(&self) -> u8 {
+        match self {
+            Self::Missing(_) => NOINPUT,
+            Self::NotOurs { .. } | Self::Newer { .. } => DATAERR,
+            Self::Sqlite { source, .. } => match source.sqlite_error_code() {
+                Some(rusqlite::ErrorCode::NotADatabase | rusqlite::ErrorCode::DatabaseCorrupt) => {
+                    DATAERR
+                }
+                _ => IOERR,
+            },
+        }
+    }
+}

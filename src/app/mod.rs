@@ -31,3 +31,5 @@ pub mod headless;
 pub(crate) mod kiosk;
 pub(crate) mod logging;
 pub(crate) mod message;
+pub mod report;
+pub mod visits;

@@ -83,6 +83,24 @@ pub(super) enum Command {
         /// .vrm) to show instead of the configuration's.
         #[arg(long, value_name = "FILE", requires = "headless")]
         mesh: Option<PathBuf>,
+        /// Run the whole pipeline without rendering and record what the
+        /// recording's visitors do into this visits database (as the
+        /// kiosk does), for `marionette report`.
+        #[arg(long, value_name = "PATH", conflicts_with_all = ["headless", "metrics", "contacts"])]
+        visits: Option<PathBuf>,
+    },
+    /// What visitors did at the table, from the visits record: report.html
+    /// (charts, no script) and report.json
+    Report {
+        /// The visits database [default: the configuration's kiosk.visits]
+        #[arg(long, value_name = "PATH")]
+        db: Option<PathBuf>,
+        /// How far back: 7d, 24h, 90m or all
+        #[arg(long, default_value = "7d")]
+        since: crate::app::report::Since,
+        /// Where report.html and report.json go
+        #[arg(long, default_value = "report")]
+        out: PathBuf,
     },
     /// Write the motion the character performs for a recording as BVH
     /// (the library's skeleton, at its frame rate).

@@ -176,12 +176,56 @@ fn command_outputs(command: &Command) -> impl Iterator<Item = &Path> {
         Command::Replay {
             metrics: Some(out), ..
         }
+        | Command::Replay {
+            visits: Some(out), ..
+        }
         | Command::ExportBvh { out, .. }
         | Command::ConvertBvh { out, .. }
         | Command::Record { out, .. } => Some(out),
         _ => None,
     };
     out.into_iter()
+}
+
+/// `marionette report`: report.json and report.html from the visits
+/// record, and a line saying what they hold.
+fn report(
+    config: &Config,
+    db: Option<std::path::PathBuf>,
+    since: crate::app::report::Since,
+    out: &Path,
+) -> Result<(), Failure> {
+    let db = db.unwrap_or_else(|| config.kiosk.visits.clone());
+    if db.as_os_str().is_empty() {
+        return Err(Failure::new(
+            exit::USAGE,
+            "no visits database: give --db PATH (kiosk.visits is empty)",
+        ));
+    }
+    let now_ms = (crate::app::visits::unix_now() * 1e3) as i64;
+    let r = crate::app::report::gather(&db, since, now_ms)?;
+    let (json, page) = crate::app::report::write(&r, out).map_err(|e| {
+        Failure::new(
+            exit::CANTCREAT,
+            format!("cannot write the report into {}: {e}", out.display()),
+        )
+    })?;
+    writeln!(
+        std::io::stdout(),
+        "{} sessions, {} grabs, {} actions started ({} finished), {} near misses; written to {} and {}",
+        r.sessions,
+        r.grabs,
+        r.actions_started,
+        r.actions_finished,
+        r.near_misses,
+        page.display(),
+        json.display()
+    )
+    .map_err(stdout_error)?;
+    for a in &r.advice {
+        writeln!(std::io::stdout(), "  {a}").map_err(stdout_error)?;
+    }
+    Ok(())
 }
 
 fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Failure> {
@@ -237,6 +281,12 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
             no_tracking,
             ..
         } => replay_metrics(config, &file, &out, no_tracking),
+        Command::Replay {
+            file,
+            visits: Some(db),
+            ..
+        } => self::replay::replay_visits(config, &file, &db),
+        Command::Report { db, since, out } => report(config, db, since, &out),
         Command::Replay { file, contacts, .. } => replay(config, &file, contacts),
         Command::ExportBvh { file, out, .. } => export_bvh(config, &file, &out),
         Command::Record {

@@ -292,6 +292,48 @@ pub(super) fn replay_poses(
     Ok((ch, summary, tick_hz))
 }
 
+/// `replay FILE --visits DB`: the whole pipeline without rendering, what
+/// its visitors do recorded into `db`; the summary printed.
+pub(super) fn replay_visits(config: &Config, file: &Path, db: &Path) -> Result<(), Failure> {
+    use crate::app::headless;
+    let rec = Recording::read_file(file)?;
+    // A file there that is not a visits record is refused, never set
+    // aside as the kiosk would.
+    drop(crate::app::visits::store::open(db)?);
+    let ch = character(config)?;
+    let frames = pipeline::replay(&rec, &config.input, config.display.picture())
+        .map_err(|e| Failure::new(exit::DATAERR, e))?;
+    let opts = headless::Options {
+        until: Some(pipeline::summarize(&rec).0.replay_s),
+        visits: Some(db.to_owned()),
+        ..headless::Options::default()
+    };
+    let summary = headless::run(ch, config, frames, &opts).map_err(|e| naming_file(config, e))?;
+    let (c, written) = summary.visits.unwrap_or_default();
+    if written.committed < written.sent || written.dropped > 0 {
+        return Err(Failure::new(
+            exit::CANTCREAT,
+            format!(
+                "{}: {} of {} rows of visits could not be written (the log above says why)",
+                db.display(),
+                written.sent + written.dropped - written.committed,
+                written.sent + written.dropped
+            ),
+        ));
+    }
+    writeln!(
+        std::io::stdout(),
+        "{summary}\nvisits recorded into {}: {} sessions, {} touches ({} grabs), {} actions, {} near misses",
+        db.display(),
+        c.sessions,
+        c.touches,
+        c.grabs,
+        c.actions,
+        c.near_misses
+    )
+    .map_err(stdout_error)
+}
+
 pub(super) fn replay_metrics(
     config: &Config,
     file: &Path,

@@ -11,12 +11,13 @@ use thiserror::Error;
 
 mod summary;
 
-pub use self::summary::{ActionRecord, CharacterSummary, HitRecord, Summary};
+pub use self::summary::{ActionRecord, CharacterSummary, HitRecord, NearMissRecord, Summary};
 use super::config::Config;
 use super::frame::{Backend, Flow, Steps};
 use crate::control::action::timeline::ActionEvent;
 use crate::control::character::Character;
 use crate::control::stage::{Actor, Stage};
+use crate::control::stage::{Took, TouchEvent};
 use crate::control::ticker::Ticker;
 use crate::input::touch::ScreenFrame;
 use crate::render::contact;
@@ -60,6 +61,9 @@ pub struct Options {
     pub measure: bool,
     /// Tracking control on (off: the output is the synthesised posture).
     pub tracking: bool,
+    /// Record what the recording's visitors do into this database
+    /// (`replay --visits`).
+    pub visits: Option<PathBuf>,
 }
 
 impl Default for Options {
@@ -75,6 +79,7 @@ impl Default for Options {
             keep_poses: false,
             measure: false,
             tracking: true,
+            visits: None,
         }
     }
 }
@@ -220,6 +225,7 @@ struct Replay<'a> {
     /// Each character's actions, hits and held parts (a table of several).
     per: Vec<CharacterSummary>,
     held_by: Vec<BTreeSet<String>>,
+    recording: Option<crate::app::visits::Recording>,
 }
 
 impl Replay<'_> {
@@ -293,6 +299,16 @@ impl Replay<'_> {
             }
         };
         match e {
+            ActionEvent::NearMiss {
+                action,
+                time_s,
+                held_by,
+                ..
+            } => self.summary.near_misses.push(NearMissRecord {
+                action,
+                time_s,
+                held_by: held_by.to_owned(),
+            }),
             ActionEvent::Started { action, time_s, .. } => records.push(ActionRecord {
                 action,
                 started_s: time_s,
@@ -338,8 +354,10 @@ impl Replay<'_> {
             meter,
             mut per,
             held_by,
+            recording,
             ..
         } = self;
+        summary.visits = recording.map(crate::app::visits::Recording::finish);
         for ((c, held), a) in per.iter_mut().zip(held_by).zip(ctl.actors()) {
             c.parts_held = held.into_iter().collect();
             c.hits_landed = a.hits_landed;
@@ -435,7 +453,24 @@ impl Backend for Replay<'_> {
         for h in ctl.take_hits() {
             self.hit(&h);
         }
-        for (k, e) in ctl.take_events() {
+        let touches = ctl.take_touches();
+        self.summary.grabs += touches
+            .iter()
+            .filter(|e| {
+                matches!(
+                    e,
+                    TouchEvent::Down {
+                        took: Took::Part { .. },
+                        ..
+                    }
+                )
+            })
+            .count();
+        let events = ctl.take_events();
+        if let Some(r) = &mut self.recording {
+            r.frame(&touches, &events, t, true);
+        }
+        for (k, e) in events {
             self.event(k, e);
         }
         self.render(ctl, t)?;
@@ -618,6 +653,13 @@ pub fn run_table(
             Vec::new()
         },
         held_by: vec![BTreeSet::new(); n],
+        recording: opts.visits.as_ref().map(|path| {
+            crate::app::visits::Recording::into_file(
+                path.clone(),
+                config,
+                crate::app::visits::unix_now(),
+            )
+        }),
         meter: opts.measure.then(|| {
             crate::tools::metrics::Meter::new(
                 &measured.lib.skeleton,

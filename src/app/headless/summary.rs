@@ -15,6 +15,15 @@ pub struct ActionRecord {
     pub ended_s: Option<f64>,
 }
 
+/// A drag that started nothing: the action it came nearest to starting,
+/// when, and the threshold that held it back (`cost` or `margin`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NearMissRecord {
+    pub action: String,
+    pub time_s: f64,
+    pub held_by: String,
+}
+
 /// What a run did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Summary {
@@ -23,6 +32,16 @@ pub struct Summary {
     pub steps: usize,
     pub frames_written: usize,
     pub actions: Vec<ActionRecord>,
+    /// Drags that started nothing, with the action each came nearest to.
+    pub near_misses: Vec<NearMissRecord>,
+    /// Fingers that went down on a body part.
+    pub grabs: usize,
+    /// What `--visits` recorded, and the rows written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visits: Option<(
+        crate::app::visits::record::Counts,
+        crate::app::visits::writer::Written,
+    )>,
     /// Body parts fingers held.
     pub parts_held: Vec<String>,
     /// Most parts held at once.
@@ -93,6 +112,12 @@ impl std::fmt::Display for Summary {
             },
             self.most_held_at_once,
             if self.camera_moved { "yes" } else { "no" }
+        )?;
+        writeln!(
+            f,
+            "posing: {} grabs; drags that started nothing: {}",
+            self.grabs,
+            self.near_misses.len()
         )?;
         writeln!(f, "actions started by drags: {}", self.actions.len())?;
         for a in &self.actions {

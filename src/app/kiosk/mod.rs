@@ -181,6 +181,7 @@ pub fn run_with_clock(
         .map_or(0, |t| vitals::starts_before(&t))
         + 1;
     let service = ServiceView::new(config.display.service_view);
+    let visits = crate::app::visits::Recording::configured(&config, crate::app::visits::unix_now());
     let mut kiosk = Kiosk {
         start: frames,
         screen,
@@ -203,6 +204,7 @@ pub fn run_with_clock(
         no_panel_since: None,
         no_panel_said: false,
         no_panel_shown: false,
+        visits,
     };
     frame::run(&mut ctl, &mut frames, &mut kiosk)?;
     Ok(kiosk.stopped(frames.now()))
@@ -217,8 +219,19 @@ impl Kiosk<'_> {
             screen,
             mut stats,
             vitals,
+            visits,
             ..
         } = self;
+        if let Some(v) = visits {
+            let (c, _) = v.finish();
+            tracing::info!(
+                sessions = c.sessions,
+                grabs = c.grabs,
+                actions = c.actions,
+                near_misses = c.near_misses,
+                "visits recorded this run"
+            );
+        }
         (stats.touch_to_flip_ms_mean, stats.touch_to_flip_n) = vitals.run_latency();
         input.stop();
         stats.seconds = seconds;
@@ -276,6 +289,8 @@ struct Kiosk<'a> {
     no_panel_since: Option<f64>,
     no_panel_said: bool,
     no_panel_shown: bool,
+    /// The record of what visitors do, if one is configured.
+    visits: Option<crate::app::visits::Recording>,
 }
 
 /// After this long without a touchscreen the display says so (s).
@@ -348,12 +363,19 @@ impl Backend for Kiosk<'_> {
     }
 
     fn frame(&mut self, ctl: &mut Stage, t: f64) -> Result<Flow, RunError> {
-        for (_, e) in ctl.take_events() {
+        let events = ctl.take_events();
+        for (_, e) in &events {
             if let crate::control::action::timeline::ActionEvent::Started { action, .. } = e {
                 tracing::info!(%action, "action started");
                 self.vitals.action_started();
             }
         }
+        let touches = ctl.take_touches();
+        if let Some(v) = &mut self.visits {
+            v.frame(&touches, &events, t, self.attract.is_none());
+            self.vitals.totals.today = Some(v.writer().today());
+        }
+        self.service.today = self.vitals.totals.today;
         self.service.tick(t);
         self.vital_signs(t);
         self.recover_display(t);

@@ -31,6 +31,8 @@ pub struct ServiceView {
     trails: BTreeMap<u64, VecDeque<(f64, ScreenPoint)>>,
     /// The touchscreens read, by instance: path and name.
     pub panels: BTreeMap<u32, String>,
+    /// Today's visitor sessions and actions (the visits record), if kept.
+    pub today: Option<(u64, u64)>,
 }
 
 impl ServiceView {
@@ -96,6 +98,12 @@ impl ServiceView {
         } else {
             lines.extend(self.panels.values().map(|p| format!("touchscreen: {p}")));
         }
+        lines.push(match self.today {
+            Some((sessions, actions)) => {
+                format!("today: {sessions} visitor sessions, {actions} actions started")
+            }
+            None => "today: no visits record (kiosk.visits)".to_owned(),
+        });
         lines.push(format!(
             "{:.1} fps   frame {:.1} / {:.1} ms   touch to flip {:.0} / {:.0} ms   (p50 / p99)",
             vitals.fps,

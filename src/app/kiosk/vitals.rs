@@ -40,6 +40,9 @@ pub struct Totals {
     /// Times the kiosk started (this one included), carried over in the
     /// textfile: a restart by systemd shows as a step.
     pub starts: u64,
+    /// Sessions and actions today (local time) as the visits record
+    /// counts them (restarts included); `None` without a record.
+    pub today: Option<(u64, u64)>,
 }
 
 /// The figures being gathered.
@@ -223,6 +226,20 @@ pub fn prometheus(s: &Summary, totals: &Totals, panels: usize) -> String {
         "Times the kiosk started (restarts included).",
         &[("", totals.starts as f64)],
     );
+    if let Some((sessions, actions)) = totals.today {
+        metric(
+            "marionette_sessions_today",
+            "gauge",
+            "Visitor sessions since local midnight (the visits record).",
+            &[("", sessions as f64)],
+        );
+        metric(
+            "marionette_actions_today",
+            "gauge",
+            "Actions started since local midnight (the visits record).",
+            &[("", actions as f64)],
+        );
+    }
     metric(
         "marionette_touchscreens",
         "gauge",
@@ -317,8 +334,13 @@ mod tests {
             actions_started: 7,
             hits: 2,
             starts: 3,
+            today: Some((12, 30)),
         };
         let text = prometheus(&s, &totals, 1);
+        assert!(text.contains("marionette_sessions_today 12\n"), "{text}");
+        assert!(text.contains("marionette_actions_today 30\n"), "{text}");
+        let without = prometheus(&s, &Totals { today: None, ..totals }, 1);
+        assert!(!without.contains("today"), "{without}");
         for want in [
             "marionette_fps 59.94\n",
             "marionette_frame_seconds{quantile=\"0.99\"} 0.0095\n",

@@ -23,6 +23,27 @@ pub enum ActionEvent {
         /// `walking`): no action template started it.
         #[serde(skip_serializing_if = "std::ops::Not::not")]
         by_reach: bool,
+        /// How the template recogniser decided it (none for the paper's
+        /// rule, a walk by reach, or an action started otherwise).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        decided: Option<Decided>,
+    },
+    /// A drag lifted having started nothing: the action it came nearest
+    /// to starting, and what held it back.
+    NearMiss {
+        action: String,
+        time_s: f64,
+        /// The leading template's cost and the limit it had to be under
+        /// (m).
+        cost_m: f64,
+        cost_limit_m: f64,
+        /// Its lead over the next action, and the lead needed (m).
+        margin_m: f64,
+        margin_needed_m: f64,
+        /// Share of the template's path the drag covered.
+        coverage: f64,
+        /// The threshold that held it back: `cost` or `margin`.
+        held_by: &'static str,
     },
     /// Time stopped moving with a finger resting (where allowed).
     Stopped {
@@ -38,6 +59,18 @@ pub enum ActionEvent {
         action: String,
         time_s: f64,
     },
+}
+
+/// How the template recogniser decided to start an action.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Decided {
+    /// The best template's cost (m).
+    pub cost_m: f64,
+    /// How much more the next action cost (m; infinite: no other action
+    /// matched).
+    pub margin_m: f64,
+    /// Share of the template's path the drag covered.
+    pub coverage: f64,
 }
 
 /// How the action stands after a step.
@@ -88,6 +121,7 @@ impl ActionTimeline {
             action: def.name.clone(),
             time_s,
             by_reach: false,
+            decided: None,
         });
         Self {
             def,

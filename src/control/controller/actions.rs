@@ -7,6 +7,7 @@ use crate::character::roles::Role;
 use crate::control::action::model::{ActionModel, recognize};
 use crate::control::action::player::ActionPlayer;
 use crate::control::action::recogniser::{Decision, DragMatch, Thresholds};
+use crate::control::action::timeline::{ActionEvent, Decided};
 use crate::control::action::trail::{TrailPoint, view_angle_deg};
 use crate::control::marks::{Marks, TrajectoryMark};
 use crate::screen::ScreenPoint;
@@ -24,22 +25,66 @@ impl Matching {
         self.fed = trail.len();
     }
 
-    /// The drag lifted having started nothing: what it came nearest to,
-    /// and which threshold held it back, for a closer look.
-    fn started_nothing(&self, actions: &[ActionModel], thresholds: &Thresholds) {
+    /// The drag lifted at `t` having started nothing: what it came nearest
+    /// to, and which threshold held it back, for a closer look (the debug
+    /// log) and for the record of what visitors do (`events`).
+    fn started_nothing(
+        &self,
+        actions: &[ActionModel],
+        thresholds: &Thresholds,
+        t: f64,
+        events: &mut Vec<ActionEvent>,
+    ) {
         let Some(c) = self.drag.closest() else {
             return;
         };
+        let cost_limit_m = actions[c.action]
+            .def
+            .threshold_m
+            .unwrap_or(thresholds.cost_m);
         tracing::debug!(
             nearest = %actions[c.action].def.name,
             clip = %c.clip,
             cost_m = c.cost_m,
-            cost_limit_m = actions[c.action].def.threshold_m.unwrap_or(thresholds.cost_m),
+            cost_limit_m,
             margin_m = c.margin_m,
             margin_needed_m = thresholds.margin_m,
             coverage = c.coverage,
             "drag started no action"
         );
+        events.push(ActionEvent::NearMiss {
+            action: actions[c.action].def.name.clone(),
+            time_s: t,
+            cost_m: c.cost_m,
+            cost_limit_m,
+            margin_m: c.margin_m,
+            margin_needed_m: thresholds.margin_m,
+            coverage: c.coverage,
+            held_by: if c.cost_m > cost_limit_m {
+                "cost"
+            } else {
+                "margin"
+            },
+        });
+    }
+}
+
+/// How the template recogniser's decision `d` was taken, as told with the
+/// action's start.
+pub(super) fn decided_by(d: &Decision) -> Decided {
+    Decided {
+        cost_m: d.cost_m,
+        margin_m: d.margin_m,
+        coverage: d.coverage,
+    }
+}
+
+/// Tell `decided` with the starts among `events` (those of this step).
+pub(super) fn tell_decision(events: &mut [ActionEvent], decided: Option<Decided>) {
+    for e in events {
+        if let ActionEvent::Started { decided: d, .. } = e {
+            *d = decided;
+        }
     }
 }
 
@@ -50,16 +95,17 @@ impl Controller {
         camera: &crate::character::camera::Camera,
         t: f64,
     ) -> Option<ActionPlayer> {
-        let (action, start_at) = match self.settings.recogniser {
+        let (action, start_at, decided) = match self.settings.recogniser {
             RecogniserKind::Paper => {
                 let found = self.recognise_paper(camera)?;
-                (found.action, found.matched.coverage)
+                (found.action, found.matched.coverage, None)
             }
             RecogniserKind::Templates => {
                 let d = self.recognise_templates(camera, |_| true)?;
-                (d.action, d.generalized)
+                (d.action, d.generalized, Some(decided_by(&d)))
             }
         };
+        let told = self.motion.events.len();
         let name = self.ch.actions[action].def.name.clone();
         if self.ch.travels[action] && self.start_walk(camera, t, &name) {
             // A walk's drag: walk along the finger's path instead.
@@ -67,6 +113,7 @@ impl Controller {
                 action = %self.ch.actions[action].def.name,
                 "a travelling action's drag walks along the finger's path"
             );
+            tell_decision(&mut self.motion.events[told..], decided);
             return None;
         }
         let at = self.placement_now();
@@ -78,6 +125,7 @@ impl Controller {
             t,
             &mut self.motion.events,
         );
+        tell_decision(&mut self.motion.events[told..], decided);
         self.fingers.restart_drags(t);
         self.fingers.forget_matches();
         Some(player)
@@ -125,14 +173,16 @@ impl Controller {
         only: fn(Role) -> bool,
     ) -> Option<Decision> {
         let at = self.placement_now();
+        let now = self.time();
         let actions = &self.ch.actions;
         let thresholds = self.ch.recogniser.thresholds;
         let drift = self.motion.layering.drift_px();
+        let events = &mut self.motion.events;
         let (grabs, matching) = self.fingers.grabs_and_matches();
         matching.retain(|id, m| {
             let held = grabs.contains_key(id);
             if !held {
-                m.started_nothing(actions, &thresholds);
+                m.started_nothing(actions, &thresholds, now, events);
             }
             held
         });

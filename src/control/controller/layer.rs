@@ -203,6 +203,7 @@ impl Controller {
                 "laid over the legs' motion"
             );
             let at = self.placement_now();
+            let told = self.motion.events.len();
             let player = ActionPlayer::start(
                 &self.ch.actions,
                 d.action,
@@ -210,6 +211,10 @@ impl Controller {
                 at,
                 t,
                 &mut self.motion.events,
+            );
+            super::actions::tell_decision(
+                &mut self.motion.events[told..],
+                Some(super::actions::decided_by(&d)),
             );
             self.motion.layering.begin(player, mask, &self.target);
             self.fingers.restart_drags(t);

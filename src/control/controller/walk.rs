@@ -221,6 +221,7 @@ impl Controller {
             action: label.to_owned(),
             time_s: t,
             by_reach,
+            decided: None,
         });
         self.motion.mode = Mode::Walk(Box::new(walker));
         self.motion

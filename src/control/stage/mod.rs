@@ -125,6 +125,38 @@ const RESTITUTION: f64 = 0.3;
 /// Passes of pushing apart per step.
 const SEPARATION_PASSES: usize = 6;
 
+/// A finger landing on the table or lifting, as the table saw it (for
+/// the record of what visitors do).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TouchEvent {
+    Down {
+        id: ContactId,
+        t: f64,
+        at: ScreenPoint,
+        took: Took,
+    },
+    Up {
+        id: ContactId,
+        t: f64,
+    },
+}
+
+/// What a finger going down took.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Took {
+    /// A character's body part.
+    Part { character: usize, role: Role },
+    /// The camera (a finger on empty floor).
+    Camera,
+    /// Nothing until it lifts (empty floor while another visitor holds a
+    /// character of several).
+    Nothing,
+}
+
+/// Touch events kept for a caller that takes them; more are dropped (a
+/// caller that never takes them keeps no growing list).
+const TOUCH_EVENTS_KEPT: usize = 4096;
+
 /// The table's state between frames.
 #[derive(Clone)]
 pub struct Stage {
@@ -143,6 +175,8 @@ pub struct Stage {
     trunk_depth_left: f64,
     time: f64,
     last_touch: f64,
+    /// Fingers down and up since the caller last took them.
+    touches: Vec<TouchEvent>,
 }
 
 impl Stage {
@@ -172,6 +206,7 @@ impl Stage {
             trunk_depth_left: 0.0,
             time: t,
             last_touch: t,
+            touches: Vec::new(),
         }
     }
 
@@ -279,6 +314,18 @@ impl Stage {
             .collect()
     }
 
+    /// Fingers that went down (and what each took) and lifted since the
+    /// last call.
+    pub fn take_touches(&mut self) -> Vec<TouchEvent> {
+        std::mem::take(&mut self.touches)
+    }
+
+    fn told(&mut self, e: TouchEvent) {
+        if self.touches.len() < TOUCH_EVENTS_KEPT {
+            self.touches.push(e);
+        }
+    }
+
     /// Hits since the last call.
     pub fn take_hits(&mut self) -> Vec<Hit> {
         std::mem::take(&mut self.hits)
@@ -348,6 +395,12 @@ impl Stage {
             if c.phase == Phase::Down {
                 let owner = match self.grabbed(&camera, p) {
                     Some((k, role)) => {
+                        self.told(TouchEvent::Down {
+                            id: c.id,
+                            t: frame.t,
+                            at: p,
+                            took: Took::Part { character: k, role },
+                        });
                         if self.many() {
                             // A character is held now: fingers on the
                             // floor stop moving the camera.
@@ -364,6 +417,18 @@ impl Stage {
                     None if self.many() && self.held_any() => Owner::Parked(p),
                     None => Owner::Camera(p),
                 };
+                if !matches!(owner, Owner::Character(_)) {
+                    self.told(TouchEvent::Down {
+                        id: c.id,
+                        t: frame.t,
+                        at: p,
+                        took: if matches!(owner, Owner::Camera(_)) {
+                            Took::Camera
+                        } else {
+                            Took::Nothing
+                        },
+                    });
+                }
                 self.owners.insert(c.id, owner);
             } else if c.phase.is_down() {
                 match self.owners.get_mut(&c.id) {
@@ -371,8 +436,17 @@ impl Stage {
                     Some(Owner::Camera(at) | Owner::Parked(at)) => *at = p,
                     None => {}
                 }
-            } else if let Some(Owner::Character(k)) = self.owners.remove(&c.id) {
-                per[k].0.push(*c);
+            } else {
+                let owner = self.owners.remove(&c.id);
+                if owner.is_some() {
+                    self.told(TouchEvent::Up {
+                        id: c.id,
+                        t: frame.t,
+                    });
+                }
+                if let Some(Owner::Character(k)) = owner {
+                    per[k].0.push(*c);
+                }
             }
         }
         if !frame.contacts.is_empty() {
