@@ -299,6 +299,10 @@ pub(super) fn replay_visits(config: &Config, file: &Path, db: &Path) -> Result<(
     let rec = Recording::read_file(file)?;
     // A file there that is not a visits record is refused, never set
     // aside as the kiosk would.
+    if let Some(folder) = db.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(folder)
+            .map_err(|e| Failure::new(exit::CANTCREAT, format!("{}: {e}", folder.display())))?;
+    }
     drop(crate::app::visits::store::open(db)?);
     let ch = character(config)?;
     let frames = pipeline::replay(&rec, &config.input, config.display.picture())

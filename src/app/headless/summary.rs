@@ -115,7 +115,7 @@ impl std::fmt::Display for Summary {
         )?;
         writeln!(
             f,
-            "posing: {} grabs; drags that started nothing: {}",
+            "grabs: {}; drags that started nothing: {}",
             self.grabs,
             self.near_misses.len()
         )?;

@@ -339,7 +339,14 @@ mod tests {
         let text = prometheus(&s, &totals, 1);
         assert!(text.contains("marionette_sessions_today 12\n"), "{text}");
         assert!(text.contains("marionette_actions_today 30\n"), "{text}");
-        let without = prometheus(&s, &Totals { today: None, ..totals }, 1);
+        let without = prometheus(
+            &s,
+            &Totals {
+                today: None,
+                ..totals
+            },
+            1,
+        );
         assert!(!without.contains("today"), "{without}");
         for want in [
             "marionette_fps 59.94\n",

@@ -33,7 +33,7 @@ CREATE TABLE touches (
     cell_y INTEGER NOT NULL,
     duration_s REAL NOT NULL
 );
-CREATE INDEX touches_at ON touches (at_ms);
+CREATE INDEX touches_session ON touches (session_ms);
 CREATE TABLE actions (
     session_ms INTEGER NOT NULL,
     at_ms INTEGER NOT NULL,
@@ -46,6 +46,7 @@ CREATE TABLE actions (
     length_s REAL,
     PRIMARY KEY (at_ms, character, action)
 ) WITHOUT ROWID;
+CREATE INDEX actions_session ON actions (session_ms);
 CREATE TABLE near_misses (
     session_ms INTEGER NOT NULL,
     at_ms INTEGER NOT NULL,
@@ -57,7 +58,7 @@ CREATE TABLE near_misses (
     margin_needed_m REAL NOT NULL,
     held_by TEXT NOT NULL
 );
-CREATE INDEX near_misses_at ON near_misses (at_ms);
+CREATE INDEX near_misses_session ON near_misses (session_ms);
 "];
 
 /// What can go wrong with the record.
@@ -343,8 +344,9 @@ pub struct Pruned {
 const DAY_MS: i64 = 86_400_000;
 
 /// Drop rows older than `keep_days` before `now_ms`, then the oldest days
-/// while the rows take more than nine tenths of `max_bytes` (the file keeps
-/// its freed pages for the next rows, so it stays under the bound).
+/// while the rows take more than eight tenths of `max_bytes` (the file
+/// keeps its freed pages for the next rows, so it stays under the bound;
+/// the log is kept to a tenth).
 ///
 /// # Errors
 /// SQLite's, with the path.
@@ -356,9 +358,17 @@ pub fn prune(
     max_bytes: u64,
 ) -> Result<Pruned, VisitsError> {
     let e = sql(path);
+    // The write-ahead log is checkpointed and cut back at a tenth of the
+    // bound (4 MB at most).
+    let log = (max_bytes / 10).min(4 << 20);
+    conn.execute_batch(&format!(
+        "PRAGMA wal_autocheckpoint = {}; PRAGMA journal_size_limit = {log};",
+        (log / 4096).max(16)
+    ))
+    .map_err(&e)?;
     let mut pruned = Pruned::default();
     pruned.sessions += drop_before(conn, now_ms - i64::from(keep_days) * DAY_MS).map_err(&e)?;
-    let budget = max_bytes / 10 * 9;
+    let budget = max_bytes / 10 * 8;
     while used_bytes(conn).map_err(&e)? > budget {
         let oldest: Option<i64> = conn
             .query_row("SELECT min(start_ms) FROM sessions", [], |r| r.get(0))

@@ -270,6 +270,9 @@ impl Thread {
                 }
                 Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => {
+                    // The last rows: one more try, however recent the
+                    // last failure.
+                    self.failed_at = None;
                     self.commit();
                     return;
                 }
