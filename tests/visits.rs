@@ -57,7 +57,10 @@ fn sessions_in(recording: &Path, idle_s: f64) -> u64 {
                     sessions += 1;
                 }
                 down.insert(id);
-            } else if c["phase"] != "move" && down.remove(&id) && down.is_empty() {
+            } else if (c["phase"] == "up" || c["phase"] == "cancel")
+                && down.remove(&id)
+                && down.is_empty()
+            {
                 empty_since = t;
             }
         }
@@ -161,8 +164,11 @@ fn the_report_counts_what_the_replays_say() {
     // The bundled demo: one visitor, every action.
     let demo = dir.path().join("demo");
     let r = counts_agree(&root.join("assets/recordings/demo.evemu"), &demo);
+    // The README's summary: 13 grabs, one drag that started nothing.
     assert_eq!(r["sessions"], 1);
     assert_eq!(r["actions_started"], 8);
+    assert_eq!(r["grabs"], 13);
+    assert_eq!(r["near_misses"], 1);
     // A real panel's long multi-finger capture.
     let real = common::shared_dir().join("recordings/evemu/evemu-data.3m-microtouch-usb.evemu");
     let r = counts_agree(&real, &dir.path().join("3m"));

@@ -3,6 +3,7 @@
 usage: systemd_vm.py WORK VMLINUZ OUT
 """
 
+import json
 import os
 import re
 import sys
@@ -11,11 +12,17 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from vmlib import bluish, boot, check_moved, ppm  # noqa: E402
 
 work, kernel, out = sys.argv[1:4]
-text = boot(work, out, [
-    "-kernel", kernel, "-initrd", os.path.join(work, "initrd.gz"),
-    "-drive", f"file={os.path.join(work, 'root.img')},if=virtio,format=raw",
-    "-append", "console=ttyS0 quiet panic=-1 rdinit=/init systemd.show_status=0",
-], timeout_s=900)
+
+
+def guest(append, out):
+    return boot(work, out, [
+        "-kernel", kernel, "-initrd", os.path.join(work, "initrd.gz"),
+        "-drive", f"file={os.path.join(work, 'root.img')},if=virtio,format=raw",
+        "-append", "console=ttyS0 quiet panic=-1 rdinit=/init systemd.show_status=0" + append,
+    ], timeout_s=900)
+
+
+text = guest("", out)
 if not os.path.exists(os.path.join(out, "rc")):
     raise SystemExit("vm test: the guest did not report back; console:\n" + text[-6000:])
 
@@ -57,6 +64,33 @@ for name in ["sd-ready", "sd-restarted"]:
             failures.append(f"the character is not on screen at '{name}' ({blue} shirt pixels)")
 for a, b in [("sd-ready", "sd-posed"), ("sd-before-replug", "sd-replugged")]:
     check_moved(screens, a, b, failures)
+# The record of visits after the hard reset: booted again, it opens, is
+# whole, and holds what it held two seconds before the reset.
+if "hard reset at" not in rc or "play3 rc=0" not in rc:
+    failures.append("the guest did not reach the hard reset after a drag")
+else:
+    after_out = os.path.join(out, "after-reset")
+    os.makedirs(after_out, exist_ok=True)
+    after_text = guest(" kiosk_check=after-reset", after_out)
+
+    def visits(dir_, name):
+        try:
+            return json.load(open(os.path.join(dir_, f"{name}.json")))
+        except (OSError, ValueError):
+            return {}
+
+    before, after = visits(out, "before"), visits(after_out, "after")
+    print("visits before the reset:", {k: before.get(k) for k in ["sessions", "touches", "grabs", "integrity"]})
+    print("visits after the reset:", {k: after.get(k) for k in ["sessions", "touches", "grabs", "integrity"]})
+    if not before.get("touches"):
+        failures.append("the record held no touches before the reset: " + open(os.path.join(out, "before.txt")).read()[-2000:])
+    if after.get("integrity") != "ok":
+        failures.append("after the reset the record does not open whole: "
+                        + (open(os.path.join(after_out, "after.txt")).read()[-2000:]
+                           if os.path.exists(os.path.join(after_out, "after.txt")) else after_text[-3000:]))
+    for k in ["sessions", "touches", "grabs", "actions_started"]:
+        if after.get(k, -1) < before.get(k, 0):
+            failures.append(f"after the reset the record lost {k}: {before.get(k)} -> {after.get(k)}")
 if failures:
     print("journal:\n" + journal[-4000:])
     raise SystemExit("vm test failed:\n  " + "\n  ".join(failures))

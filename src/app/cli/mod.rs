@@ -212,12 +212,13 @@ fn report(
     })?;
     writeln!(
         std::io::stdout(),
-        "{} sessions, {} grabs, {} actions started ({} finished), {} near misses; written to {} and {}",
+        "{} sessions, {} grabs, {} actions started ({} finished), {} near misses; integrity {}; written to {} and {}",
         r.sessions,
         r.grabs,
         r.actions_started,
         r.actions_finished,
         r.near_misses,
+        r.integrity,
         page.display(),
         json.display()
     )

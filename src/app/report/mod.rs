@@ -85,6 +85,8 @@ pub struct PartRow {
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Report {
     pub db: String,
+    /// What SQLite's `integrity_check` says of the file (`ok`).
+    pub integrity: String,
     /// The window: from this Unix time (ms) on; none for all.
     pub since_ms: Option<i64>,
     /// The first and last session in it (Unix ms).
@@ -161,6 +163,12 @@ pub fn gather(db: &Path, since: Since, now_ms: i64) -> Result<Report, VisitsErro
         since_ms,
         ..Report::default()
     };
+    r.integrity = conn
+        .query_row("PRAGMA integrity_check", [], |row| row.get(0))
+        .map_err(e)?;
+    if r.integrity != "ok" {
+        tracing::warn!(db = %db.display(), integrity = %r.integrity, "the visits database is damaged: the report shows what can still be read");
+    }
     sessions(&conn, from, &mut r).map_err(e)?;
     touches(&conn, from, &mut r).map_err(e)?;
     actions(&conn, from, &mut r).map_err(e)?;

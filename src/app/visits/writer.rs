@@ -23,6 +23,9 @@ pub const BATCH_S: f64 = 0.25;
 const QUEUE: usize = 4096;
 /// Rows kept while the database cannot be written; the oldest go beyond.
 const PENDING_MAX: usize = 100_000;
+/// Committed rows reach the disk this often (s): with the quarter second
+/// they may wait to be written, a power cut loses at most the last second.
+const SYNC_S: f64 = 0.7;
 /// A paused record tries again this often (s).
 const RETRY_S: f64 = 5.0;
 /// The record is kept within its bounds this often (s).
@@ -203,6 +206,10 @@ struct Thread {
     failed_at: Option<Instant>,
     said: Option<String>,
     last_commit: Instant,
+    /// When the log was last made durable, and whether it holds commits
+    /// since.
+    last_sync: Instant,
+    unsynced: bool,
     last_prune: Option<Instant>,
     last_today: Option<Instant>,
 }
@@ -250,6 +257,8 @@ impl Thread {
             failed_at: None,
             said: None,
             last_commit: Instant::now(),
+            last_sync: Instant::now(),
+            unsynced: false,
             last_prune: None,
             last_today: None,
         }
@@ -274,11 +283,13 @@ impl Thread {
                     // last failure.
                     self.failed_at = None;
                     self.commit();
+                    self.sync(true);
                     return;
                 }
             }
             if self.last_commit.elapsed().as_secs_f64() >= BATCH_S {
                 self.commit();
+                self.sync(false);
                 self.housekeeping();
             }
         }
@@ -335,8 +346,33 @@ impl Thread {
                     .committed
                     .fetch_add(self.pending.len() as u64, Ordering::Relaxed);
                 self.pending.clear();
+                self.unsynced = true;
             }
-            Err(e) => self.fault(&e),
+            Err(e) => {
+                self.fault(&e);
+                return;
+            }
+        }
+        self.sync(false);
+    }
+
+    /// In WAL mode with synchronous=NORMAL a commit is not flushed to the
+    /// disk; a checkpoint flushes the log first. One runs (passive: it
+    /// waits on no reader) when commits are older than [`SYNC_S`], or now
+    /// with `now`.
+    fn sync(&mut self, now: bool) {
+        if !self.unsynced || (!now && self.last_sync.elapsed().as_secs_f64() < SYNC_S) {
+            return;
+        }
+        let Some(conn) = self.conn.as_ref() else {
+            return;
+        };
+        match conn.query_row("PRAGMA wal_checkpoint(PASSIVE)", [], |_| Ok(())) {
+            Ok(()) => {
+                self.last_sync = Instant::now();
+                self.unsynced = false;
+            }
+            Err(e) => tracing::debug!(error = %e, "visits log not flushed yet"),
         }
     }
 
