@@ -51,6 +51,8 @@ library = "/library"
 [input]
 rescan_interval_ms = 100
 grab = true
+[kiosk]
+visits = "/tmp/visits.db"
 [display]
 status_line = false
 TOML

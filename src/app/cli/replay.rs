@@ -314,13 +314,13 @@ pub(super) fn replay_visits(config: &Config, file: &Path, db: &Path) -> Result<(
     };
     let summary = headless::run(ch, config, frames, &opts).map_err(|e| naming_file(config, e))?;
     let (c, written) = summary.visits.unwrap_or_default();
-    if written.committed < written.sent || written.dropped > 0 {
+    if !written.all() {
         return Err(Failure::new(
             exit::CANTCREAT,
             format!(
                 "{}: {} of {} rows of visits could not be written (the log above says why)",
                 db.display(),
-                written.sent + written.dropped - written.committed,
+                (written.sent + written.dropped).saturating_sub(written.committed + written.merged),
                 written.sent + written.dropped
             ),
         ));

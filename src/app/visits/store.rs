@@ -139,7 +139,10 @@ pub fn open(path: &Path) -> Result<Connection, VisitsError> {
     if !mode.eq_ignore_ascii_case("wal") {
         tracing::warn!(path = %path.display(), mode, "the visits database is not in WAL mode");
     }
-    conn.execute_batch("PRAGMA synchronous = NORMAL; PRAGMA journal_size_limit = 4194304;")
+    // A small page cache: the kiosk writes, the report reads.
+    conn.execute_batch(
+        "PRAGMA synchronous = NORMAL; PRAGMA journal_size_limit = 4194304; PRAGMA cache_size = -512;",
+    )
         .map_err(&e)?;
     let ok: String = conn
         .query_row("PRAGMA quick_check", [], |r| r.get(0))
@@ -184,7 +187,22 @@ pub fn open_to_read(path: &Path) -> Result<Connection, VisitsError> {
             source,
         },
     })?;
-    if app != APPLICATION_ID {
+    ours(path, app, version, false)?;
+    if version < SCHEMA_VERSION {
+        return Err(VisitsError::NotOurs {
+            path: path.to_owned(),
+            why: format!(
+                "schema {version} (the kiosk brings it to {SCHEMA_VERSION} when it next opens it)"
+            ),
+        });
+    }
+    Ok(conn)
+}
+
+/// Whether a database that says `app` and `version` is marionette's record
+/// of a schema this build can read (`empty`: a new file, none yet).
+fn ours(path: &Path, app: i64, version: i64, empty: bool) -> Result<(), VisitsError> {
+    if app != APPLICATION_ID && !(app == 0 && empty) {
         return Err(VisitsError::NotOurs {
             path: path.to_owned(),
             why: format!("a SQLite database of another program (application_id {app:#x})"),
@@ -197,15 +215,7 @@ pub fn open_to_read(path: &Path) -> Result<Connection, VisitsError> {
             known: SCHEMA_VERSION,
         });
     }
-    if version < SCHEMA_VERSION {
-        return Err(VisitsError::NotOurs {
-            path: path.to_owned(),
-            why: format!(
-                "schema {version} (the kiosk brings it to {SCHEMA_VERSION} when it next opens it)"
-            ),
-        });
-    }
-    Ok(conn)
+    Ok(())
 }
 
 fn ids(conn: &Connection) -> rusqlite::Result<(i64, i64)> {
@@ -221,19 +231,7 @@ fn migrate(conn: &Connection, path: &Path) -> Result<(), VisitsError> {
     let tables: i64 = conn
         .query_row("SELECT count(*) FROM sqlite_schema", [], |r| r.get(0))
         .map_err(&e)?;
-    if app != APPLICATION_ID && !(app == 0 && tables == 0) {
-        return Err(VisitsError::NotOurs {
-            path: path.to_owned(),
-            why: format!("a SQLite database of another program (application_id {app:#x})"),
-        });
-    }
-    if version > SCHEMA_VERSION {
-        return Err(VisitsError::Newer {
-            path: path.to_owned(),
-            found: version,
-            known: SCHEMA_VERSION,
-        });
-    }
+    ours(path, app, version, tables == 0)?;
     for (k, step) in MIGRATIONS.iter().enumerate().skip(version.max(0) as usize) {
         let batch = format!(
             "BEGIN; {step} PRAGMA application_id = {APPLICATION_ID}; PRAGMA user_version = {}; COMMIT;",

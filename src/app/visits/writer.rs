@@ -21,8 +21,9 @@ use super::store::{self, Fault, VisitsError};
 pub const BATCH_S: f64 = 0.25;
 /// Messages (a frame's rows each) the queue holds before dropping.
 const QUEUE: usize = 4096;
-/// Rows kept while the database cannot be written; the oldest go beyond.
-const PENDING_MAX: usize = 100_000;
+/// Rows kept while the database cannot be written; the oldest go beyond
+/// (about 2 MB; ten minutes of a busy table).
+const PENDING_MAX: usize = 20_000;
 /// Committed rows reach the disk this often (s): with the quarter second
 /// they may wait to be written, a power cut loses at most the last second.
 const SYNC_S: f64 = 0.7;
@@ -46,6 +47,9 @@ pub struct Bounds {
 pub struct Shared {
     sent: AtomicU64,
     committed: AtomicU64,
+    /// Rows replaced by a newer row of the same session before they were
+    /// written.
+    merged: AtomicU64,
     dropped: AtomicU64,
     today_sessions: AtomicU64,
     today_actions: AtomicU64,
@@ -57,13 +61,24 @@ enum Msg {
     Flush(SyncSender<()>),
 }
 
-/// Rows handed to the writer, written, and dropped before they were handed
-/// over (a full queue).
+/// Rows handed to the writer, written, replaced by a newer row of the same
+/// session before they were written, and dropped (a full queue, or too
+/// many waiting while paused).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Written {
     pub sent: u64,
     pub committed: u64,
+    pub merged: u64,
     pub dropped: u64,
+}
+
+impl Written {
+    /// Whether every row handed over is in the file (or replaced there by
+    /// a newer one).
+    #[must_use]
+    pub fn all(&self) -> bool {
+        self.committed + self.merged >= self.sent && self.dropped == 0
+    }
 }
 
 /// The handle the kiosk keeps.
@@ -166,9 +181,10 @@ impl Writer {
         let w = Written {
             sent: self.shared.sent.load(Ordering::Relaxed),
             committed: self.committed(),
+            merged: self.shared.merged.load(Ordering::Relaxed),
             dropped: self.dropped(),
         };
-        if w.committed < w.sent {
+        if !w.all() {
             tracing::warn!(
                 sent = w.sent,
                 committed = w.committed,
@@ -202,6 +218,8 @@ struct Thread {
     shared: Arc<Shared>,
     conn: Option<Connection>,
     pending: Vec<Row>,
+    /// The session row waiting in `pending`, and where.
+    session_at: Option<(i64, usize)>,
     /// When the database last failed, and the fault already said.
     failed_at: Option<Instant>,
     said: Option<String>,
@@ -234,7 +252,8 @@ fn stamp() -> String {
 }
 
 /// Days since 1970-01-01 as a date (proleptic Gregorian).
-fn civil(days: i64) -> (i64, i64, i64) {
+#[must_use]
+pub fn civil(days: i64) -> (i64, i64, i64) {
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z.rem_euclid(146_097);
@@ -254,6 +273,7 @@ impl Thread {
             shared,
             conn: None,
             pending: Vec::new(),
+            session_at: None,
             failed_at: None,
             said: None,
             last_commit: Instant::now(),
@@ -296,10 +316,28 @@ impl Thread {
     }
 
     fn take(&mut self, rows: Vec<Row>) {
-        self.pending.extend(rows);
+        for row in rows {
+            // A session told again replaces its row still waiting.
+            if let Row::Session { start_ms, .. } = row
+                && let Some(k) = self
+                    .session_at
+                    .filter(|(s, _)| *s == start_ms)
+                    .map(|(_, k)| k)
+                && k < self.pending.len()
+            {
+                self.pending[k] = row;
+                self.shared.merged.fetch_add(1, Ordering::Relaxed);
+                continue;
+            }
+            if let Row::Session { start_ms, .. } = row {
+                self.session_at = Some((start_ms, self.pending.len()));
+            }
+            self.pending.push(row);
+        }
         if self.pending.len() > PENDING_MAX {
             let over = self.pending.len() - PENDING_MAX;
             self.pending.drain(..over);
+            self.session_at = None;
             self.shared
                 .dropped
                 .fetch_add(over as u64, Ordering::Relaxed);
@@ -346,6 +384,7 @@ impl Thread {
                     .committed
                     .fetch_add(self.pending.len() as u64, Ordering::Relaxed);
                 self.pending.clear();
+                self.session_at = None;
                 self.unsynced = true;
             }
             Err(e) => {
