@@ -62,7 +62,7 @@ fn frames(c: &mut Criterion) {
                 (1280.0, 720.0),
             )
         });
-        let mut k = 1u64;
+        let mut k = 0u64;
         g.bench_function(
             if on {
                 "visits record on"
@@ -72,14 +72,14 @@ fn frames(c: &mut Criterion) {
             |b| {
                 b.iter(|| {
                     k += 1;
-                    let t = k as f64 / 30.0;
+                    let t = (k + 1) as f64 / 30.0;
                     // A finger on the hand, moving it a little; it lifts
                     // every second and lands again as a new touch.
                     let id = k / 30;
                     let at = ScreenPoint::new(hand.x + (t * 2.0).sin() * 20.0, hand.y);
                     let phase = match k % 30 {
-                        0 => Phase::Up,
-                        1 => Phase::Down,
+                        0 => Phase::Down,
+                        29 => Phase::Up,
                         _ => Phase::Move,
                     };
                     ctl.touch(&ScreenFrame {
