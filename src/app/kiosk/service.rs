@@ -208,6 +208,17 @@ mod tests {
         assert!(text.contains("59.9 fps"), "{text}");
         assert!(text.contains("touch to flip 22 / 41 ms"), "{text}");
         assert!(text.contains("finger at 130, 100"), "{text}");
+        assert!(text.contains("today: no visits record"), "{text}");
+        v.today = Some((14, 37));
+        let today = v
+            .marks(&s, "Virtual-1", (1280, 720))
+            .unwrap()
+            .lines
+            .join("\n");
+        assert!(
+            today.contains("today: 14 visitor sessions, 37 actions started"),
+            "{today}"
+        );
         // The last 1.5 s of the path.
         assert_eq!(m.trails.len(), 1);
         assert!(
