@@ -375,6 +375,9 @@ struct Watch<'a> {
     /// The finger's stops, at how many the character stood by it, and
     /// whether it stands by it in the stop now.
     stops: (usize, usize, bool),
+    /// In the stop now: the least the feet moved over `STOOD_OVER_S` and
+    /// the pelvis's distance from the finger then (m), for the debug log.
+    stop_best: (f64, f64),
     dt: f64,
     /// The path's length (m).
     length_m: f64,
@@ -398,6 +401,7 @@ impl<'a> Watch<'a> {
             speed_until: None,
             length_m,
             stops: (0, 0, false),
+            stop_best: (f64::INFINITY, f64::INFINITY),
             dt,
         }
     }
@@ -415,11 +419,22 @@ impl<'a> Watch<'a> {
             .map_or(f64::INFINITY, |p| {
                 (now[1] - p[1]).length().max((now[2] - p[2]).length())
             });
-        self.stops.2 |= moved <= STOOD_M && (now[0] - at).length() <= FOLLOWED_M;
+        let from_finger = (now[0] - at).length();
+        if moved < self.stop_best.0 {
+            self.stop_best = (moved, from_finger);
+        }
+        self.stops.2 |= moved <= STOOD_M && from_finger <= FOLLOWED_M;
     }
 
     /// The finger moves on after a stop.
     fn stop_ended(&mut self) {
+        tracing::debug!(
+            stood = self.stops.2,
+            feet_moved_m = self.stop_best.0,
+            pelvis_from_finger_m = self.stop_best.1,
+            "the finger moves on after a stop"
+        );
+        self.stop_best = (f64::INFINITY, f64::INFINITY);
         self.stops.0 += 1;
         self.stops.1 += usize::from(self.stops.2);
         self.stops.2 = false;
