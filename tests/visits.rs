@@ -305,8 +305,10 @@ fn a_database_locked_for_ten_seconds_never_holds_a_frame_up() {
     }
     let took = start.elapsed().as_secs_f64();
     eprintln!("12 s of frames in {took:.2} s, the slowest frame's record call {slowest:?}");
-    // A call that waited on the lock would take its 200 ms busy timeout.
-    assert!(slowest < Duration::from_millis(50), "{slowest:?}");
+    // A call that waited on the lock would take its 200 ms busy timeout
+    // (or the lock's 10 s); a busy machine may hold a thread up for a few
+    // of its time slices.
+    assert!(slowest < Duration::from_millis(100), "{slowest:?}");
     assert!(took < 12.5, "{took}");
     holder.join().unwrap();
     let (counts, written) = rec.finish();
