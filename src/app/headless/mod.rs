@@ -14,7 +14,6 @@ mod summary;
 pub use self::summary::{ActionRecord, CharacterSummary, HitRecord, NearMissRecord, Summary};
 use super::config::Config;
 use super::frame::{Backend, Flow, Steps};
-use crate::control::action::timeline::ActionEvent;
 use crate::control::character::Character;
 use crate::control::stage::{Actor, Stage};
 use crate::control::stage::{Took, TouchEvent};
@@ -222,8 +221,6 @@ struct Replay<'a> {
     thumbs: Vec<(Image, String, f64)>,
     times: Vec<f64>,
     meter: Option<crate::tools::metrics::Meter<'a>>,
-    /// Each character's actions, hits and held parts (a table of several).
-    per: Vec<CharacterSummary>,
     held_by: Vec<BTreeSet<String>>,
     recording: Option<crate::app::visits::Recording>,
 }
@@ -254,91 +251,6 @@ impl Replay<'_> {
         }
         Ok(())
     }
-
-    /// A hit on the table, recorded for both characters.
-    fn hit(&mut self, h: &crate::control::stage::Hit) {
-        for (k, role, other, part, other_part) in [
-            (
-                h.striker,
-                "landed",
-                h.struck,
-                &h.striker_part,
-                &h.struck_part,
-            ),
-            (
-                h.struck,
-                "taken",
-                h.striker,
-                &h.struck_part,
-                &h.striker_part,
-            ),
-        ] {
-            if let Some(c) = self.per.get_mut(k) {
-                c.hits.push(HitRecord {
-                    time_s: h.time_s,
-                    role: role.to_owned(),
-                    other,
-                    part: part.clone(),
-                    other_part: other_part.clone(),
-                    impulse_ns: h.impulse_ns,
-                    speed_m_s: h.speed_m_s,
-                });
-            }
-        }
-    }
-
-    /// Action event `e` of character `k`, recorded: an action started, or
-    /// the one of that name playing ended.
-    fn event(&mut self, k: usize, e: ActionEvent) {
-        let records = if self.per.is_empty() {
-            &mut self.summary.actions
-        } else {
-            match self.per.get_mut(k) {
-                Some(c) => &mut c.actions,
-                None => return,
-            }
-        };
-        match e {
-            ActionEvent::NearMiss {
-                action,
-                time_s,
-                held_by,
-                ..
-            } => self.summary.near_misses.push(NearMissRecord {
-                action,
-                time_s,
-                held_by: held_by.to_owned(),
-            }),
-            ActionEvent::Started { action, time_s, .. } => records.push(ActionRecord {
-                action,
-                started_s: time_s,
-                outcome: "playing".into(),
-                ended_s: None,
-            }),
-            ActionEvent::Finished {
-                ref action, time_s, ..
-            }
-            | ActionEvent::Cancelled {
-                ref action, time_s, ..
-            } => {
-                // The action of that name still playing (a walk and an
-                // action laid over it end apart).
-                let open = records
-                    .iter_mut()
-                    .rev()
-                    .find(|r| r.ended_s.is_none() && r.action == *action);
-                if let Some(r) = open {
-                    r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
-                        "finished".into()
-                    } else {
-                        "cancelled".into()
-                    };
-                    r.ended_s = Some(time_s);
-                }
-            }
-            _ => {}
-        }
-    }
 }
 
 impl Replay<'_> {
@@ -352,12 +264,12 @@ impl Replay<'_> {
             thumbs,
             times,
             meter,
-            mut per,
             held_by,
             recording,
             ..
         } = self;
         summary.visits = recording.map(crate::app::visits::Recording::finish);
+        let mut per = std::mem::take(&mut summary.characters);
         for ((c, held), a) in per.iter_mut().zip(held_by).zip(ctl.actors()) {
             c.parts_held = held.into_iter().collect();
             c.hits_landed = a.hits_landed;
@@ -451,7 +363,7 @@ impl Backend for Replay<'_> {
             }
         }
         for h in ctl.take_hits() {
-            self.hit(&h);
+            self.summary.hit(&h);
         }
         let touches = ctl.take_touches();
         self.summary.grabs += touches
@@ -471,7 +383,7 @@ impl Backend for Replay<'_> {
             r.frame(&touches, &events, t, true);
         }
         for (k, e) in events {
-            self.event(k, e);
+            self.summary.event(k, e);
         }
         self.render(ctl, t)?;
         if t >= self.end {
@@ -636,22 +548,24 @@ pub fn run_table(
         headless,
         summary: Summary {
             touch_frames,
+            // Each character's actions, hits and held parts (a table of
+            // several).
+            characters: if n > 1 {
+                (0..n)
+                    .map(|k| CharacterSummary {
+                        library: libraries.get(k).cloned().unwrap_or_default(),
+                        ..CharacterSummary::default()
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            },
             ..Summary::default()
         },
         hash: 0xcbf2_9ce4_8422_2325u64,
         held_ever: BTreeSet::new(),
         thumbs: Vec::new(),
         times: Vec::new(),
-        per: if n > 1 {
-            (0..n)
-                .map(|k| CharacterSummary {
-                    library: libraries.get(k).cloned().unwrap_or_default(),
-                    ..CharacterSummary::default()
-                })
-                .collect()
-        } else {
-            Vec::new()
-        },
         held_by: vec![BTreeSet::new(); n],
         recording: opts.visits.as_ref().map(|path| {
             crate::app::visits::Recording::into_file(

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
+use crate::control::action::timeline::ActionEvent;
+
 /// An action as it happened.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ActionRecord {
@@ -93,6 +95,93 @@ pub struct HitRecord {
     pub other_part: String,
     pub impulse_ns: f64,
     pub speed_m_s: f64,
+}
+
+impl Summary {
+    /// A hit on the table, recorded for both characters.
+    pub(super) fn hit(&mut self, h: &crate::control::stage::Hit) {
+        for (k, role, other, part, other_part) in [
+            (
+                h.striker,
+                "landed",
+                h.struck,
+                &h.striker_part,
+                &h.struck_part,
+            ),
+            (
+                h.struck,
+                "taken",
+                h.striker,
+                &h.struck_part,
+                &h.striker_part,
+            ),
+        ] {
+            if let Some(c) = self.characters.get_mut(k) {
+                c.hits.push(HitRecord {
+                    time_s: h.time_s,
+                    role: role.to_owned(),
+                    other,
+                    part: part.clone(),
+                    other_part: other_part.clone(),
+                    impulse_ns: h.impulse_ns,
+                    speed_m_s: h.speed_m_s,
+                });
+            }
+        }
+    }
+
+    /// Action event `e` of character `k`, recorded: an action started, or
+    /// the one of that name playing ended.
+    pub(super) fn event(&mut self, k: usize, e: ActionEvent) {
+        let records = if self.characters.is_empty() {
+            &mut self.actions
+        } else {
+            match self.characters.get_mut(k) {
+                Some(c) => &mut c.actions,
+                None => return,
+            }
+        };
+        match e {
+            ActionEvent::NearMiss {
+                action,
+                time_s,
+                held_by,
+                ..
+            } => self.near_misses.push(NearMissRecord {
+                action,
+                time_s,
+                held_by: held_by.to_owned(),
+            }),
+            ActionEvent::Started { action, time_s, .. } => records.push(ActionRecord {
+                action,
+                started_s: time_s,
+                outcome: "playing".into(),
+                ended_s: None,
+            }),
+            ActionEvent::Finished {
+                ref action, time_s, ..
+            }
+            | ActionEvent::Cancelled {
+                ref action, time_s, ..
+            } => {
+                // The action of that name still playing (a walk and an
+                // action laid over it end apart).
+                let open = records
+                    .iter_mut()
+                    .rev()
+                    .find(|r| r.ended_s.is_none() && r.action == *action);
+                if let Some(r) = open {
+                    r.outcome = if matches!(e, ActionEvent::Finished { .. }) {
+                        "finished".into()
+                    } else {
+                        "cancelled".into()
+                    };
+                    r.ended_s = Some(time_s);
+                }
+            }
+            _ => {}
+        }
+    }
 }
 
 impl std::fmt::Display for Summary {

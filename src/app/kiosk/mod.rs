@@ -223,14 +223,7 @@ impl Kiosk<'_> {
             ..
         } = self;
         if let Some(v) = visits {
-            let (c, _) = v.finish();
-            tracing::info!(
-                sessions = c.sessions,
-                grabs = c.grabs,
-                actions = c.actions,
-                near_misses = c.near_misses,
-                "visits recorded this run"
-            );
+            v.finish();
         }
         (stats.touch_to_flip_ms_mean, stats.touch_to_flip_n) = vitals.run_latency();
         input.stop();
@@ -557,39 +550,13 @@ impl Kiosk<'_> {
 }
 
 impl Kiosk<'_> {
-    /// Every minute: the vital signs to the journal and to the textfile.
+    /// Every minute: the vital signs to the journal and to the textfile
+    /// (once as soon as the kiosk shows the character: a start counts at
+    /// once).
     fn vital_signs(&mut self, t: f64) {
-        // The textfile is written once as soon as the kiosk shows the
-        // character (a start counts at once), then every minute.
         let first = self.ready && !self.textfile_written;
-        let due = self.vitals.window_due(t);
-        if due.is_none() && !first {
-            return;
-        }
-        let s = due.unwrap_or_else(|| self.vitals.summary(t));
-        self.textfile_written = true;
-        let totals = self.vitals.totals;
         let panels = self.service.panels.len();
-        if due.is_some() {
-            tracing::info!(
-                fps = (s.fps * 10.0).round() / 10.0,
-                frame_ms_p50 = (s.frame_ms_p50 * 100.0).round() / 100.0,
-                frame_ms_p99 = (s.frame_ms_p99 * 100.0).round() / 100.0,
-                touch_to_flip_ms_p50 = (s.latency_ms_p50 * 10.0).round() / 10.0,
-                touch_to_flip_ms_p99 = (s.latency_ms_p99 * 10.0).round() / 10.0,
-                touches = totals.touches,
-                actions_started = totals.actions_started,
-                hits = totals.hits,
-                touchscreens = panels,
-                "vitals over the last minute"
-            );
-        }
-        if let Some(path) = &self.textfile {
-            if let Err(e) = vitals::write_atomically(path, &vitals::prometheus(&s, &totals, panels))
-            {
-                tracing::warn!(path = %path.display(), error = %e, "cannot write the metrics textfile (ReadWritePaths= in the unit?)");
-            }
-        }
+        self.textfile_written |= self.vitals.tell(t, first, panels, self.textfile.as_deref());
     }
 }
 

@@ -152,6 +152,41 @@ impl Vitals {
     }
 }
 
+impl Vitals {
+    /// At `t`: at the end of a window its figures go to the journal and,
+    /// with `textfile`, to that file, as they do the `first` time (the
+    /// window so far) with `panels` touchscreens read; whether they were
+    /// told.
+    pub fn tell(&mut self, t: f64, first: bool, panels: usize, textfile: Option<&Path>) -> bool {
+        let due = self.window_due(t);
+        if due.is_none() && !first {
+            return false;
+        }
+        let s = due.unwrap_or_else(|| self.summary(t));
+        let totals = self.totals;
+        if due.is_some() {
+            tracing::info!(
+                fps = (s.fps * 10.0).round() / 10.0,
+                frame_ms_p50 = (s.frame_ms_p50 * 100.0).round() / 100.0,
+                frame_ms_p99 = (s.frame_ms_p99 * 100.0).round() / 100.0,
+                touch_to_flip_ms_p50 = (s.latency_ms_p50 * 10.0).round() / 10.0,
+                touch_to_flip_ms_p99 = (s.latency_ms_p99 * 10.0).round() / 10.0,
+                touches = totals.touches,
+                actions_started = totals.actions_started,
+                hits = totals.hits,
+                touchscreens = panels,
+                "vitals over the last minute"
+            );
+        }
+        if let Some(path) = textfile
+            && let Err(e) = write_atomically(path, &prometheus(&s, &totals, panels))
+        {
+            tracing::warn!(path = %path.display(), error = %e, "cannot write the metrics textfile (ReadWritePaths= in the unit?)");
+        }
+        true
+    }
+}
+
 /// The `p` quantile (0..1) by nearest rank; 0 for no values.
 fn percentile(v: &mut [f64], p: f64) -> f64 {
     if v.is_empty() {

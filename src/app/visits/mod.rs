@@ -110,7 +110,16 @@ impl Recording {
         self.visits.end(&mut self.rows);
         self.writer.send(std::mem::take(&mut self.rows));
         let written = self.writer.finish();
-        (self.visits.counts, written)
+        let c = self.visits.counts;
+        tracing::info!(
+            sessions = c.sessions,
+            touches = c.touches,
+            grabs = c.grabs,
+            actions = c.actions,
+            near_misses = c.near_misses,
+            "visits recorded this run"
+        );
+        (c, written)
     }
 }
 
