@@ -90,6 +90,23 @@ fn bandai_styles_left_out_and_what_library_check_says() {
             .any(|a| a.starts_with("`walk` drags from the 45° view start `walk-right`")),
         "{advice:#?}"
     );
+    // The styles' takes of an action differ in size (2 to 5 times) where
+    // its left-out drags start it seldom, and one take of `byebye` goes
+    // another way than its others (108 degrees from them).
+    for name in ["bow", "bye_right", "bye_left", "byebye"] {
+        assert!(
+            advice
+                .iter()
+                .any(|a| a.starts_with(&format!("`{name}`'s takes differ in size"))),
+            "{advice:#?}"
+        );
+    }
+    assert!(
+        advice
+            .iter()
+            .any(|a| a.contains("a take of `byebye`, goes another way than its other takes")),
+        "{advice:#?}"
+    );
     let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
     // Left out in turn (540 drags; the feminine bye-bye, whose hands
     // hardly move, is no action, nor are the pieces of a bow and a guide

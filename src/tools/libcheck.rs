@@ -16,12 +16,19 @@ use crate::character::body::{Anchor, Placement};
 use crate::character::camera::Camera;
 use crate::character::library::Library;
 use crate::control::action::calibrate::{Calibration, SLOW_BUDGET, calibrate};
-use crate::control::action::model::ActionModel;
+use crate::control::action::model::{ActionModel, ClipPath};
 use crate::control::action::recogniser::{DragMatch, Recogniser, TemplateRule, Thresholds};
 
 /// A drag from one view confused with another action this often is a pair
 /// the builder should hear about.
 const CONFUSED_SHARE: f64 = 0.25;
+/// An action's takes whose drags differ in size by more than this are told.
+const SIZE_RATIO: f64 = 1.5;
+/// ...where its left-out drags start it less than this share of the time.
+const SIZES_TOLD_UNDER: f64 = 0.8;
+/// A take whose drag goes more than this far from the way its action's
+/// other takes go is told (degrees).
+const OTHER_WAY_DEG: f64 = 90.0;
 
 /// The whole report.
 #[derive(Clone, Debug, Serialize)]
@@ -200,6 +207,8 @@ fn action_row(
             takes.iter().next().copied().unwrap_or("")
         ));
     }
+    let (n, right) = views.values().fold((0, 0), |(n, r), v| (n + v.0, r + v.1));
+    shape_advice(name, &a.templates, share(right, n), advice);
     let home = home_view(actions, ai, &c.recogniser, camera, &origin);
     home_advice(a, &home, drawable, advice);
     let views = view_reports(name, views, advice);
@@ -218,6 +227,77 @@ fn action_row(
         false_trigger_slow: share(slow, slow_n),
         drawable_from_default_camera: drawable,
         home_view: home,
+    }
+}
+
+/// How far a clip's part goes from where it starts moving (m), and which
+/// way (a unit vector in the character's frame) to the point it goes
+/// farthest.
+fn shape_of(p: &ClipPath) -> Option<(f64, glam::DVec3)> {
+    let start = *p.points.get(p.lead_in)?;
+    let (far, reach) = p.points[p.lead_in..]
+        .iter()
+        .map(|q| (*q, (*q - start).length()))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (reach > 1e-3).then(|| (reach, (far - start) / reach))
+}
+
+/// Advice on action `name`'s takes (its templates, one shape a take: the
+/// take's first clip) whose drags differ in size by more than
+/// [`SIZE_RATIO`] where its left-out drags start it less than
+/// [`SIZES_TOLD_UNDER`] of the time (`started`), or one that goes another
+/// way than the others.
+fn shape_advice(name: &str, paths: &[ClipPath], started: f64, advice: &mut Vec<String>) {
+    let mut seen = std::collections::BTreeSet::new();
+    let takes: Vec<(&str, f64, glam::DVec3)> = paths
+        .iter()
+        .filter(|p| seen.insert(take_of(&p.clip)))
+        .filter_map(|p| shape_of(p).map(|(r, w)| (take_of(&p.clip), r, w)))
+        .collect();
+    if takes.len() < 2 {
+        return;
+    }
+    let by_size =
+        |a: &&(&str, f64, glam::DVec3), b: &&(&str, f64, glam::DVec3)| a.1.total_cmp(&b.1);
+    if let (Some(small), Some(big)) = (takes.iter().min_by(by_size), takes.iter().max_by(by_size))
+        && big.1 > SIZE_RATIO * small.1
+        && started < SIZES_TOLD_UNDER
+    {
+        advice.push(format!(
+            "`{name}`'s takes differ in size: {} goes {:.2} m, {} {:.2} m ({:.1}x), and left out in turn its drags start it {:.0}% of the time: a take left out is far from the others; record takes of the sizes in between (and of the sizes visitors drag), or leave the odd one out",
+            big.0,
+            big.1,
+            small.0,
+            small.1,
+            big.1 / small.1,
+            started * 100.0
+        ));
+    }
+    for (k, (take, _, way)) in takes.iter().enumerate() {
+        let others: glam::DVec3 = takes
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .map(|(_, t)| t.2)
+            .sum();
+        if others.length() < 1e-6 {
+            continue;
+        }
+        let deg = way
+            .dot(others.normalize())
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees();
+        if deg > OTHER_WAY_DEG && (takes.len() > 2 || k == 0) {
+            advice.push(format!(
+                "{take}, a take of `{name}`, goes another way than {} ({deg:.0} degrees from them): a drag like it starts another action or nothing; check it is the same action (a mirror image belongs to the mirrored action), or leave it out",
+                if takes.len() > 2 {
+                    "its other takes"
+                } else {
+                    "its other take"
+                }
+            ));
+        }
     }
 }
 
@@ -383,5 +463,56 @@ mod tests {
         );
         assert_eq!(take_of("bow.bvh~mirror"), "bow.bvh");
         assert_eq!(take_of("bow.bvh"), "bow.bvh");
+    }
+
+    fn path(clip: &str, to: glam::DVec3) -> ClipPath {
+        ClipPath {
+            clip: clip.to_owned(),
+            points: (0..=10).map(|k| to * (f64::from(k) / 10.0)).collect(),
+            dt: 1.0 / 30.0,
+            lead_in: 0,
+            peak_speed: 1.0,
+        }
+    }
+
+    #[test]
+    fn takes_of_another_size_or_way_are_told() {
+        let x = glam::DVec3::X;
+        let alike = [
+            path("a.bvh", x * 0.4),
+            path("a.bvh#20-40", x * 0.9),
+            path("b.bvh", x * 0.5),
+            path("c.bvh", (x + glam::DVec3::Y * 0.2) * 0.45),
+        ];
+        let mut advice = Vec::new();
+        shape_advice("punch", &alike, 0.5, &mut advice);
+        assert!(advice.is_empty(), "{advice:?}");
+        let odd = [
+            path("a.bvh", x * 0.4),
+            path("b.bvh", x * 0.5),
+            path("c.bvh", -x * 0.45),
+            path("d.bvh", x * 0.9),
+        ];
+        shape_advice("call", &odd, 0.9, &mut advice);
+        assert_eq!(
+            advice.len(),
+            1,
+            "sizes that cost nothing left out: {advice:?}"
+        );
+        advice.clear();
+        shape_advice("call", &odd, 0.5, &mut advice);
+        assert_eq!(advice.len(), 2, "{advice:?}");
+        assert!(
+            advice[0].contains("d.bvh goes 0.90 m, a.bvh 0.40 m (2.2x)"),
+            "{advice:?}"
+        );
+        assert!(
+            advice[1].starts_with("c.bvh, a take of `call`, goes another way"),
+            "{advice:?}"
+        );
+        // One take: nothing to compare.
+        let mut one = Vec::new();
+        shape_advice("bow", &odd[..1], 0.0, &mut one);
+        assert!(one.is_empty());
     }
 }
