@@ -37,6 +37,7 @@ fn browser(dir: &Path) -> Command {
     c.args([
         "--headless",
         "--no-sandbox",
+        "--disable-dev-shm-usage",
         "--disable-gpu",
         "--no-first-run",
         "--disable-extensions",
