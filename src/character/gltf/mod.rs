@@ -10,12 +10,14 @@ mod frame;
 mod geometry;
 pub mod humanoid;
 mod limbs;
+mod names;
 mod parts;
 mod places;
 mod read;
 mod rig;
 mod texture;
 mod upright;
+mod vrm;
 
 pub use drive::Drive;
 pub use geometry::Geometry;
