@@ -74,13 +74,25 @@ fn the_report_opens_in_chromium_with_its_counts_and_charts() {
     assert_eq!(r["sessions"], 30 * 600);
     let page = out.join("report.html");
     let html = std::fs::read_to_string(&page).unwrap();
-    // Nothing is fetched: no script, style sheet, image or link (SVG's
-    // namespace names a URL but fetches nothing).
+    // Nothing is fetched: no script, style sheet or image, and no link to
+    // the network (SVG's namespace names a URL but fetches nothing; the
+    // link to `library check`'s guide is a file the package installs).
     for fetches in [
-        "<script", "<link", "<img", "src=", "href=", "url(", "@import",
+        "<script",
+        "<link",
+        "<img",
+        "src=",
+        "href=\"http",
+        "url(",
+        "@import",
     ] {
         assert!(!html.contains(fetches), "{fetches} in the page");
     }
+    // Where visitors often fail to start an action, the advice links to
+    // `library check`'s guide.
+    assert!(html.contains(
+        "href=\"file:///usr/share/doc/marionette/docs/exhibit.md#marionette-library-check"
+    ));
     let url = format!("file://{}", page.display());
 
     // The text as the browser reads it.

@@ -9,6 +9,11 @@ use plotters::prelude::*;
 
 use super::Report;
 
+/// Where the installed package keeps `library check`'s explanation (a
+/// file on the kiosk: nothing is fetched from the network).
+const LIBRARY_CHECK_DOC: &str =
+    "file:///usr/share/doc/marionette/docs/exhibit.md#marionette-library-check-dir---json";
+
 const BLUE: RGBColor = RGBColor(52, 101, 164);
 const ORANGE: RGBColor = RGBColor(222, 120, 31);
 
@@ -258,7 +263,12 @@ pub fn page(r: &Report) -> String {
         for a in &r.advice {
             let _ = write!(h, "<li>{}</li>", escape(a));
         }
-        h.push_str("</ul>");
+        let _ = write!(
+            h,
+            "</ul><p>What the library's own takes start, action by action: \
+             <code>marionette library check LIBRARY</code>, explained in \
+             <a href=\"{LIBRARY_CHECK_DOC}\">the exhibit builder's guide</a> (installed with the package).</p>"
+        );
     }
     h.push_str(
         "<table id=\"actions-table\" style=\"border-collapse: collapse\"><tr><th>action</th><th>started</th>\
