@@ -93,12 +93,6 @@ impl Recording {
         self.writer.send(std::mem::take(&mut self.rows));
     }
 
-    /// What was recorded so far.
-    #[must_use]
-    pub fn counts(&self) -> record::Counts {
-        self.visits.counts
-    }
-
     #[must_use]
     pub fn writer(&self) -> &Writer {
         &self.writer

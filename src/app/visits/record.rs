@@ -90,9 +90,9 @@ struct Open {
     characters: BTreeSet<usize>,
 }
 
-/// Actions playing: (character, name) to their start (s, and Unix ms),
-/// how they were decided (cost, margin) and whether by reach.
-type Playing = BTreeMap<(usize, String), (f64, i64, Option<(f64, f64)>, bool)>;
+/// Actions playing: (character, name) to their start (s) and the row
+/// told then.
+type Playing = BTreeMap<(usize, String), (f64, Row)>;
 
 /// The rows being made from a table's events.
 #[derive(Clone, Debug)]
@@ -232,44 +232,40 @@ impl Visits {
                 by_reach,
                 decided,
             } => {
-                let how = decided.map(|d| (d.cost_m, d.margin_m));
-                let at_ms = self.ms(*time_s);
-                self.playing
-                    .insert((k, action.clone()), (*time_s, at_ms, how, *by_reach));
-                self.counts.actions += 1;
-                out.push(Row::Action {
+                let row = Row::Action {
                     session_ms,
-                    at_ms,
+                    at_ms: self.ms(*time_s),
                     character: k as u32,
                     action: action.clone(),
                     by_reach: *by_reach,
-                    cost_m: how.map(|h| h.0),
-                    margin_m: how.map(|h| h.1).filter(|m| m.is_finite()),
+                    cost_m: decided.map(|d| d.cost_m),
+                    margin_m: decided.map(|d| d.margin_m).filter(|m| m.is_finite()),
                     outcome: "playing",
                     length_s: None,
-                });
+                };
+                self.playing
+                    .insert((k, action.clone()), (*time_s, row.clone()));
+                self.counts.actions += 1;
+                out.push(row);
             }
             ActionEvent::Finished { action, time_s }
             | ActionEvent::Cancelled { action, time_s } => {
-                let Some((t0, at_ms, how, by_reach)) = self.playing.remove(&(k, action.clone()))
-                else {
+                // The start's row told again with how it ended.
+                let Some((t0, mut row)) = self.playing.remove(&(k, action.clone())) else {
                     return;
                 };
-                out.push(Row::Action {
-                    session_ms,
-                    at_ms,
-                    character: k as u32,
-                    action: action.clone(),
-                    by_reach,
-                    cost_m: how.map(|h| h.0),
-                    margin_m: how.map(|h| h.1).filter(|m| m.is_finite()),
-                    outcome: if matches!(e, ActionEvent::Finished { .. }) {
+                if let Row::Action {
+                    outcome, length_s, ..
+                } = &mut row
+                {
+                    *outcome = if matches!(e, ActionEvent::Finished { .. }) {
                         "finished"
                     } else {
                         "cancelled"
-                    },
-                    length_s: Some((time_s - t0).max(0.0)),
-                });
+                    };
+                    *length_s = Some((time_s - t0).max(0.0));
+                }
+                out.push(row);
             }
             ActionEvent::NearMiss {
                 action,

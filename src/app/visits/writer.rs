@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync_channel};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use rusqlite::Connection;
 
@@ -174,10 +174,7 @@ impl Writer {
     /// Write what is left and stop the thread: how many rows were handed
     /// over, written and dropped.
     pub fn finish(mut self) -> Written {
-        self.tx = None;
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        self.stop();
         let w = Written {
             sent: self.shared.sent.load(Ordering::Relaxed),
             committed: self.committed(),
@@ -202,12 +199,19 @@ impl Writer {
     }
 }
 
-impl Drop for Writer {
-    fn drop(&mut self) {
+impl Writer {
+    /// Close the queue and wait for the thread to write what is left.
+    fn stop(&mut self) {
         self.tx = None;
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
+    }
+}
+
+impl Drop for Writer {
+    fn drop(&mut self) {
+        self.stop();
     }
 }
 
@@ -233,9 +237,7 @@ struct Thread {
 }
 
 fn now_ms() -> i64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_millis() as i64)
+    (super::unix_now() * 1e3) as i64
 }
 
 /// A date and time for a set-aside file's name (UTC).
@@ -309,7 +311,6 @@ impl Thread {
             }
             if self.last_commit.elapsed().as_secs_f64() >= BATCH_S {
                 self.commit();
-                self.sync(false);
                 self.housekeeping();
             }
         }
