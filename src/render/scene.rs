@@ -305,10 +305,18 @@ pub fn shadow_mesh(skeleton: &Skeleton, roles: &RoleMap, world: &WorldPose) -> M
 }
 
 /// The coarse capsules that cast a body's shadow.
+///
+/// The stencil darkens each shadow pixel once, so the capsules are laid
+/// whole, overlapping, rather than as their union (what lies inside one
+/// capsule falls inside its shadow: the same pixels, for half the time
+/// of composing a skinned figure's frame); of each, only the half facing
+/// the light (the other half falls on the same pixels).
 fn shadow_into(mesh: &mut Mesh, segments: &[Segment]) {
-    let parts: Vec<CapsulePart> = segments.iter().map(|s| s.part([0.0; 4])).collect();
     let from = mesh.indices.len() / 3;
-    mesh.capsule_union(&parts, SHADOW_AROUND, SHADOW_RINGS);
+    for s in segments {
+        let c = s.part([0.0; 4]);
+        mesh.capsule_with(c.a, c.b, c.r, c.color, SHADOW_AROUND, SHADOW_RINGS);
+    }
     mesh.keep_facing(LIGHT, from);
 }
 

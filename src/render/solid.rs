@@ -131,17 +131,16 @@ impl Mesh {
     /// others would be turned over and culled after the vertex work.
     pub fn keep_facing(&mut self, towards: Vec3, from: usize) {
         let v = &self.vertices;
-        let kept: Vec<u32> = self.indices[from * 3..]
-            .chunks_exact(3)
-            .filter(|t| {
-                let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(v[t[k] as usize].pos));
-                (b - a).cross(c - a).dot(towards) > 0.0
-            })
-            .flatten()
-            .copied()
-            .collect();
-        self.indices.truncate(from * 3);
-        self.indices.extend(kept);
+        let mut kept = from * 3;
+        for i in (from * 3..self.indices.len()).step_by(3) {
+            let t = [self.indices[i], self.indices[i + 1], self.indices[i + 2]];
+            let [a, b, c] = t.map(|k| Vec3::from(v[k as usize].pos));
+            if (b - a).cross(c - a).dot(towards) > 0.0 {
+                self.indices[kept..kept + 3].copy_from_slice(&t);
+                kept += 3;
+            }
+        }
+        self.indices.truncate(kept);
     }
 }
 

@@ -17,7 +17,7 @@
 use glam::{DMat4, DQuat, DVec3};
 
 use super::Figure;
-use super::limbs::{end_points, foot_points, low_points, near_points, toward, two_bone};
+use super::limbs::{Carried, end_points, foot_points, low_points, near_points, toward, two_bone};
 use super::upright::Upright;
 use crate::character::body::{facing, leg_length_posed};
 use crate::character::library::Library;
@@ -133,16 +133,16 @@ pub struct Drive {
     limb_scale: [f64; 4],
     /// Each limb end's mesh points (rest pose; feet, then hands, as
     /// [`LIMBS`]) with the joint carrying each (see `limbs::end_points`).
-    ends: [Vec<super::Point>; 4],
+    ends: [Carried; 4],
     /// The hands' points looked at where one comes within [`NEAR_M`] of
     /// the floor (see `limbs::near_points`; none for the feet).
-    near: [Vec<super::Point>; 4],
+    near: [Carried; 4],
     /// Each limb of [`LIMBS`]: one bone from its root to its end (its
     /// middle made up).
     one_bone: [bool; 4],
     /// Mesh points the figure carries low at rest off its legs (a cape, a
     /// skirt, a tail), each with its joint: none goes under the floor.
-    low: Vec<super::Point>,
+    low: Carried,
     /// The library's upper body turned back up where the figure's head
     /// would go under the floor.
     upright: Upright,
@@ -176,11 +176,11 @@ impl Drive {
                 len(&fpos, &fig.roles) / len(&rest_lib.positions, lib_roles).max(1e-9)
             }),
             ends: LIMBS.map(|(_, m, r)| {
-                if matches!(r, Role::LeftFoot | Role::RightFoot) {
+                Carried::new(if matches!(r, Role::LeftFoot | Role::RightFoot) {
                     foot_points(fig, fig.roles.get(r), fig.roles.get(m))
                 } else {
                     end_points(fig, fig.roles.get(r))
-                }
+                })
             }),
             hip_drop: {
                 let drop = |p: &[DVec3], r: &RoleMap| {
@@ -199,16 +199,20 @@ impl Drive {
             }),
             planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
             near: LIMBS.map(|(_, _, r)| {
-                if matches!(r, Role::LeftHand | Role::RightHand) {
+                Carried::new(if matches!(r, Role::LeftHand | Role::RightHand) {
                     near_points(fig, fig.roles.get(r))
                 } else {
                     Vec::new()
-                }
+                })
             }),
             one_bone: LIMBS
                 .map(|(_, b, _)| fig.made_up.get(fig.roles.get(b)).copied().unwrap_or(false)),
-            low: low_points(fig),
-            upright: Upright::new(lib, lib_roles, end_points(fig, fig.roles.get(Role::Head))),
+            low: Carried::new(low_points(fig)),
+            upright: Upright::new(
+                lib,
+                lib_roles,
+                Carried::new(end_points(fig, fig.roles.get(Role::Head))),
+            ),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
             rest: fig
@@ -318,6 +322,18 @@ impl Drive {
             let skin = self.skinning(&posed);
             for (k, (_, _, f)) in LIMBS.into_iter().enumerate() {
                 let j = self.fig_roles.get(f);
+                if self.end_clear(&skin, k) {
+                    continue;
+                }
+                if pass > 0 && !self.one_bone[k] {
+                    // Only how far it is under is wanted now.
+                    let low = self.end_lowest(&skin, k);
+                    if low < -1e-4 {
+                        under = true;
+                        lift[k] -= low;
+                    }
+                    continue;
+                }
                 let points = self.end_now(&skin, k);
                 let lowest =
                     |ps: &mut dyn Iterator<Item = DVec3>| ps.min_by(|a, b| a.y.total_cmp(&b.y));
@@ -361,10 +377,11 @@ impl Drive {
         // whole figure rises by what is left.
         let skin = self.skinning(&posed);
         let low = (0..LIMBS.len())
-            .flat_map(|k| self.end_now(&skin, k))
-            .chain(self.low.iter().map(|p| p.now(&skin)))
-            .chain(self.upright.points.iter().map(|p| p.now(&skin)))
-            .map(|p| p.y)
+            .map(|k| self.end_lowest(&skin, k))
+            .chain([
+                self.low.lowest_below(&skin, 0.0),
+                self.upright.points.lowest_below(&skin, 0.0),
+            ])
             .fold(0.0f64, f64::min);
         if low < -1e-4 {
             for m in &mut posed {
@@ -385,14 +402,7 @@ impl Drive {
         w: &[DMat4],
         raise: DVec3,
     ) -> Option<WorldPose> {
-        let head_lowest = |w: &[DMat4]| {
-            let skin = self.skinning(w);
-            self.upright
-                .points
-                .iter()
-                .map(|p| p.now(&skin).y)
-                .fold(f64::INFINITY, f64::min)
-        };
+        let head_lowest = |w: &[DMat4]| self.upright.points.lowest_below(&self.skinning(w), 0.0);
         if head_lowest(w) >= 0.0 {
             return None;
         }
@@ -415,11 +425,28 @@ impl Drive {
     /// `skin` (from [`Self::skinning`] of a posture, made once for all
     /// four limbs): a hand near the floor by all it carries.
     fn end_now(&self, skin: &[DMat4], k: usize) -> Vec<DVec3> {
-        let kept: Vec<DVec3> = self.ends[k].iter().map(|p| p.now(skin)).collect();
+        let kept = self.ends[k].now(skin);
         if !self.near[k].is_empty() && kept.iter().any(|p| p.y < NEAR_M) {
-            return self.near[k].iter().map(|p| p.now(skin)).collect();
+            return self.near[k].now(skin);
         }
         kept
+    }
+
+    /// The height of limb `k`'s end's lowest mesh point
+    /// ([`Self::end_now`]), or 0 where none is under the floor.
+    fn end_lowest(&self, skin: &[DMat4], k: usize) -> f64 {
+        if self.near[k].is_empty() || self.ends[k].lowest_below(skin, NEAR_M) >= NEAR_M {
+            self.ends[k].lowest_below(skin, 0.0)
+        } else {
+            self.near[k].lowest_below(skin, 0.0)
+        }
+    }
+
+    /// Whether none of limb `k`'s end's mesh points ([`Self::end_now`])
+    /// can be under the floor for skinning matrices `skin`.
+    fn end_clear(&self, skin: &[DMat4], k: usize) -> bool {
+        self.ends[k].floor_bound(skin) >= -1e-4
+            && (self.near[k].is_empty() || self.near[k].floor_bound(skin) >= -1e-4)
     }
 
     /// The joint turns that put each limb's end where the library has it
@@ -768,12 +795,13 @@ fn hip_wide(
 /// the heel).
 fn flatter(points: &[DVec3], (ankle, axis): (DVec3, DVec3), low_y: f64, most: f64) -> f64 {
     let low_after = |angle: f64| {
-        let q = DQuat::from_axis_angle(axis, angle);
+        // Only the height is wanted: the turn's row that gives it.
+        let up = glam::DMat3::from_quat(DQuat::from_axis_angle(axis, angle)).row(1);
         points
             .iter()
-            .map(|p| ankle + q * (*p - ankle))
-            .min_by(|a, b| a.y.total_cmp(&b.y))
-            .map_or(f64::NEG_INFINITY, |p| p.y)
+            .map(|p| ankle.y + up.dot(*p - ankle))
+            .min_by(f64::total_cmp)
+            .unwrap_or(f64::NEG_INFINITY)
     };
     let mut best = (0.0, low_y);
     for step in 1..=FLATTEN_STEPS {

@@ -2,7 +2,7 @@
 //! knee or elbow towards a pole, and the mesh points a limb's end carries
 //! (what must stay off the floor).
 
-use glam::{DQuat, DVec3};
+use glam::{DMat4, DQuat, DVec3};
 
 use super::{Figure, Point, carried_blended};
 use crate::character::roles::Role;
@@ -210,4 +210,202 @@ pub(super) fn low_points(fig: &Figure) -> Vec<Point> {
         .filter(|p| p.at.y < floor && !leg.get(p.joint).copied().unwrap_or(true))
         .collect();
     spread(all, DVec3::new(0.0, floor, 0.0))
+}
+
+/// Mesh points the figure keeps off the floor, with what bounds how low
+/// they can go. Skinning moves a point as a blend of its joints'
+/// transforms, so it is no lower than the lowest of its joints' spheres
+/// (per joint carrying any of the points: a rest point, their mean, and
+/// how far the farthest is from it): a set whose spheres are all above
+/// the floor is not skinned point by point (a hanging hand, a head held
+/// up), nor is a run of points near each other at rest whose spheres
+/// are above the lowest point found.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Carried {
+    pub(super) points: Vec<Point>,
+    spheres: Vec<Sphere>,
+    /// Runs of the points near each other at rest: their indices and
+    /// spheres.
+    runs: Vec<(Vec<u32>, Vec<Sphere>)>,
+}
+
+/// A joint, a rest point and a radius (see [`Carried`]).
+type Sphere = (usize, DVec3, f64);
+
+/// How many points a run of [`Carried`] holds.
+const RUN: usize = 48;
+
+/// The spheres bounding `points` (see [`Carried`]).
+fn spheres<'a>(points: impl Iterator<Item = &'a Point> + Clone) -> Vec<Sphere> {
+    let carrying = |p: &'a Point| {
+        (0..4)
+            .filter(|&k| p.weights[k] > 0.0)
+            .map(move |k| (usize::from(p.joints[k]), p.at))
+    };
+    let mut sums: Vec<(usize, DVec3, usize)> = Vec::new();
+    for (j, at) in points.clone().flat_map(carrying) {
+        match sums.iter_mut().find(|s| s.0 == j) {
+            Some(s) => {
+                s.1 += at;
+                s.2 += 1;
+            }
+            None => sums.push((j, at, 1)),
+        }
+    }
+    let mut out: Vec<Sphere> = sums
+        .into_iter()
+        .map(|(j, sum, n)| (j, sum / n as f64, 0.0))
+        .collect();
+    for (j, at) in points.flat_map(carrying) {
+        if let Some(s) = out.iter_mut().find(|s| s.0 == j) {
+            s.2 = s.2.max((at - s.1).length());
+        }
+    }
+    out
+}
+
+/// The lowest height the spheres' points can have for skinning matrices
+/// `skin` (rest to posed; a joint past them stays at rest).
+fn bound(spheres: &[Sphere], skin: &[DMat4]) -> f64 {
+    spheres
+        .iter()
+        .map(|&(j, c, r)| match skin.get(j) {
+            Some(m) => {
+                let stretch = m
+                    .x_axis
+                    .truncate()
+                    .length()
+                    .max(m.y_axis.truncate().length())
+                    .max(m.z_axis.truncate().length());
+                m.transform_point3(c).y - r * stretch
+            }
+            None => c.y - r,
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Runs of at most [`RUN`] of `points` (those in `order`), near each
+/// other at rest: halved across the widest side of their box, again and
+/// again.
+fn split(points: &[Point], order: &mut [u32], runs: &mut Vec<(Vec<u32>, Vec<Sphere>)>) {
+    if order.len() <= RUN {
+        if !order.is_empty() {
+            runs.push((
+                order.to_vec(),
+                spheres(order.iter().map(|&i| &points[i as usize])),
+            ));
+        }
+        return;
+    }
+    let at = |i: u32| points[i as usize].at;
+    let (lo, hi) = order.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &i| (lo.min(at(i)), hi.max(at(i))),
+    );
+    let size = hi - lo;
+    let axis = if size.x >= size.y && size.x >= size.z {
+        0
+    } else if size.y >= size.z {
+        1
+    } else {
+        2
+    };
+    let half = order.len() / 2;
+    order.select_nth_unstable_by(half, |&a, &b| at(a)[axis].total_cmp(&at(b)[axis]));
+    let (a, b) = order.split_at_mut(half);
+    split(points, a, runs);
+    split(points, b, runs);
+}
+
+impl Carried {
+    pub(super) fn new(points: Vec<Point>) -> Self {
+        let mut order: Vec<u32> = (0..points.len() as u32).collect();
+        let mut runs = Vec::new();
+        split(&points, &mut order, &mut runs);
+        Self {
+            spheres: spheres(points.iter()),
+            points,
+            runs,
+        }
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// A height none of the points is under, for skinning matrices
+    /// `skin` (rest to posed).
+    pub(super) fn floor_bound(&self, skin: &[DMat4]) -> f64 {
+        bound(&self.spheres, skin)
+    }
+
+    /// Where the points are for skinning matrices `skin`.
+    pub(super) fn now(&self, skin: &[DMat4]) -> Vec<DVec3> {
+        self.points.iter().map(|p| p.now(skin)).collect()
+    }
+
+    /// The height of the lowest point for skinning matrices `skin`, or
+    /// `ceiling` where none is lower.
+    pub(super) fn lowest_below(&self, skin: &[DMat4], ceiling: f64) -> f64 {
+        let mut best = ceiling;
+        if self.floor_bound(skin) >= best {
+            return best;
+        }
+        for (run, spheres) in &self.runs {
+            if bound(spheres, skin) >= best {
+                continue;
+            }
+            for &i in run {
+                best = best.min(self.points[i as usize].now(skin).y);
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points blended over up to three of five joints, posed by turns,
+    /// moves and scales: the bound is never above a point, and the
+    /// lowest found by runs is the lowest of them all.
+    #[test]
+    fn the_floor_bound_holds_and_the_lowest_is_found_past_the_runs() {
+        let mut seed = 0x2545_f491_u64;
+        let mut next = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let points: Vec<Point> = (0..500)
+            .map(|_| {
+                let joints = [0, 1, 2, 3].map(|_| (next() * 5.0) as u16);
+                let w = [next(), next(), next(), 0.0];
+                let sum: f64 = w.iter().sum();
+                Point {
+                    joint: usize::from(joints[0]),
+                    at: DVec3::new(next() - 0.5, next() * 1.5, next() - 0.5),
+                    joints,
+                    weights: w.map(|x| (x / sum) as f32),
+                }
+            })
+            .collect();
+        let carried = Carried::new(points.clone());
+        for _ in 0..50 {
+            let skin: Vec<DMat4> = (0..5)
+                .map(|_| {
+                    DMat4::from_scale_rotation_translation(
+                        DVec3::splat(0.5 + next()),
+                        DQuat::from_euler(glam::EulerRot::XYZ, next() * 6.0, next() * 6.0, next()),
+                        DVec3::new(next() - 0.5, next() - 0.7, next() - 0.5),
+                    )
+                })
+                .collect();
+            let all: Vec<f64> = points.iter().map(|p| p.now(&skin).y).collect();
+            let lowest = all.iter().copied().fold(f64::INFINITY, f64::min);
+            assert!(carried.floor_bound(&skin) <= lowest + 1e-12);
+            assert_eq!(carried.lowest_below(&skin, f64::INFINITY), lowest);
+            assert_eq!(carried.lowest_below(&skin, 0.0), lowest.min(0.0));
+        }
+    }
 }

@@ -185,14 +185,16 @@ impl Point {
     /// Where it is for skinning matrices `skin` (rest to posed).
     #[must_use]
     pub fn now(&self, skin: &[DMat4]) -> glam::DVec3 {
-        (0..4)
-            .filter(|&k| self.weights[k] > 0.0)
-            .map(|k| {
-                skin.get(usize::from(self.joints[k]))
-                    .map_or(self.at, |m| m.transform_point3(self.at))
-                    * f64::from(self.weights[k])
-            })
-            .sum()
+        let mut sum = glam::DVec3::ZERO;
+        for (j, w) in self.joints.iter().zip(self.weights) {
+            if w > 0.0 {
+                let at = skin
+                    .get(usize::from(*j))
+                    .map_or(self.at, |m| m.transform_point3(self.at));
+                sum += at * f64::from(w);
+            }
+        }
+        sum
     }
 }
 

@@ -7,7 +7,7 @@
 
 use glam::{DQuat, DVec3};
 
-use super::Point;
+use super::limbs::Carried;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Skeleton, WorldPose};
 
@@ -25,13 +25,13 @@ pub(super) struct Upright {
     pelvis: usize,
     head: usize,
     /// The mesh points the figure's head carries (rest pose).
-    pub(super) points: Vec<Point>,
+    pub(super) points: Carried,
 }
 
 impl Upright {
     /// For `lib` (whose roles are `lib_roles`) and the figure's head's mesh
     /// `points`.
-    pub(super) fn new(lib: &Skeleton, lib_roles: &RoleMap, points: Vec<Point>) -> Self {
+    pub(super) fn new(lib: &Skeleton, lib_roles: &RoleMap, points: Carried) -> Self {
         let pelvis = lib_roles.get(Role::Pelvis);
         let hips = [Role::LeftHip, Role::RightHip].map(|r| lib_roles.get(r));
         let upper = (0..lib.len())
@@ -119,7 +119,7 @@ mod tests {
             upper: vec![false, true, true, false],
             pelvis: 0,
             head: 2,
-            points: Vec::new(),
+            points: Carried::default(),
         };
         // The head's mesh hangs 1.2 m below its joint: 0.2 m under.
         let lowest = |w: &WorldPose| w.positions[2].y - 1.2;
