@@ -347,3 +347,52 @@ fn separation_shows_why_the_held_out_variants_are_told_apart() {
         assert!(apart, "{action}: {s:?}");
     }
 }
+
+#[test]
+fn every_drag_is_explained_as_it_was_decided() {
+    use marionette::character::motion::Clip;
+    use marionette::control::action::recogniser::Held;
+    use marionette::control::character::Character;
+    use marionette::tools::eval::actions::{eval_templates, eval_templates_explained};
+    let (lib, actions) = setup();
+    let recogniser = Character::calibrated(&lib, &actions);
+    let clips = held_out_clips();
+    let tests: Vec<(String, &Clip)> = clips.iter().map(|(a, c)| (a.clone(), c)).collect();
+    let files: Vec<String> = (0..tests.len()).map(|i| format!("test{i}")).collect();
+    let mut trials = Vec::new();
+    let explained = eval_templates_explained(&actions, &recogniser, &tests, &files, 1, &mut trials);
+    // The same decisions as without the explanation.
+    assert_eq!(explained, eval_templates(&actions, &recogniser, &tests, 1));
+    let drags = trials.iter().filter(|t| !t.slow).count();
+    assert_eq!(drags, explained.trials);
+    let mut correct = 0;
+    for t in &trials {
+        assert!(t.points.windows(2).all(|w| w[0].t <= w[1].t), "{t:?}");
+        let starts: Vec<_> = t
+            .points
+            .iter()
+            .filter(|p| p.at.held == Held::Starts)
+            .collect();
+        match &t.started {
+            Some(a) => {
+                // It started at its last point, the one explained as
+                // starting, led by the action it started.
+                assert_eq!(starts.len(), 1, "{t:?}");
+                let last = t.points.last().unwrap();
+                assert_eq!(last.at.held, Held::Starts);
+                let lead = last.at.lead.as_ref().unwrap();
+                assert_eq!(&lead.action, a);
+                assert!(lead.cost_m <= recogniser.thresholds.cost_m + 1e-12);
+                assert!(
+                    last.at
+                        .margin_m
+                        .is_none_or(|m| m >= recogniser.thresholds.margin_m)
+                );
+                correct += usize::from(!t.slow && a == &t.action);
+            }
+            None => assert!(starts.is_empty(), "{t:?}"),
+        }
+        assert!(files.contains(&t.file));
+    }
+    assert!((correct as f64 / drags as f64 - explained.correct).abs() < 1e-3);
+}

@@ -372,6 +372,14 @@ pub(super) enum EvalCommand {
         /// controller, no posing model)
         #[arg(long)]
         models_only: bool,
+        /// Write every drag explained to this file, one JSON object a line
+        /// (the template recogniser alone, as --models-only): at each point
+        /// the leading action and the next with their costs, the margin,
+        /// the leader's coverage and tempo, and the rule that held the
+        /// decision back (not_moving, coverage, cost, margin, no_template;
+        /// starts where it started)
+        #[arg(long, value_name = "FILE.jsonl")]
+        explain: Option<PathBuf>,
     },
 }
 

@@ -15,7 +15,7 @@ pub(super) fn eval_actions(
     library: &Path,
     test_dir: &Path,
     seed: u64,
-    models_only: bool,
+    (models_only, explain): (bool, Option<&Path>),
 ) -> Result<(), Failure> {
     use crate::character::library::Library;
     use crate::tools::eval::actions as eval;
@@ -27,7 +27,16 @@ pub(super) fn eval_actions(
             format!("cannot list {}: {e}", test_dir.display()),
         )
     })?;
+    if explain.is_some()
+        && config.action.recogniser == crate::control::controller::RecogniserKind::Paper
+    {
+        return Err(Failure::new(
+            exit::USAGE,
+            "--explain explains the template recogniser; the configuration sets [action] recogniser = \"paper\"",
+        ));
+    }
     let mut clips = Vec::new();
+    let mut names = Vec::new();
     for f in &files {
         let stem = f
             .file_stem()
@@ -42,6 +51,11 @@ pub(super) fn eval_actions(
         let (_, mut clip) = read_clip(f, None)?;
         crate::character::floor::shift(&mut clip, lib.floor_shift_m);
         clips.push((action, clip));
+        names.push(
+            f.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        );
     }
     if clips.is_empty() {
         return Err(Failure::new(
@@ -59,7 +73,26 @@ pub(super) fn eval_actions(
     }
     let tests: Vec<(String, &crate::character::motion::Clip)> =
         clips.iter().map(|(a, c)| (a.clone(), c)).collect();
-    let mut result = if models_only {
+    let mut result = if let Some(out) = explain {
+        let recogniser = crate::app::character::recogniser(&lib, &actions);
+        let mut trials = Vec::new();
+        let result = eval::eval_templates_explained(
+            &actions,
+            &recogniser,
+            &tests,
+            &names,
+            seed,
+            &mut trials,
+        );
+        let mut text = String::new();
+        for t in &trials {
+            text.push_str(&serde_json::to_string(t).map_err(|e| Failure::new(exit::FAILURE, e))?);
+            text.push('\n');
+        }
+        super::write_atomically(out, &text)?;
+        tracing::info!(file = %out.display(), drags = trials.len(), "every drag explained");
+        result
+    } else if models_only {
         match config.action.recogniser {
             crate::control::controller::RecogniserKind::Paper => {
                 eval::eval_actions(&actions, &tests, &config.action.rule(), seed)

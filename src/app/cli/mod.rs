@@ -352,13 +352,14 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                     test,
                     seed,
                     models_only,
+                    explain,
                 },
         } => eval_actions(
             config,
             &chosen_library(config, library)?,
             &test,
             seed,
-            models_only,
+            (models_only, explain.as_deref()),
         ),
         Command::Eval {
             what:

@@ -17,7 +17,7 @@ use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::control::action::model::{ActionModel, recognize};
-use crate::control::action::recogniser::{DragMatch, Recogniser};
+use crate::control::action::recogniser::{DragMatch, Explained, Held, Recogniser};
 use crate::control::action::trail::{StartRule, TrailPoint};
 pub use crate::control::action::trials::Drag;
 use crate::control::action::trials::each_drag;
@@ -159,6 +159,72 @@ pub fn eval_templates(
         })
     };
     eval_with(&with_primary(actions, tests), seed, &mut judge)
+}
+
+/// One drag of `eval actions --explain`: the test file's action and
+/// name, the view, whether it was a slow posing drag, what it started, and
+/// each of its points explained up to the one that started it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TrialExplained {
+    pub action: String,
+    pub file: String,
+    pub view_deg: f64,
+    pub slow: bool,
+    pub started: Option<String>,
+    pub points: Vec<PointExplained>,
+}
+
+/// A drag point explained, at `t` seconds from the drag's first.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PointExplained {
+    pub t: f64,
+    #[serde(flatten)]
+    pub at: Explained,
+}
+
+/// [`eval_templates`], each drag explained point by point into `trials`
+/// (`files` names each test).
+#[must_use]
+pub fn eval_templates_explained(
+    actions: &[ActionModel],
+    recogniser: &Recogniser,
+    tests: &[(String, &Clip)],
+    files: &[String],
+    seed: u64,
+    trials: &mut Vec<TrialExplained>,
+) -> ActionEval {
+    let known: Vec<usize> = (0..tests.len())
+        .filter(|&i| actions.iter().any(|a| a.def.name == tests[i].0))
+        .collect();
+    let tests_known: Vec<(String, &Clip)> = known.iter().map(|&i| tests[i].clone()).collect();
+    let mut judge = |d: &Drag<'_>| {
+        let mut m = DragMatch::new(recogniser, actions, d.role, d.camera, d.at, None);
+        let t0 = d.trail.first().map_or(0.0, |p| p.t);
+        let mut points = Vec::new();
+        let started = d.trail.iter().enumerate().find_map(|(k, p)| {
+            m.push(*p);
+            let at = m.explain(actions, &recogniser.thresholds);
+            let starts = at.held == Held::Starts;
+            points.push(PointExplained {
+                t: ((p.t - t0) * 1000.0).round() / 1000.0,
+                at,
+            });
+            let decided = m.decide(actions, &recogniser.thresholds);
+            debug_assert_eq!(starts, decided.is_some(), "explained as decided");
+            decided.map(|r| (actions[r.action].def.name.clone(), k + 1))
+        });
+        let test = known[d.test];
+        trials.push(TrialExplained {
+            action: tests[test].0.clone(),
+            file: files.get(test).cloned().unwrap_or_default(),
+            view_deg: d.angle_deg,
+            slow: d.slow,
+            started: started.as_ref().map(|(a, _)| a.clone()),
+            points,
+        });
+        started
+    };
+    eval_with(&with_primary(actions, &tests_known), seed, &mut judge)
 }
 
 /// The tests whose action is in `actions`, with its primary part.

@@ -33,7 +33,10 @@
 
 use glam::{DVec2, DVec3};
 
+mod explain;
 mod template;
+
+pub use self::explain::{Explained, Held, Leading};
 
 use self::template::{Seen, see};
 use super::model::ActionModel;
