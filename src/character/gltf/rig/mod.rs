@@ -7,8 +7,13 @@ use std::collections::BTreeMap;
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::read::{Budget, File, Kind};
-use super::{Figure, GltfError, Part, frame, humanoid, places};
+use super::read::File;
+mod bind;
+mod stance;
+
+use self::bind::bind_or_node_pose;
+use self::stance::{body_turn, extent_along_y};
+use super::{Figure, GltfError, Part, humanoid, places};
 use crate::character::motion::detect_scale;
 use crate::character::roles::{self, Role};
 use crate::character::skeleton::{Joint, Skeleton};
@@ -203,171 +208,6 @@ impl Joints {
     }
 }
 
-/// Whether the file's meshes are mostly skinned: not a figure of rigid
-/// meshes hung on its joints with a few skinned parts.
-fn mostly_skinned(file: &File) -> bool {
-    let (mut skinned, mut rigid) = (0usize, 0usize);
-    for node in file.doc.nodes() {
-        if let Some(mesh) = node.mesh() {
-            let count: usize = mesh
-                .primitives()
-                .filter_map(|p| p.get(&gltf::Semantic::Positions).map(|a| a.count()))
-                .sum();
-            if node.skin().is_some() {
-                skinned += count;
-            } else {
-                rigid += count;
-            }
-        }
-    }
-    rigid * 10 <= skinned
-}
-
-/// Each node's bind pose as its skin (the first that has it) binds it, in
-/// the nodes' world; `None` for nodes no skin binds.
-fn skin_binds(
-    file: &File,
-    world: &[DMat4],
-    joints: &Joints,
-) -> Result<Vec<Option<DMat4>>, GltfError> {
-    let mut bind: Vec<Option<DMat4>> = vec![None; world.len()];
-    let mut budget = Budget::default();
-    for skin in file.doc.skins() {
-        let Some(a) = skin.inverse_bind_matrices() else {
-            continue;
-        };
-        file.check(&a, "inverse bind matrices", Kind::Matrices, &mut budget)?;
-        let nodes: Vec<usize> = skin.joints().map(|j| j.index()).collect();
-        let ibms: Vec<DMat4> = skin
-            .reader(|b| file.buffer(b))
-            .read_inverse_bind_matrices()
-            .map(|it| {
-                it.map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
-                    .collect()
-            })
-            .unwrap_or_default();
-        if ibms.len() < nodes.len()
-            || ibms
-                .iter()
-                .any(|m| !m.is_finite() || m.determinant().abs() < 1e-12)
-        {
-            // Said by the parts' reader, which refuses them.
-            continue;
-        }
-        let model = model_place(world, joints, skin.index(), &nodes, &ibms);
-        for (k, &n) in nodes.iter().enumerate() {
-            if bind[n].is_none() {
-                bind[n] = Some(model * ibms[k].inverse());
-            }
-        }
-    }
-    Ok(bind)
-}
-
-/// The model's place for skin `skin` (its joint `nodes`, their inverse bind
-/// matrices `ibms`): the skinning matrix most joints share at the nodes'
-/// pose (every joint shares it where that is the bind pose); the
-/// armature's own place where a joint (its root, unmoved) agrees with it,
-/// else the one most joints agree on.
-fn model_place(
-    world: &[DMat4],
-    joints: &Joints,
-    skin: usize,
-    nodes: &[usize],
-    ibms: &[DMat4],
-) -> DMat4 {
-    let skinning: Vec<DMat4> = nodes
-        .iter()
-        .zip(ibms)
-        .map(|(&n, m)| world[n] * *m)
-        .collect();
-    let close = |a: &DMat4, b: &DMat4| {
-        a.to_cols_array()
-            .iter()
-            .zip(b.to_cols_array())
-            .all(|(x, y)| (x - y).abs() < 1e-4 * (1.0 + x.abs().max(y.abs())))
-    };
-    let armature = nodes
-        .iter()
-        .find_map(|&n| {
-            joints
-                .joint_parent(n)
-                .is_none()
-                .then(|| joints.parent_node[n])
-        })
-        .map_or(DMat4::IDENTITY, |p| p.map_or(DMat4::IDENTITY, |p| world[p]));
-    let model = if skinning.iter().any(|b| close(&armature, b)) {
-        armature
-    } else {
-        skinning
-            .iter()
-            .take(64)
-            .max_by_key(|a| skinning.iter().filter(|b| close(a, b)).count())
-            .copied()
-            .unwrap_or(DMat4::IDENTITY)
-    };
-    tracing::debug!(
-        skin,
-        joints = nodes.len(),
-        agree = skinning.iter().filter(|b| close(&model, b)).count(),
-        "joints whose skinning matrix at the nodes' pose is the model's"
-    );
-    model
-}
-
-/// Each node's world transform with the skinned joints in their bind
-/// pose (from the skins' inverse bind matrices), where the nodes hold
-/// another pose (an idle pose stored on the nodes): the nodes a joint
-/// carries go with it. `None` where the nodes already stand in the bind
-/// pose (within half a percent of the skeleton's size).
-fn bind_pose(
-    file: &File,
-    world: &[DMat4],
-    joints: &Joints,
-) -> Result<Option<Vec<DMat4>>, GltfError> {
-    // A figure built of rigid meshes hung on its joints looks as it should
-    // in the nodes' pose, wherever its few skinned parts were bound.
-    if !mostly_skinned(file) {
-        return Ok(None);
-    }
-    let bind = skin_binds(file, world, joints)?;
-    let places: Vec<DVec3> = joints
-        .order
-        .iter()
-        .map(|&n| world[n].w_axis.truncate())
-        .collect();
-    let size = places
-        .iter()
-        .flat_map(|a| {
-            places
-                .iter()
-                .step_by((places.len() / 32).max(1))
-                .map(move |b| (*a - *b).length())
-        })
-        .fold(0.0f64, f64::max);
-    let moved = joints
-        .order
-        .iter()
-        .filter_map(|&n| bind[n].map(|b| (b.w_axis - world[n].w_axis).truncate().length()))
-        .fold(0.0f64, f64::max);
-    if moved.is_nan() || moved <= 0.005 * size || bind.iter().flatten().any(|m| !m.is_finite()) {
-        return Ok(None);
-    }
-    // Every node in the bind pose: a joint as its skin binds it, a node a
-    // joint carries as its joint moved.
-    let mut out = world.to_vec();
-    for n in 0..world.len() {
-        if let Some(b) = bind[n] {
-            out[n] = b;
-        } else if let Some(c) = joints.carrier(n) {
-            if let Some(b) = bind[c] {
-                out[n] = b * world[c].inverse() * world[n];
-            }
-        }
-    }
-    Ok(Some(out))
-}
-
 pub(super) fn figure(
     file: &File,
     overrides: &BTreeMap<String, String>,
@@ -445,26 +285,6 @@ pub(super) fn figure(
         own: false,
         made_up,
         credit: file.extensions.as_ref().and_then(humanoid::vrm_credit),
-    })
-}
-
-/// Each node's world transform in the skin's bind pose (said in `notes`
-/// where the nodes hold another), else as the nodes stand.
-fn bind_or_node_pose(
-    file: &File,
-    joints: &Joints,
-    notes: &mut Vec<String>,
-) -> Result<Vec<DMat4>, GltfError> {
-    let node_pose = world_transforms(file)?;
-    Ok(match bind_pose(file, &node_pose, joints)? {
-        Some(bound) => {
-            notes.push(
-                "its nodes hold another pose than the skin's bind pose: the bind pose is used"
-                    .to_owned(),
-            );
-            bound
-        }
-        None => node_pose,
     })
 }
 
@@ -547,34 +367,6 @@ fn joint_table(
     (names, parents, places)
 }
 
-/// The turn that stands the figure up facing +Z, and what said which way
-/// is up and which way it faces: its body's frame (its sides swapped where
-/// its names put them the other way round), else its joints' spread.
-fn body_turn(
-    found: &mut BTreeMap<Role, (usize, humanoid::Evidence)>,
-    (names, parents, places): (&[String], &[Option<usize>], &[DVec3]),
-    parts_raw: &[Part],
-    (raw, verts): (&[DVec3], &[DVec3]),
-    notes: &mut Vec<String>,
-) -> (DQuat, String, String) {
-    match frame::body_frame(found, places, parents, parts_raw, names) {
-        Some(b) => {
-            if b.crossed {
-                notes.push("its joints' names put left and right the other way round from where its toes point: their sides are swapped".to_owned());
-                frame::swap_sides(found);
-            }
-            (b.turn, b.up, b.facing)
-        }
-        None => {
-            let (turn, up_name) = upright(raw);
-            let upright_joints: Vec<DVec3> = places.iter().map(|p| turn * *p).collect();
-            let height_units = extent_along_y(verts, raw, turn);
-            let (yaw, facing_name) = facing(&upright_joints, parents, height_units, turn);
-            (DQuat::from_rotation_y(yaw) * turn, up_name, facing_name)
-        }
-    }
-}
-
 /// The skeleton at rest through `normal`: offsets in the world axes,
 /// identity rotations; each joint's rest transform its node's (`node(k)`,
 /// made rigid) or, for a made-up joint, its place.
@@ -619,18 +411,6 @@ pub const MIN_JOINTS: usize = 6;
 /// The most joints a figure's skins may have together (as BVH's
 /// [`crate::character::bvh::MAX_JOINTS`]).
 pub const MAX_JOINTS: usize = crate::character::bvh::MAX_JOINTS;
-
-/// How far the figure reaches along the file's axis turned up by `turn`.
-fn extent_along_y(verts: &[DVec3], raw: &[DVec3], turn: DQuat) -> f64 {
-    let (lo, hi) = verts
-        .iter()
-        .chain(raw)
-        .map(|p| (turn * *p).y)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), y| {
-            (l.min(y), h.max(y))
-        });
-    hi - lo
-}
 
 /// The roles the file (VRM's humanoid map) and the configuration name,
 /// with their evidence; a configured role or joint that does not exist
@@ -699,112 +479,4 @@ fn summary(evidence: &BTreeMap<Role, humanoid::Evidence>) -> &'static str {
     } else {
         "names"
     }
-}
-
-/// The turn that stands the figure up where its names do not say up: the
-/// file's Y unless the skeleton is less than half as long along it as
-/// along its longest axis (then that axis is the body's); its feet are at
-/// the end where the joints spread widest across it (two feet apart,
-/// against one head).
-fn upright(joints: &[DVec3]) -> (DQuat, String) {
-    let pts = joints;
-    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
-    let extent = |a: DVec3| {
-        let (lo, hi) = joints
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
-                (l.min(p.dot(a)), h.max(p.dot(a)))
-            });
-        (hi - lo, lo, hi)
-    };
-    let (k, longest) = axes
-        .iter()
-        .enumerate()
-        .map(|(k, a)| (k, extent(*a).0))
-        .fold((1, f64::NEG_INFINITY), |best, (k, e)| {
-            if e > best.1 + 1e-9 { (k, e) } else { best }
-        });
-    // glTF's up (+Y) unless the figure clearly lies along another axis: a
-    // T-pose's arm span, fingers and all, can outreach its height, never
-    // twice it.
-    let k = if extent(DVec3::Y).0 >= 0.5 * longest {
-        1
-    } else {
-        k
-    };
-    let axis = axes[k];
-    let (len, lo, hi) = extent(axis);
-    // The spread across the axis of the points within 8% of each end.
-    let spread = |near: f64| {
-        let band: Vec<DVec3> = pts
-            .iter()
-            .filter(|p| (p.dot(axis) - near).abs() < 0.08 * len)
-            .map(|p| *p - axis * p.dot(axis))
-            .collect();
-        let mut widest: f64 = 0.0;
-        for a in &band {
-            for b in band.iter().step_by((band.len() / 64).max(1)) {
-                widest = widest.max((*a - *b).length());
-            }
-        }
-        widest
-    };
-    // Ties (within 1% of the height) keep the file's own sense of up.
-    let (bottom, top) = (spread(lo), spread(hi));
-    let up = if (bottom - top).abs() < 0.01 * len {
-        if axis == DVec3::Y { DVec3::Y } else { axis }
-    } else if bottom > top {
-        axis
-    } else {
-        -axis
-    };
-    let name = format!(
-        "{}{}",
-        if up.dot(axis) > 0.0 { "+" } else { "-" },
-        ["X", "Y", "Z"][k]
-    );
-    (DQuat::from_rotation_arc(up, DVec3::Y), name)
-}
-
-/// The turn about Y that faces the upright figure +Z: where its toes
-/// point (a low joint from a low parent that is not the skeleton's root,
-/// as a toe from its ankle), else as the file has it (glTF faces +Z).
-/// Also names the file's axis the figure faced.
-fn facing(joints: &[DVec3], parents: &[Option<usize>], h: f64, up: DQuat) -> (f64, String) {
-    let mut votes = DVec3::ZERO;
-    let lowest = joints.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
-    // The two lowest joints (the toes, where the feet have them), each
-    // from its parent, when that is low too and not the root (a rig whose
-    // feet hang from its root says nothing of where they point).
-    let mut order: Vec<usize> = (0..joints.len()).collect();
-    order.sort_by(|&a, &b| joints[a].y.total_cmp(&joints[b].y));
-    for &j in order.iter().take(2) {
-        let Some(p) = parents[j] else { continue };
-        if parents[p].is_none() {
-            continue;
-        }
-        let (a, b) = (joints[p], joints[j]);
-        if b.y - lowest < 0.1 * h && a.y - lowest < 0.15 * h {
-            let d = (b - a).with_y(0.0);
-            if d.length() > 0.01 * h {
-                votes += d.normalize();
-            }
-        }
-    }
-    let yaw = if votes.length() > 0.5 {
-        // Turn `votes` onto +Z.
-        -votes.x.atan2(votes.z)
-    } else {
-        0.0
-    };
-    let was = (DQuat::from_rotation_y(yaw) * up).inverse() * DVec3::Z;
-    let k = (0..3)
-        .max_by(|&a, &b| was[a].abs().total_cmp(&was[b].abs()))
-        .unwrap_or(2);
-    let name = format!(
-        "{}{}",
-        if was[k] >= 0.0 { "+" } else { "-" },
-        ["X", "Y", "Z"][k]
-    );
-    (yaw, name)
 }
