@@ -66,23 +66,19 @@ impl DragMatch {
         // The action other than those `keep` leaves out costing least at
         // any coverage.
         let at_any = |keep: &dyn Fn(usize) -> bool| {
-            self.costs
-                .iter()
-                .filter(|c| keep(c.action) && c.any[gate % CAPS].is_finite())
-                .min_by(|a, b| a.any[gate % CAPS].total_cmp(&b.any[gate % CAPS]))
-                .map(|c| {
-                    let (action, clip) = name(c);
-                    (
-                        c.action,
-                        Leading {
-                            action,
-                            clip,
-                            cost_m: c.any[gate % CAPS],
-                            coverage: None,
-                            tempo: None,
-                        },
-                    )
-                })
+            self.cheapest_template(gate, keep).map(|c| {
+                let (action, clip) = name(c);
+                (
+                    c.action,
+                    Leading {
+                        action,
+                        clip,
+                        cost_m: c.any[gate % CAPS],
+                        coverage: None,
+                        tempo: None,
+                    },
+                )
+            })
         };
         let held_early = if self.seen.is_empty() {
             Some(Held::NoTemplate)

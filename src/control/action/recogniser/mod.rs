@@ -413,11 +413,20 @@ impl DragMatch {
     /// the slowness cap of `gate`), among those `keep` keeps.
     #[must_use]
     pub fn cheapest(&self, gate: usize, keep: impl Fn(usize) -> bool) -> Option<usize> {
+        self.cheapest_template(gate, keep).map(|c| c.action)
+    }
+
+    /// The template costing least now, at any coverage (for the slowness
+    /// cap of `gate`), among those of the actions `keep` keeps.
+    fn cheapest_template(
+        &self,
+        gate: usize,
+        keep: impl Fn(usize) -> bool,
+    ) -> Option<&TemplateCost> {
         self.costs
             .iter()
             .filter(|c| keep(c.action) && c.any[gate % CAPS].is_finite())
             .min_by(|a, b| a.any[gate % CAPS].total_cmp(&b.any[gate % CAPS]))
-            .map(|c| c.action)
     }
 
     fn leader(&self, gate: usize) -> Option<usize> {
