@@ -263,10 +263,15 @@ impl Walker {
         let steer_to = self.along(self.steer_ahead());
         let to = DQuat::from_rotation_y(-self.yaw) * (steer_to - self.root);
         let finger_done = !self.leading || self.still_s > 0.3;
+        // The end itself, from the character (its place on the path can
+        // be on the way back of a turn it cut, the end still far).
+        let to_end = DQuat::from_rotation_y(-self.yaw)
+            * (*self.path.last().unwrap_or(&self.root) - self.root).with_y(0.0);
         if finger_done
             && remaining < STRIDE_M
+            && to_end.length() < ARRIVE_M
             && self.travelled_m >= STRIDE_M
-            && wrap(to.x.atan2(to.z)).abs() > 1.0
+            && wrap(to_end.x.atan2(to_end.z)).abs() > 1.0
         {
             // The end is close beside or behind a walk that went past it:
             // turning round it would circle it. The walk ends here. (A
@@ -276,7 +281,8 @@ impl Walker {
             // again.)
             tracing::debug!(
                 remaining_m = remaining,
-                bearing_deg = wrap(to.x.atan2(to.z)).to_degrees(),
+                from_end_m = to_end.length(),
+                bearing_deg = wrap(to_end.x.atan2(to_end.z)).to_degrees(),
                 "the path's end is beside or behind, within a stride: the walk ends here"
             );
             let end = self.root;
