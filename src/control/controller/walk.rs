@@ -68,7 +68,10 @@ pub(super) struct Lead {
     /// the level plane at this height.
     height: f64,
     beyond_since: Option<f64>,
-    /// The finger the walk under way follows.
+    /// Where the finger out of reach led last (a floor point).
+    beyond_goal: Option<DVec3>,
+    /// The finger the walk under way follows (or the last walk followed,
+    /// while it stays down).
     finger: Option<ContactId>,
     /// What the walk under way is told as.
     told: String,
@@ -100,23 +103,36 @@ impl Lead {
         t: f64,
     ) -> Option<DVec3> {
         let Some(f) = finger else {
+            // Lifted. A finger that led a walk, stopped and went on out of
+            // reach, lifted before the walk on began: the character walks
+            // to where it lifted all the same. The next finger has walked
+            // nowhere yet.
+            let walk_on = self.finger.take().and(self.beyond_goal);
             self.beyond_since = None;
-            return None;
+            self.beyond_goal = None;
+            return walk_on;
         };
         let goal = self.goal(camera, f.at);
         if (goal - pelvis).length() <= WALK_REACH_M {
             self.beyond_since = None;
+            self.beyond_goal = None;
             return None;
         }
         let (at, from) = (f.at, f.from);
-        let across = (at.x - from.x).abs() >= (at.y - from.y).abs()
+        // A finger that has led a walk and stopped walks on whichever way
+        // it goes (its drag began anew where it stopped: up the screen is
+        // away from the camera, not a jump).
+        let walked = self.finger == Some(f.id);
+        let across = (walked || (at.x - from.x).abs() >= (at.y - from.y).abs())
             && (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - goal).length()
                 <= MAX_M_PER_PX;
         if !across {
             self.beyond_since = None;
+            self.beyond_goal = None;
             return None;
         }
         let since = *self.beyond_since.get_or_insert(t);
+        self.beyond_goal = Some(goal);
         (t - since >= WALK_CONFIRM_S).then_some(goal)
     }
 
@@ -124,6 +140,7 @@ impl Lead {
     pub fn began(&mut self, label: &str, finger: Option<ContactId>) {
         label.clone_into(&mut self.told);
         self.beyond_since = None;
+        self.beyond_goal = None;
         self.finger = finger;
     }
 
@@ -327,6 +344,48 @@ mod tests {
             let t = 0.05 * f64::from(k);
             assert_eq!(
                 lead.out_of_reach(&cam, finger(from, up), DVec3::ZERO, t),
+                None
+            );
+        }
+    }
+
+    #[test]
+    fn a_finger_that_walked_walks_on_up_the_screen_and_to_where_it_lifted() {
+        let cam = camera();
+        let mut lead = Lead::new(0.95);
+        let from = cam.project(DVec3::new(0.0, 0.95, 0.0)).unwrap();
+        let away = cam.project(DVec3::new(0.1, 0.95, 1.0)).unwrap();
+        assert!((away.y - from.y).abs() > (away.x - from.x).abs());
+        // Finger 7 led a walk that ended; it goes on up the screen, a
+        // metre away: it walks on there.
+        lead.began("walking", Some(7));
+        lead.finished();
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, away), DVec3::ZERO, 0.0),
+            None
+        );
+        let goal = lead
+            .out_of_reach(&cam, finger(from, away), DVec3::ZERO, 0.1)
+            .expect("walks on");
+        assert!((goal - DVec3::new(0.1, 0.0, 1.0)).length() < 1e-6, "{goal}");
+        // It lifts out of reach before the walk on began: the character
+        // walks to where it lifted, once.
+        lead.began("walking", Some(7));
+        lead.finished();
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, away), DVec3::ZERO, 1.0),
+            None
+        );
+        let lifted = lead
+            .out_of_reach(&cam, None, DVec3::ZERO, 1.02)
+            .expect("walks to the lift");
+        assert!((lifted - goal).length() < 1e-6, "{lifted}");
+        assert_eq!(lead.out_of_reach(&cam, None, DVec3::ZERO, 1.04), None);
+        // A finger that has not walked moves the pelvis up the screen.
+        for k in 0..4 {
+            let t = 2.0 + 0.05 * f64::from(k);
+            assert_eq!(
+                lead.out_of_reach(&cam, finger(from, away), DVec3::ZERO, t),
                 None
             );
         }
