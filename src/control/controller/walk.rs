@@ -2,9 +2,10 @@
 //! across the screen farther over the floor than posing can take the body
 //! (the pelvis cannot follow without stepping), or whose drag matches a
 //! travelling action's (a walk's) template, starts a walk along the
-//! finger's path; the
-//! walk ends standing near where the finger stopped or lifted, and posing
-//! resumes. A library without locomotion clips keeps posing.
+//! finger's path; the walk ends standing near where the finger stopped or
+//! lifted, and posing resumes. The same finger going on walks on, and if
+//! it lifts out of reach before the walk on began, the character walks to
+//! where it lifted. A library without locomotion clips keeps posing.
 
 use glam::DVec3;
 
@@ -24,7 +25,8 @@ pub const WALK_REACH_M: f64 = 0.35;
 /// ... for this long (s) before a walk starts. Only a finger gone across
 /// the screen walks so: one gone up or down it moves the pelvis up or
 /// down (posing, a jump, a squat), as the camera sees the floor from low;
-/// a walk towards the camera starts by the walk's own template.
+/// a walk towards the camera starts by the walk's own template. A finger
+/// that has led a walk and stopped walks on whichever way it goes.
 const WALK_CONFIRM_S: f64 = 0.1;
 
 /// A floor point that moves more than this (m) for a pixel up or down
