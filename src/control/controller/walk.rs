@@ -69,9 +69,9 @@ pub(super) struct Lead {
     /// The pelvis's standing height (m): the finger moves the pelvis in
     /// the level plane at this height.
     height: f64,
-    beyond_since: Option<f64>,
-    /// Where the finger out of reach led last (a floor point).
-    beyond_goal: Option<DVec3>,
+    /// Since when the finger has been out of reach, and where it led
+    /// there last (a floor point).
+    beyond: Option<(f64, DVec3)>,
     /// The finger the walk under way follows (or the last walk followed,
     /// while it stays down).
     finger: Option<ContactId>,
@@ -109,15 +109,12 @@ impl Lead {
             // reach, lifted before the walk on began: the character walks
             // to where it lifted all the same. The next finger has walked
             // nowhere yet.
-            let walk_on = self.finger.take().and(self.beyond_goal);
-            self.beyond_since = None;
-            self.beyond_goal = None;
-            return walk_on;
+            let beyond = self.beyond.take();
+            return self.finger.take().and(beyond).map(|(_, goal)| goal);
         };
         let goal = self.goal(camera, f.at);
         if (goal - pelvis).length() <= WALK_REACH_M {
-            self.beyond_since = None;
-            self.beyond_goal = None;
+            self.beyond = None;
             return None;
         }
         let (at, from) = (f.at, f.from);
@@ -129,20 +126,18 @@ impl Lead {
             && (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - goal).length()
                 <= MAX_M_PER_PX;
         if !across {
-            self.beyond_since = None;
-            self.beyond_goal = None;
+            self.beyond = None;
             return None;
         }
-        let since = *self.beyond_since.get_or_insert(t);
-        self.beyond_goal = Some(goal);
+        let since = self.beyond.map_or(t, |(since, _)| since);
+        self.beyond = Some((since, goal));
         (t - since >= WALK_CONFIRM_S).then_some(goal)
     }
 
     /// A walk began, told as `label`, following the finger `finger`.
     pub fn began(&mut self, label: &str, finger: Option<ContactId>) {
         label.clone_into(&mut self.told);
-        self.beyond_since = None;
-        self.beyond_goal = None;
+        self.beyond = None;
         self.finger = finger;
     }
 

@@ -273,17 +273,17 @@ impl Walker {
             && self.travelled_m >= STRIDE_M
             && wrap(to_end.x.atan2(to_end.z)).abs() > 1.0
         {
-            // The end is close beside or behind a walk that went past it:
-            // turning round it would circle it. The walk ends here. (A
-            // walk that has not gone a stride turns to a finger that
-            // stopped behind it: ended here it stood where it began, and
-            // the finger out of posing's reach started it again and
-            // again.)
+            // The end is beside or behind a walk that went past it, within
+            // the arrival distance: turning round it would circle it. The
+            // walk ends here. (A walk that has not gone a stride turns to a
+            // finger that stopped behind it: ended here it stood where it
+            // began, and the finger out of posing's reach started it again
+            // and again.)
             tracing::debug!(
                 remaining_m = remaining,
                 from_end_m = to_end.length(),
                 bearing_deg = wrap(to_end.x.atan2(to_end.z)).to_degrees(),
-                "the path's end is beside or behind, within a stride: the walk ends here"
+                "the path's end is beside or behind, within the arrival distance: the walk ends here"
             );
             let end = self.root;
             self.path.truncate(self.seg + 1);
