@@ -6,7 +6,7 @@
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::{Drive, LIMBS};
+use super::{Drive, LIMBS, STANDING_M, Settled};
 use crate::character::gltf::Figure;
 use crate::character::roles::Role;
 use crate::character::skeleton::WorldPose;
@@ -39,10 +39,10 @@ impl Drive {
         lib: &WorldPose,
         w: &[DMat4],
         raise: DVec3,
-    ) -> Vec<DMat4> {
+    ) -> Settled {
         let mut lift = [0.0f64; 4];
         let mut turn = [DQuat::IDENTITY; 4];
-        let mut fixed = self.reach(fig, lib, w, lift, turn);
+        let mut fixed = self.reach(fig, lib, w, lift, turn, raise);
         let mut posed = self.place(fig, lib, &fixed, raise);
         // No sole under the floor: a foot whose lowest point went under is
         // first turned flatter about its ankle (a longer foot than the
@@ -104,7 +104,7 @@ impl Drive {
             if !under {
                 break;
             }
-            fixed = self.reach(fig, lib, w, lift, turn);
+            fixed = self.reach(fig, lib, w, lift, turn, raise);
             posed = self.place(fig, lib, &fixed, raise);
         }
         // A limb too short to reach where it is lifted to (a stride longer
@@ -123,7 +123,20 @@ impl Drive {
                 m.w_axis.y -= low;
             }
         }
-        posed
+        // The lifts of feet the library stands on.
+        let standing = |k: usize| {
+            let foot = self.lib_roles.get(LIMBS[k].2);
+            if lib.positions[foot].y < self.ankles.0 + STANDING_M {
+                lift[k]
+            } else {
+                0.0
+            }
+        };
+        Settled {
+            posed,
+            lift: [standing(0), standing(1)],
+            rise: (-low).max(0.0),
+        }
     }
 
     /// A bow that would put the head under the floor (the figure placed

@@ -3,7 +3,8 @@
 //! is laid along the library's rest bone (an A-pose figure under a T-pose
 //! library); unmapped joints (fingers, tails, helpers) keep their rest
 //! pose on their parents; the pelvis goes where the library's goes, its
-//! height over the ankles and its travel scaled by leg length; the
+//! height over the ankles and its travel scaled by leg length, then as
+//! high as its standing legs reach bent as the library's are; the
 //! figure's own legs then reach where the library puts the feet (two-bone
 //! IK; a one-bone leg pointed along the library's, the pelvis as high as
 //! such a leg needs to reach), its arms keep the library's turns and are
@@ -80,6 +81,15 @@ const RAISED_BLEND_M: f64 = 0.3;
 /// How near its standing height (library metres) the library's ankle is
 /// for the figure's foot on that side to stand (see `Drive::stand`).
 const STANDING_M: f64 = 0.02;
+
+/// A figure placed and kept off the floor: its joint transforms, how
+/// much each standing foot was lifted off its place (its sole under the
+/// floor) and how much the whole figure rose (what it carries under it).
+pub(super) struct Settled {
+    posed: Vec<DMat4>,
+    lift: [f64; 2],
+    rise: f64,
+}
 
 /// A figure joint's library joint and turn (see `Drive::follow`).
 type Follow = Option<(usize, DQuat)>;
@@ -276,11 +286,27 @@ impl Drive {
     /// The figure's joint transforms (world, metres) for the library's
     /// posture `lib`: turned as the library's joints, then each limb put
     /// on the library's hand or foot, relative to the hip or shoulder.
+    /// Where a standing foot had to be lifted (its sole under the floor)
+    /// or the whole figure raised (a cape under it), it is placed again
+    /// with its pelvis that much higher, as far as its legs reach, so
+    /// that its legs keep the library's shape rather than bend or float.
     #[must_use]
     pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
+        let first = self.settle(fig, lib, [0.0; 2], 0.0);
+        if first.rise > 1e-4 || first.lift.iter().any(|&l| l > 1e-3) {
+            return self.settle(fig, lib, first.lift, first.rise).posed;
+        }
+        first.posed
+    }
+
+    /// The figure placed for `lib` (see [`Self::pose`]), its standing
+    /// feet's places raised by `lifted` and its pelvis by `rise` as far
+    /// as its legs reach.
+    fn settle(&self, fig: &Figure, lib: &WorldPose, lifted: [f64; 2], rise: f64) -> Settled {
         let free = vec![None; fig.rest.len()];
         let w = self.place(fig, lib, &free, DVec3::ZERO);
-        let raise = self.stand(lib, &w);
+        let (want, most) = self.stand(lib, &w, lifted);
+        let raise = DVec3::Y * (want + rise).min(most);
         let w = if raise == DVec3::ZERO {
             w
         } else {
@@ -297,7 +323,9 @@ impl Drive {
     /// The joint turns that put each limb's end where the library has it
     /// (raised by `lift`, the ends turned by `turn`, world turns about
     /// the ankles and wrists; a one-bone arm's about its shoulder), from
-    /// the posture `w` turned as the library's.
+    /// the posture `w` turned as the library's, its pelvis standing
+    /// `raise` off the library's (a raised foot's place does not move
+    /// with it: a foot lifting off the floor rises as the library's).
     fn reach(
         &self,
         fig: &Figure,
@@ -305,6 +333,7 @@ impl Drive {
         w: &[DMat4],
         lift: [f64; 4],
         turn: [DQuat; 4],
+        raise: DVec3,
     ) -> Vec<Option<DQuat>> {
         let mut fixed = vec![None; fig.rest.len()];
         for (k, (a, b, c)) in LIMBS.into_iter().enumerate() {
@@ -319,7 +348,7 @@ impl Drive {
             // height as the library's.
             let root = w[fa].w_axis.truncate();
             let goal = if k < 2 {
-                self.foot_goal(lib, k, root) + DVec3::Y * lift[k]
+                self.foot_goal(lib, k, root - raise) + DVec3::Y * lift[k]
             } else {
                 root + (lib.positions[lc] - lib.positions[la]) * self.limb_scale[k]
                     + DVec3::Y * lift[k]
@@ -388,34 +417,55 @@ impl Drive {
 
     /// How much higher than the library's (scaled) the pelvis stands so
     /// that the legs reach where the library puts the feet (`w`, the
-    /// posture turned as the library's). A one-bone leg, which cannot
-    /// bend, reaches no further: the pelvis as high as the one that needs
-    /// it most, so that the standing foot reaches the floor and a lifted
-    /// one stays above its place. Legs that bend: lowered as much as a
-    /// standing foot needs to reach its place (a figure whose hips stand
-    /// wider or lower for its legs than the library's, on straight legs),
-    /// else where it is.
-    fn stand(&self, lib: &WorldPose, w: &[DMat4]) -> DVec3 {
+    /// posture turned as the library's; a standing foot's place raised
+    /// by `lifted`), and the most it may (the standing legs straight). A
+    /// one-bone leg, which cannot bend, reaches no further: the pelvis as
+    /// high as the one that needs it most, so that the standing foot
+    /// reaches the floor and a lifted one stays above its place. Legs
+    /// that bend: each standing leg as far above its foot as it reaches
+    /// bent as the library's is (a short thigh on a long shin bends less
+    /// for the same drop), the pelvis at the mean of the two, no higher
+    /// than both reach; no leg standing, where it is.
+    fn stand(&self, lib: &WorldPose, w: &[DMat4], lifted: [f64; 2]) -> (f64, f64) {
         let mut one_bone: Option<f64> = None;
-        let mut lower = 0.0f64;
+        let mut standing: Option<(f64, f64, f64)> = None;
         for (k, &(a, b, c)) in LIMBS.iter().enumerate().take(2) {
             let at = |r: Role| w[self.fig_roles.get(r)].w_axis.truncate();
             let hip = at(a);
+            let lengths = ((at(b) - hip).length(), (at(c) - at(b)).length());
             let length = if self.one_bone[k] {
                 (at(c) - hip).length()
             } else {
-                (at(b) - hip).length() + (at(c) - at(b)).length()
+                lengths.0 + lengths.1
             };
             let v = self.foot_goal(lib, k, hip) - hip;
             let across = v.with_y(0.0).length().min(length);
-            let need = v.y + (length * length - across * across).sqrt();
+            let straight = v.y + (length * length - across * across).sqrt();
             if self.one_bone[k] {
-                one_bone = Some(one_bone.map_or(need, |r: f64| r.max(need)));
+                let straight = straight + lifted[k];
+                one_bone = Some(one_bone.map_or(straight, |r: f64| r.max(straight)));
             } else if lib.positions[self.lib_roles.get(c)].y < self.ankles.0 + STANDING_M {
-                lower = lower.min(need);
+                // (No higher than it reaches its place unlifted: placed
+                // higher, it may not need the lift.)
+                let shaped = v.y + lifted[k] + self.drop(lib, k, lengths);
+                let (sum, n, most) = standing.unwrap_or((0.0, 0.0, f64::INFINITY));
+                standing = Some((sum + shaped.min(straight), n + 1.0, most.min(straight)));
             }
         }
-        DVec3::Y * one_bone.unwrap_or(lower)
+        match (one_bone, standing) {
+            (Some(r), _) => (r, r),
+            (None, Some((sum, n, most))) => ((sum / n).min(most), most),
+            (None, None) => (0.0, 0.0),
+        }
+    }
+
+    /// How far below its hip leg `k`'s foot is, its thigh and shin
+    /// (`lengths`) pointed as the library's.
+    fn drop(&self, lib: &WorldPose, k: usize, lengths: (f64, f64)) -> f64 {
+        let (a, b, c) = LIMBS[k];
+        let at = |r: Role| lib.positions[self.lib_roles.get(r)];
+        let (thigh, shin) = (at(b) - at(a), at(c) - at(b));
+        -(thigh.normalize_or_zero().y * lengths.0 + shin.normalize_or_zero().y * lengths.1)
     }
 
     /// The turn about the vertical that carries foot `k`'s offset from the
