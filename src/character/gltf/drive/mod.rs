@@ -120,8 +120,9 @@ pub struct Drive {
     hip_drop: f64,
     /// Each hip's place under the pelvis at rest (along the floor): the
     /// figure's less the library's scaled. A foot stands that much aside
-    /// of the library's (turned with the foot), so that a figure with
-    /// wider hips stands with its feet under them.
+    /// (and forward or back) of the library's (turned with the foot), so
+    /// that a figure with wider hips, or hips behind its pelvis joint,
+    /// stands with its feet under them.
     hip_wide: [DVec3; 2],
     /// How each library foot lies planted, facing +Z (inverted).
     planted_inv: [DQuat; 2],
@@ -185,13 +186,31 @@ impl Drive {
                 };
                 drop(&fpos, &fig.roles) - drop(&rest_lib.positions, lib_roles) * scale
             },
-            hip_wide: [Role::LeftHip, Role::RightHip].map(|h| {
-                hip_wide(
+            hip_wide: [
+                (Role::LeftHip, Role::LeftKnee),
+                (Role::RightHip, Role::RightKnee),
+            ]
+            .map(|(h, knee)| {
+                let wide = hip_wide(
                     h,
                     (&fpos, &fig.roles),
                     (&standing, &rest_lib, lib_roles),
                     scale,
-                )
+                );
+                // A one-bone leg, which cannot bend, leans to the
+                // library's foot from where its hip is: moved back
+                // under the hip it rolls onto its sole's edge in a
+                // bow and the figure floats.
+                if fig
+                    .made_up
+                    .get(fig.roles.get(knee))
+                    .copied()
+                    .unwrap_or(false)
+                {
+                    wide.with_z(0.0)
+                } else {
+                    wide
+                }
             }),
             planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
             near: LIMBS.map(|(_, _, r)| {

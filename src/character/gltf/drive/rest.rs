@@ -153,8 +153,9 @@ pub(super) fn hang_order(fig: &Figure, hang: &mut [Option<usize>]) -> Vec<usize>
 /// A hip's place under the pelvis along the floor, the figure's (from its
 /// rest) less the library's scaled (from its clips facing +Z: its rest
 /// pose need not stand; the Bandai hips sit 9 cm apart in height there).
-/// Across only: a figure's hips forward or back of its pelvis joint do not
-/// move its feet.
+/// Across and forward: a figure whose hips sit behind its pelvis joint
+/// (a robot's, 7 cm) stands with its feet under its hips, not
+/// under the joint.
 pub(super) fn hip_wide(
     hip: Role,
     (fpos, fig_roles): (&[DVec3], &RoleMap),
@@ -173,5 +174,5 @@ pub(super) fn hip_wide(
         rest_lib.positions[lib_roles.get(hip)] - rest_lib.positions[lib_roles.get(Role::Pelvis)]
     };
     let d = fpos[fig_roles.get(hip)] - fpos[fig_roles.get(Role::Pelvis)] - lib_under * scale;
-    DVec3::new(d.x, 0.0, 0.0)
+    DVec3::new(d.x, 0.0, d.z)
 }
