@@ -398,22 +398,7 @@ fn the_ragdoll_never_explodes() {
 /// metres from where they began).
 fn bandai_library() -> std::sync::Arc<marionette::control::character::Character> {
     let dir = tempfile::tempdir().unwrap();
-    let takes = dir.path().join("takes");
-    std::fs::create_dir_all(&takes).unwrap();
-    common::bandai::split(&takes, None);
-    let lib = dir.path().join("lib");
-    let out = common::marionette(&[
-        "library",
-        "init",
-        takes.to_str().unwrap(),
-        "--out",
-        lib.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let lib = common::bandai::library(dir.path());
     let lib = marionette::character::library::Library::load(&lib).unwrap();
     std::sync::Arc::new(marionette::control::character::Character::from_library(lib))
 }

@@ -673,22 +673,7 @@ fn every_shared_character_plays_a_library_of_other_capture() {
     // styles): its walks, bows and kicks ask more of a figure's legs than
     // the default library's.
     let dir = tempfile::tempdir().unwrap();
-    let takes = dir.path().join("takes");
-    std::fs::create_dir_all(&takes).unwrap();
-    common::bandai::split(&takes, None);
-    let out = dir.path().join("lib");
-    let made = common::marionette(&[
-        "library",
-        "init",
-        takes.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(
-        made.status.success(),
-        "{}",
-        String::from_utf8_lossy(&made.stderr)
-    );
+    let out = common::bandai::library(dir.path());
     let lib = marionette::character::library::Library::load(&out).unwrap();
     for path in shared_characters() {
         let file = path.file_name().unwrap().to_string_lossy().into_owned();

@@ -159,6 +159,29 @@ pub mod bandai {
         .unwrap();
     }
 
+    /// The library `library init` makes of the library's takes, in
+    /// `dir` (its takes linked into `dir/takes`, the library in
+    /// `dir/lib`, whose path is returned).
+    pub fn library(dir: &Path) -> std::path::PathBuf {
+        let takes = dir.join("takes");
+        std::fs::create_dir_all(&takes).unwrap();
+        split(&takes, None);
+        let lib = dir.join("lib");
+        let out = super::marionette(&[
+            "library",
+            "init",
+            takes.to_str().unwrap(),
+            "--out",
+            lib.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        lib
+    }
+
     /// The library's takes into `takes`, the held-out ones into `held`
     /// (when given); both folders must exist.
     pub fn split(takes: &Path, held: Option<&Path>) {

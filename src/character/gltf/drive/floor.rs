@@ -6,7 +6,7 @@
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::{Drive, LIMBS, STANDING_M, Settled};
+use super::{Drive, LIMBS, Settled};
 use crate::character::gltf::Figure;
 use crate::character::roles::Role;
 use crate::character::skeleton::WorldPose;
@@ -124,14 +124,7 @@ impl Drive {
             }
         }
         // The lifts of feet the library stands on.
-        let standing = |k: usize| {
-            let foot = self.lib_roles.get(LIMBS[k].2);
-            if lib.positions[foot].y < self.ankles.0 + STANDING_M {
-                lift[k]
-            } else {
-                0.0
-            }
-        };
+        let standing = |k: usize| if self.stands(lib, k) { lift[k] } else { 0.0 };
         Settled {
             posed,
             lift: [standing(0), standing(1)],

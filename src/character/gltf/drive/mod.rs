@@ -160,6 +160,8 @@ impl Drive {
         let scale = Self::leg_ratio(fig, lib, lib_roles);
         let (follow, mut hang) = follow_and_hang(fig, &rest_lib, lib_roles, &planted);
         let order = hang_order(fig, &mut hang);
+        let one_bone =
+            LIMBS.map(|(_, b, _)| fig.made_up.get(fig.roles.get(b)).copied().unwrap_or(false));
         Self {
             follow,
             hang,
@@ -186,31 +188,18 @@ impl Drive {
                 };
                 drop(&fpos, &fig.roles) - drop(&rest_lib.positions, lib_roles) * scale
             },
-            hip_wide: [
-                (Role::LeftHip, Role::LeftKnee),
-                (Role::RightHip, Role::RightKnee),
-            ]
-            .map(|(h, knee)| {
+            hip_wide: [0, 1].map(|k| {
                 let wide = hip_wide(
-                    h,
+                    LIMBS[k].0,
                     (&fpos, &fig.roles),
                     (&standing, &rest_lib, lib_roles),
                     scale,
                 );
                 // A one-bone leg, which cannot bend, leans to the
-                // library's foot from where its hip is: moved back
-                // under the hip it rolls onto its sole's edge in a
-                // bow and the figure floats.
-                if fig
-                    .made_up
-                    .get(fig.roles.get(knee))
-                    .copied()
-                    .unwrap_or(false)
-                {
-                    wide.with_z(0.0)
-                } else {
-                    wide
-                }
+                // library's foot from where its hip is: moved back under
+                // the hip it rolls onto its sole's edge in a bow and the
+                // figure floats.
+                if one_bone[k] { wide.with_z(0.0) } else { wide }
             }),
             planted_inv: planted.map(|q| q.map_or(DQuat::IDENTITY, DQuat::inverse)),
             near: LIMBS.map(|(_, _, r)| {
@@ -220,8 +209,7 @@ impl Drive {
                     Vec::new()
                 })
             }),
-            one_bone: LIMBS
-                .map(|(_, b, _)| fig.made_up.get(fig.roles.get(b)).copied().unwrap_or(false)),
+            one_bone,
             low: Carried::new(low_points(fig)),
             upright: Upright::new(
                 lib,
@@ -463,7 +451,7 @@ impl Drive {
             if self.one_bone[k] {
                 let straight = straight + lifted[k];
                 one_bone = Some(one_bone.map_or(straight, |r: f64| r.max(straight)));
-            } else if lib.positions[self.lib_roles.get(c)].y < self.ankles.0 + STANDING_M {
+            } else if self.stands(lib, k) {
                 // (No higher than it reaches its place unlifted: placed
                 // higher, it may not need the lift.)
                 let shaped = v.y + lifted[k] + self.drop(lib, k, lengths);
@@ -476,6 +464,12 @@ impl Drive {
             (None, Some((sum, n, most))) => ((sum / n).min(most), most),
             (None, None) => (0.0, 0.0),
         }
+    }
+
+    /// Whether the library stands on foot `k` (its ankle within
+    /// [`STANDING_M`] of its standing height).
+    fn stands(&self, lib: &WorldPose, k: usize) -> bool {
+        lib.positions[self.lib_roles.get(LIMBS[k].2)].y < self.ankles.0 + STANDING_M
     }
 
     /// How far below its hip leg `k`'s foot is, its thigh and shin
