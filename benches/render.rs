@@ -147,6 +147,7 @@ fn bench(c: &mut Criterion) {
                     held: &held,
                     tint: Some([0.62, 0.1, 0.07]),
                     figure: None,
+                    figure_joints: None,
                 },
                 scene::Body {
                     skeleton: &clip.skeleton,
@@ -155,6 +156,7 @@ fn bench(c: &mut Criterion) {
                     held: &held,
                     tint: Some([0.09, 0.26, 0.55]),
                     figure: None,
+                    figure_joints: None,
                 },
             ],
             &both_marks,
@@ -227,6 +229,7 @@ fn bench(c: &mut Criterion) {
                 held,
                 tint,
                 figure: skin,
+                figure_joints: None,
             }
         }
         let one = [figured(clip, &world, &held, None, skin.as_ref())];

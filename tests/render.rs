@@ -339,6 +339,7 @@ fn two_characters_apart_redraw_only_where_they_are_and_were() {
         let held = [Role::RightHand];
         let body = |w, held, tint| scene::Body {
             figure: None,
+            figure_joints: None,
             skeleton: &clip.skeleton,
             roles: &clip.roles,
             world: w,
@@ -405,6 +406,7 @@ fn the_own_skinned_body_at_rest_and_held() {
                 held: &held,
                 tint,
                 figure: Some(&skin),
+                figure_joints: None,
             }],
             &Marks::default(),
         );
@@ -444,6 +446,7 @@ fn the_own_skinned_body_at_rest_and_held() {
                 held: &[],
                 tint: None,
                 figure: Some(&skin),
+                figure_joints: None,
             }],
             &Marks::default(),
         )

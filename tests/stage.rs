@@ -280,3 +280,65 @@ fn a_floor_finger_turns_the_camera_until_a_character_is_held_unless_it_is_alone(
         "a lone character's visitor turns the view ({one:.3} rad)"
     );
 }
+
+#[test]
+fn each_character_s_figure_keeps_its_own_feet_where_they_came_down() {
+    // Two characters showing the same skinned figure, one dragged: each
+    // figure is posed as one of its own sequence of postures (its feet
+    // held where they came down), not as each posture alone.
+    let dir = common::shared_dir().join("characters");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    files.sort();
+    let ch = common::character();
+    let fig =
+        marionette::character::gltf::load(&files[0], &std::collections::BTreeMap::new()).unwrap();
+    let skin = std::sync::Arc::new(marionette::character::gltf::Skin::life_size(
+        fig, &ch.lib, &ch.roles,
+    ));
+    let mut stage = duel(3.0);
+    for a in stage.actors_mut() {
+        a.set_figure(Some(skin.clone()));
+    }
+    // Each figure was posed as it was given (its first posture).
+    let mut holds = [marionette::character::gltf::Hold::default(); 2];
+    for (a, hold) in stage.actors().iter().zip(&mut holds) {
+        let _ = skin.joints_held(a.ctl.world(), hold);
+    }
+    let mut t = 0.0;
+    let hand = screen_of(&stage, 0, Role::RightHand);
+    let path = move |u: f64| ScreenPoint::new(hand.x + 120.0 * u, hand.y - 60.0 * u);
+    let (mut frames, mut apart_from_alone) = (0, 0.0f64);
+    for k in 0..90 {
+        t += DT;
+        let phase = match k {
+            0 => Phase::Down,
+            60 => Phase::Up,
+            _ => Phase::Move,
+        };
+        let frame = ScreenFrame {
+            t,
+            contacts: vec![common::contact(1, phase, path((k.min(60) as f64) / 60.0))],
+        };
+        stage.step(&[frame], t);
+        for (a, hold) in stage.actors().iter().zip(&mut holds) {
+            let (shown, joints) = a.figure_joints().unwrap();
+            assert!(std::ptr::eq(shown, &*skin));
+            let want = skin.joints_held(a.ctl.world(), hold);
+            assert_eq!(joints.as_ref(), want.as_slice(), "frame {k}");
+            let alone = skin.joints(a.ctl.world());
+            apart_from_alone = joints
+                .iter()
+                .zip(&alone)
+                .map(|(p, q)| p.w_axis.distance(q.w_axis))
+                .fold(apart_from_alone, f64::max);
+            frames += 1;
+        }
+    }
+    eprintln!("{frames} figure postures; held apart from alone by up to {apart_from_alone:.4} m");
+    // (2.4 cm: a figure posed alone would show.)
+    assert!(apart_from_alone > 0.005);
+}

@@ -134,11 +134,13 @@ pub fn compose(stage: &Stage, rotation: Rotation, marks: &Marks) -> DrawList {
     };
     let held: Vec<Vec<crate::character::roles::Role>> =
         stage.actors().iter().map(|a| a.ctl.held()).collect();
+    let figures: Vec<_> = stage.actors().iter().map(|a| a.figure_joints()).collect();
     let bodies: Vec<scene::Body<'_>> = stage
         .actors()
         .iter()
         .zip(&held)
-        .map(|(a, held)| {
+        .zip(&figures)
+        .map(|((a, held), figure)| {
             let c = a.ctl.character();
             scene::Body {
                 skeleton: &c.lib.skeleton,
@@ -146,7 +148,8 @@ pub fn compose(stage: &Stage, rotation: Rotation, marks: &Marks) -> DrawList {
                 world: a.ctl.world(),
                 held,
                 tint: a.tint,
-                figure: a.figure.as_deref(),
+                figure: figure.as_ref().map(|(s, _)| *s),
+                figure_joints: figure.as_ref().map(|(_, j)| j.as_ref()),
             }
         })
         .collect();

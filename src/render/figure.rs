@@ -13,7 +13,6 @@ use glam::DMat4;
 use super::mesh::{DrawList, JointGpu, SkinnedDraw};
 use crate::character::gltf::Skin;
 use crate::character::roles::Role;
-use crate::character::skeleton::WorldPose;
 
 /// Joints that glow when a finger holds a part: each held part's joint and
 /// the unmapped joints below it (a hand's palm and fingers), down to the
@@ -37,19 +36,18 @@ fn glowing(skin: &Skin, held: &[Role]) -> Vec<bool> {
     glow
 }
 
-/// Adds the figure, posed as the library's `world`, to the frame; the
-/// parts in `held` glow, `tint` is blended in. A posture whose joints are
-/// not finite draws nothing.
+/// Adds the figure, its joints posed as `posed` (see `Skin::joints`), to
+/// the frame; the parts in `held` glow, `tint` is blended in. A posture
+/// whose joints are not finite draws nothing.
 pub(crate) fn draw(
     list: &mut DrawList,
     skin: &Skin,
-    world: &WorldPose,
+    posed: &[DMat4],
     held: &[Role],
     tint: Option<[f32; 3]>,
 ) {
     let fig = &skin.figure;
-    let posed = skin.joints(world);
-    let mut skinning = skin.drive.skinning(&posed);
+    let mut skinning = skin.drive.skinning(posed);
     if skinning.iter().any(|m| !m.is_finite()) {
         return;
     }

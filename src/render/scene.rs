@@ -436,6 +436,7 @@ pub fn compose(
             held,
             tint: None,
             figure: None,
+            figure_joints: None,
         }],
         marks,
     )
@@ -450,8 +451,11 @@ pub struct Body<'a> {
     pub world: &'a WorldPose,
     pub held: &'a [Role],
     pub tint: Option<[f32; 3]>,
-    /// A skinned figure shown instead of the capsules.
+    /// A skinned figure shown instead of the capsules, with its joints
+    /// as posed in the postures before this one (see
+    /// `Actor::figure_joints`; `None`: posed for this posture alone).
     pub figure: Option<&'a crate::character::gltf::Skin>,
+    pub figure_joints: Option<&'a [glam::DMat4]>,
 }
 
 /// The draw list of several characters, each with its shadow, and the
@@ -465,7 +469,15 @@ pub fn compose_bodies(view: &View, bodies: &[Body<'_>], marks: &Marks) -> DrawLi
             // Shown as large as the library's character, the figure casts
             // about the capsules' shadow: the coarse one, at a fraction of
             // drawing its every triangle twice.
-            super::figure::draw(&mut list, skin, b.world, b.held, b.tint);
+            let alone;
+            let joints = match b.figure_joints {
+                Some(j) => j,
+                None => {
+                    alone = skin.joints(b.world);
+                    &alone
+                }
+            };
+            super::figure::draw(&mut list, skin, joints, b.held, b.tint);
             shadow_into(&mut list.shadow, &segs);
             continue;
         }

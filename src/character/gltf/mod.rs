@@ -19,7 +19,7 @@ mod texture;
 mod upright;
 mod vrm;
 
-pub use drive::Drive;
+pub use drive::{Drive, Hold};
 pub use geometry::Geometry;
 
 /// A figure with how it follows one library.
@@ -65,16 +65,25 @@ impl Skin {
     }
 
     /// The figure's joint transforms (world, metres) posed as the
-    /// library's `world`.
+    /// library's `world`, alone.
     #[must_use]
     pub fn joints(&self, world: &super::skeleton::WorldPose) -> Vec<DMat4> {
+        self.joints_held(world, &mut Hold::default())
+    }
+
+    /// The figure's joint transforms posed as the library's `world`, one
+    /// of a sequence of postures: its feet stay where they came down
+    /// (`hold`, carried from each posture to the next; see
+    /// [`Drive::pose_held`]).
+    #[must_use]
+    pub fn joints_held(&self, world: &super::skeleton::WorldPose, hold: &mut Hold) -> Vec<DMat4> {
         let fig = &self.figure;
         if fig.own {
             (0..fig.skeleton.len().min(world.positions.len()))
                 .map(|j| DMat4::from_rotation_translation(world.rotations[j], world.positions[j]))
                 .collect()
         } else {
-            self.drive.pose(fig, world)
+            self.drive.pose_held(fig, world, hold)
         }
     }
 }

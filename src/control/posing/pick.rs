@@ -1,7 +1,7 @@
 //! Picking: which body part lies under a screen point, for the current pose
 //! and camera, so that a finger can grab it.
 
-use glam::DVec3;
+use glam::{DMat4, DVec3};
 
 use crate::character::camera::Camera;
 use crate::character::gltf::Skin;
@@ -73,14 +73,15 @@ const SURFACE_PX: f64 = 10.0;
 /// The part under `at` on a glTF figure's skinned surface: of the
 /// figure's vertices within a few pixels of the touch, the one nearest
 /// the camera, and the grabbable part nearest it in space (its joint, or
-/// the outer half of the bone leading to it). The own body's surface is
-/// the capsules' [`pick`] already follows, so it is left to that.
+/// the outer half of the bone leading to it). The figure is posed by
+/// `joints` (see `Skin::joints`). The own body's surface is the
+/// capsules' [`pick`] already follows, so it is left to that.
 #[must_use]
 pub fn pick_on_surface(
     camera: &Camera,
     roles: &RoleMap,
     world: &WorldPose,
-    skin: &Skin,
+    (skin, joints): (&Skin, &[DMat4]),
     at: ScreenPoint,
     radius_px: f64,
 ) -> Option<Role> {
@@ -89,7 +90,8 @@ pub fn pick_on_surface(
     }
     let near = SURFACE_PX.min(radius_px);
     let front = skin
-        .posed(world)
+        .drive
+        .skin(&skin.figure, joints)
         .into_iter()
         .flatten()
         .filter(|p| p.is_finite())
@@ -129,7 +131,7 @@ pub fn pick_with(
     skeleton: &Skeleton,
     roles: &RoleMap,
     world: &WorldPose,
-    figure: Option<&Skin>,
+    figure: Option<(&Skin, &[DMat4])>,
     at: ScreenPoint,
     radius_px: f64,
 ) -> Option<Role> {

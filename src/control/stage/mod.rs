@@ -37,8 +37,13 @@ mod contact;
 use super::controller::{Controller, Mode};
 use super::marks::{FingerMark, FingerUse, Marks};
 use super::rig::{Orbit, Rig};
+use std::borrow::Cow;
+
+use glam::DMat4;
+
+use crate::character::gltf::{Hold, Skin};
 use crate::character::roles::Role;
-use crate::character::skeleton::Pose;
+use crate::character::skeleton::{Pose, WorldPose};
 use crate::control::action::timeline::ActionEvent;
 use crate::control::posing::pick::pick_with;
 use crate::input::touch::{ContactId, Phase, ScreenContact, ScreenFrame, Tool};
@@ -56,6 +61,10 @@ pub struct Actor {
     /// Hits it landed and took.
     pub hits_landed: usize,
     pub hits_taken: usize,
+    /// The posture its figure was last posed for, with the figure's
+    /// joints, and where the figure's feet came down.
+    posed: Option<(WorldPose, Vec<DMat4>)>,
+    hold: Hold,
 }
 
 impl Actor {
@@ -63,6 +72,37 @@ impl Actor {
     /// glTF figure's surface grabs the part nearest it.
     pub fn set_figure(&mut self, figure: Option<std::sync::Arc<crate::character::gltf::Skin>>) {
         self.figure = figure;
+        self.posed = None;
+        self.hold = Hold::default();
+        self.pose_figure();
+    }
+
+    /// Poses its figure for the posture it now has, the figure's feet
+    /// staying where they came down in the postures before (done as the
+    /// stage advances; see [`crate::character::gltf::Drive::pose_held`]).
+    pub fn pose_figure(&mut self) {
+        let Some(skin) = self.figure.as_deref() else {
+            return;
+        };
+        let world = self.ctl.world();
+        if self.posed.as_ref().is_some_and(|(w, _)| w == world) {
+            return;
+        }
+        let joints = skin.joints_held(world, &mut self.hold);
+        self.posed = Some((world.clone(), joints));
+    }
+
+    /// Its figure with the joints it is shown with: as last posed, for
+    /// the posture it has; posed for that posture alone where it has
+    /// changed since.
+    #[must_use]
+    pub fn figure_joints(&self) -> Option<(&Skin, Cow<'_, [DMat4]>)> {
+        let skin = self.figure.as_deref()?;
+        let world = self.ctl.world();
+        Some(match &self.posed {
+            Some((w, joints)) if w == world => (skin, Cow::Borrowed(joints.as_slice())),
+            _ => (skin, Cow::Owned(skin.joints(world))),
+        })
     }
 
     /// A character of `ch` at rest at floor point `at` facing `yaw`
@@ -87,6 +127,8 @@ impl Actor {
             figure: None,
             hits_landed: 0,
             hits_taken: 0,
+            posed: None,
+            hold: Hold::default(),
         }
     }
 }
@@ -498,12 +540,13 @@ impl Stage {
             .enumerate()
             .filter_map(|(k, a)| {
                 let ch = a.ctl.character();
+                let figure = a.figure_joints();
                 let role = pick_with(
                     camera,
                     &ch.lib.skeleton,
                     &ch.roles,
                     a.ctl.world(),
-                    a.figure.as_deref(),
+                    figure.as_ref().map(|(s, j)| (*s, j.as_ref())),
                     p,
                     a.ctl.settings.pick_radius_px,
                 )?;
@@ -536,6 +579,7 @@ impl Stage {
         let camera = self.rig.camera();
         for a in &mut self.actors {
             a.ctl.follow_drift(&camera);
+            a.pose_figure();
         }
     }
 

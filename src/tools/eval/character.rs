@@ -7,7 +7,7 @@
 use glam::{DMat4, DVec3};
 use serde::Serialize;
 
-use crate::character::gltf::{Drive, Figure};
+use crate::character::gltf::{Drive, Figure, Hold};
 use crate::character::library::Library;
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{WorldPose, forward_kinematics};
@@ -186,14 +186,18 @@ pub fn eval_character(fig: &Figure, lib: &Library, step: usize) -> CharacterEval
     for (name, clip) in &lib.clips {
         t.out.clips += 1;
         let mut last = None;
+        // Each clip a sequence of postures: a figure's foot stays where
+        // it came down.
+        let mut hold = Hold::default();
         for pose in clip.frames.iter().step_by(step.max(1)) {
             t.out.frames += 1;
             let lw = forward_kinematics(&lib.skeleton, pose);
-            let w = against.drive.pose(fig, &lw);
+            let w = against.drive.pose_held(fig, &lw, &mut hold);
             let skinned = against.drive.skin(fig, &w);
             if skinned.iter().flatten().any(|v| !v.is_finite()) {
                 t.out.bad_frames += 1;
                 last = None;
+                hold = Hold::default();
                 continue;
             }
             t.penetration(fig, &skinned, name);

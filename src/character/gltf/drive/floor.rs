@@ -39,10 +39,11 @@ impl Drive {
         lib: &WorldPose,
         w: &[DMat4],
         raise: DVec3,
+        offsets: [DVec3; 2],
     ) -> Settled {
         let mut lift = [0.0f64; 4];
         let mut turn = [DQuat::IDENTITY; 4];
-        let mut fixed = self.reach(fig, lib, w, lift, turn, raise);
+        let mut fixed = self.reach(fig, lib, w, (lift, turn), raise, offsets);
         let mut posed = self.place(fig, lib, &fixed, raise);
         // No sole under the floor: a foot whose lowest point went under is
         // first turned flatter about its ankle (a longer foot than the
@@ -104,7 +105,7 @@ impl Drive {
             if !under {
                 break;
             }
-            fixed = self.reach(fig, lib, w, lift, turn, raise);
+            fixed = self.reach(fig, lib, w, (lift, turn), raise, offsets);
             posed = self.place(fig, lib, &fixed, raise);
         }
         // A limb too short to reach where it is lifted to (a stride longer

@@ -5,9 +5,11 @@
 //! pose on their parents; the pelvis goes where the library's goes, its
 //! height over the ankles and its travel scaled by leg length, then as
 //! high as its standing legs reach bent as the library's are; the
-//! figure's own legs then reach where the library puts the feet (two-bone
-//! IK; a one-bone leg pointed along the library's, the pelvis as high as
-//! such a leg needs to reach), its arms keep the library's turns and are
+//! figure's own legs then reach where the library puts the feet, a foot
+//! coming down where the figure's leg, shaped as the library's, puts it
+//! and moving from there as the library's does (two-bone IK; a one-bone
+//! leg pointed along the library's, the pelvis as high as such a leg
+//! needs to reach), its arms keep the library's turns and are
 //! bent to reach only where a hand must be lifted off the floor (a
 //! one-bone arm pointed along the library's and swung up by the least
 //! turn that keeps its hand off it); a joint the rig hangs elsewhere (feet from the root) is
@@ -70,7 +72,8 @@ const LIMBS: [(Role, Role, Role); 4] = [
 ];
 
 /// How high a foot rises over its standing height (library metres) before
-/// its offset from the library's turns with the hips alone.
+/// its offset from the library's turns with the hips alone (a one-bone
+/// leg's), or is no longer held where it came down (see `Drive::offset`).
 const HEADING_BLEND_M: f64 = 0.1;
 
 /// How high a foot rises over its standing height (library metres)
@@ -89,6 +92,14 @@ pub(super) struct Settled {
     posed: Vec<DMat4>,
     lift: [f64; 2],
     rise: f64,
+}
+
+/// What a figure carries from one posture to the next (see
+/// [`Drive::pose_held`]): where each standing foot came down, off the
+/// library's (scaled).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Hold {
+    feet: [Option<DVec3>; 2],
 }
 
 /// A figure joint's library joint and turn (see `Drive::follow`).
@@ -119,15 +130,18 @@ pub struct Drive {
     /// stand as straight as the library's).
     hip_drop: f64,
     /// Each hip's place under the pelvis at rest (along the floor): the
-    /// figure's less the library's scaled. A foot stands that much aside
-    /// (and forward or back) of the library's (turned with the foot), so
-    /// that a figure with wider hips, or hips behind its pelvis joint,
-    /// stands with its feet under them.
+    /// figure's less the library's scaled. A one-bone leg's foot stands
+    /// that much aside of the library's (turned with the foot), so that
+    /// a figure with wider hips stands with its feet under them (a leg
+    /// that bends stands where its own shape puts it, see
+    /// `Drive::offset`).
     hip_wide: [DVec3; 2],
     /// How each library foot lies planted, facing +Z (inverted).
     planted_inv: [DQuat; 2],
     /// Each limb of [`LIMBS`]: the figure's length over the library's.
     limb_scale: [f64; 4],
+    /// Each leg's thigh and shin lengths (the figure's, metres).
+    leg_lengths: [(f64, f64); 2],
     /// Each limb end's mesh points (rest pose; feet, then hands, as
     /// [`LIMBS`]) with the joint carrying each (see `limbs::end_points`).
     ends: [Carried; 4],
@@ -168,6 +182,11 @@ impl Drive {
             order,
             scale,
             ankles: (stand, fpos[fig.roles.get(Role::LeftFoot)].y),
+            leg_lengths: [0, 1].map(|k| {
+                let (a, b, c) = LIMBS[k];
+                let at = |r: Role| fpos[fig.roles.get(r)];
+                ((at(b) - at(a)).length(), (at(c) - at(b)).length())
+            }),
             limb_scale: LIMBS.map(|(a, b, c)| {
                 let len = |p: &[DVec3], r: &RoleMap| {
                     (p[r.get(b)] - p[r.get(a)]).length() + (p[r.get(c)] - p[r.get(b)]).length()
@@ -299,23 +318,46 @@ impl Drive {
     /// that its legs keep the library's shape rather than bend or float.
     #[must_use]
     pub fn pose(&self, fig: &Figure, lib: &WorldPose) -> Vec<DMat4> {
-        let first = self.settle(fig, lib, [0.0; 2], 0.0);
+        self.pose_held(fig, lib, &mut Hold::default())
+    }
+
+    /// As [`Self::pose`], for one of a sequence of postures (`hold`
+    /// carried from each to the next): a foot that comes down stands
+    /// where the figure's own leg, shaped as the library's, puts it, and
+    /// stays there, moving only as the library's foot moves, until it
+    /// rises again (see [`Self::offset`]). Alone, a posture's feet
+    /// stand where its legs put them.
+    #[must_use]
+    pub fn pose_held(&self, fig: &Figure, lib: &WorldPose, hold: &mut Hold) -> Vec<DMat4> {
+        let free = vec![None; fig.rest.len()];
+        let w = self.place(fig, lib, &free, DVec3::ZERO);
+        let offsets = [0, 1].map(|k| self.offset(lib, k, &w, &mut hold.feet[k]));
+        let first = self.settle(fig, lib, &w, ([0.0; 2], 0.0), offsets);
         if first.rise > 1e-4 || first.lift.iter().any(|&l| l > 1e-3) {
-            return self.settle(fig, lib, first.lift, first.rise).posed;
+            return self
+                .settle(fig, lib, &w, (first.lift, first.rise), offsets)
+                .posed;
         }
         first.posed
     }
 
-    /// The figure placed for `lib` (see [`Self::pose`]), its standing
+    /// The figure placed for `lib` (see [`Self::pose`]; `placed`, turned
+    /// as the library's where the library's pelvis is), its standing
     /// feet's places raised by `lifted` and its pelvis by `rise` as far
     /// as its legs reach.
-    fn settle(&self, fig: &Figure, lib: &WorldPose, lifted: [f64; 2], rise: f64) -> Settled {
+    fn settle(
+        &self,
+        fig: &Figure,
+        lib: &WorldPose,
+        placed: &[DMat4],
+        (lifted, rise): ([f64; 2], f64),
+        offsets: [DVec3; 2],
+    ) -> Settled {
         let free = vec![None; fig.rest.len()];
-        let w = self.place(fig, lib, &free, DVec3::ZERO);
-        let (want, most) = self.stand(lib, &w, lifted);
+        let (want, most) = self.stand(lib, placed, lifted, offsets);
         let raise = DVec3::Y * (want + rise).min(most);
         let w = if raise == DVec3::ZERO {
-            w
+            placed.to_vec()
         } else {
             self.place(fig, lib, &free, raise)
         };
@@ -324,7 +366,7 @@ impl Drive {
             Some(t) => (t, self.place(fig, t, &free, raise)),
             None => (lib, w),
         };
-        self.off_the_floor(fig, lib, &w, raise)
+        self.off_the_floor(fig, lib, &w, raise, offsets)
     }
 
     /// The joint turns that put each limb's end where the library has it
@@ -332,15 +374,17 @@ impl Drive {
     /// the ankles and wrists; a one-bone arm's about its shoulder), from
     /// the posture `w` turned as the library's, its pelvis standing
     /// `raise` off the library's (a raised foot's place does not move
-    /// with it: a foot lifting off the floor rises as the library's).
+    /// with it: a foot lifting off the floor rises as the library's;
+    /// each foot `offsets` along the floor off the library's, see
+    /// [`Self::offset`]).
     fn reach(
         &self,
         fig: &Figure,
         lib: &WorldPose,
         w: &[DMat4],
-        lift: [f64; 4],
-        turn: [DQuat; 4],
+        (lift, turn): ([f64; 4], [DQuat; 4]),
         raise: DVec3,
+        offsets: [DVec3; 2],
     ) -> Vec<Option<DQuat>> {
         let mut fixed = vec![None; fig.rest.len()];
         for (k, (a, b, c)) in LIMBS.into_iter().enumerate() {
@@ -355,7 +399,7 @@ impl Drive {
             // height as the library's.
             let root = w[fa].w_axis.truncate();
             let goal = if k < 2 {
-                self.foot_goal(lib, k, root - raise) + DVec3::Y * lift[k]
+                self.foot_goal(lib, k, root - raise, offsets[k]) + DVec3::Y * lift[k]
             } else {
                 root + (lib.positions[lc] - lib.positions[la]) * self.limb_scale[k]
                     + DVec3::Y * lift[k]
@@ -404,22 +448,72 @@ impl Drive {
     }
 
     /// Where the library puts foot `k`'s ankle for the figure (its hip at
-    /// `hip`): one on the floor scaled as the pelvis is, so that a planted
-    /// foot stays planted whatever the hips do.
-    fn foot_goal(&self, lib: &WorldPose, k: usize, hip: DVec3) -> DVec3 {
+    /// `hip`): one on the floor scaled as the pelvis is, `offset` along
+    /// the floor (see [`Self::offset`]), so that a planted foot stays
+    /// planted whatever the hips do.
+    fn foot_goal(&self, lib: &WorldPose, k: usize, hip: DVec3, offset: DVec3) -> DVec3 {
         let (a, _, c) = LIMBS[k];
         let l = lib.positions[self.lib_roles.get(c)];
-        let planted = DVec3::new(
+        let planted = self.scaled(lib, k) + offset;
+        // A foot raised `RAISED_BLEND_M` or more goes where the figure's
+        // leg, pointed as the library's, puts it from its hip (a kick
+        // points as the library's does).
+        let raised = match self.shaped(lib, k) {
+            Some(v) => hip + v,
+            None => hip + (l - lib.positions[self.lib_roles.get(a)]) * self.limb_scale[k],
+        };
+        let up = ((l.y - self.ankles.0) / RAISED_BLEND_M).clamp(0.0, 1.0);
+        planted.lerp(raised, up)
+    }
+
+    /// Where the library's ankle `k` is, scaled as the pelvis is.
+    fn scaled(&self, lib: &WorldPose, k: usize) -> DVec3 {
+        let l = lib.positions[self.lib_roles.get(LIMBS[k].2)];
+        DVec3::new(
             l.x * self.scale,
             self.ankles.1 + (l.y - self.ankles.0) * self.scale,
             l.z * self.scale,
-        ) + self.heading(lib, k) * self.hip_wide[k];
-        // A foot raised `RAISED_BLEND_M` or more goes where the library's
-        // is from its hip, the leg's length scaled (a kick points as the
-        // library's does).
-        let raised = hip + (l - lib.positions[self.lib_roles.get(a)]) * self.limb_scale[k];
-        let up = ((l.y - self.ankles.0) / RAISED_BLEND_M).clamp(0.0, 1.0);
-        planted.lerp(raised, up)
+        )
+    }
+
+    /// Where leg `k`'s ankle is from its hip with its thigh and shin
+    /// pointed as the library's (none for a one-bone leg).
+    fn shaped(&self, lib: &WorldPose, k: usize) -> Option<DVec3> {
+        if self.one_bone[k] {
+            return None;
+        }
+        let (a, b, c) = LIMBS[k];
+        let at = |r: Role| lib.positions[self.lib_roles.get(r)];
+        let (thigh, shin) = (at(b) - at(a), at(c) - at(b));
+        let (l0, l1) = self.leg_lengths[k];
+        Some(thigh.normalize_or_zero() * l0 + shin.normalize_or_zero() * l1)
+    }
+
+    /// Foot `k`'s place along the floor off the library's, scaled (`w`,
+    /// the figure turned as the library's): where its leg, its thigh and
+    /// shin pointed as the library's, puts it from its hip (a figure
+    /// with wider hips, hips behind its pelvis joint, a shorter shin for
+    /// its thigh stands on legs shaped as the library's, not leaning to
+    /// the library's feet). Held while the foot stands (in `hold`, from
+    /// when it came down), so that it stays planted as the hips move,
+    /// and let go as it rises [`HEADING_BLEND_M`]: the foot moves as the
+    /// library's does, however the two legs' shapes part. A one-bone
+    /// leg's: its hip's offset ([`Self::hip_wide`]), turned with the
+    /// foot.
+    fn offset(&self, lib: &WorldPose, k: usize, w: &[DMat4], hold: &mut Option<DVec3>) -> DVec3 {
+        let foot = self.lib_roles.get(LIMBS[k].2);
+        let up = ((lib.positions[foot].y - self.ankles.0) / HEADING_BLEND_M).clamp(0.0, 1.0);
+        let Some(v) = self.shaped(lib, k) else {
+            return self.heading(lib, k) * self.hip_wide[k];
+        };
+        let hip = w[self.fig_roles.get(LIMBS[k].0)].w_axis.truncate();
+        let live = (hip + v - self.scaled(lib, k)).with_y(0.0);
+        if up >= 1.0 {
+            *hold = None;
+        } else if self.stands(lib, k) && hold.is_none() {
+            *hold = Some(live);
+        }
+        hold.map_or(live, |h| h.lerp(live, up))
     }
 
     /// How much higher than the library's (scaled) the pelvis stands so
@@ -433,7 +527,13 @@ impl Drive {
     /// bent as the library's is (a short thigh on a long shin bends less
     /// for the same drop), the pelvis at the mean of the two, no higher
     /// than both reach; no leg standing, where it is.
-    fn stand(&self, lib: &WorldPose, w: &[DMat4], lifted: [f64; 2]) -> (f64, f64) {
+    fn stand(
+        &self,
+        lib: &WorldPose,
+        w: &[DMat4],
+        lifted: [f64; 2],
+        offsets: [DVec3; 2],
+    ) -> (f64, f64) {
         let mut one_bone: Option<f64> = None;
         let mut standing: Option<(f64, f64, f64)> = None;
         for (k, &(a, b, c)) in LIMBS.iter().enumerate().take(2) {
@@ -445,7 +545,7 @@ impl Drive {
             } else {
                 lengths.0 + lengths.1
             };
-            let v = self.foot_goal(lib, k, hip) - hip;
+            let v = self.foot_goal(lib, k, hip, offsets[k]) - hip;
             let across = v.with_y(0.0).length().min(length);
             let straight = v.y + (length * length - across * across).sqrt();
             if self.one_bone[k] {
