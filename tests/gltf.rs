@@ -488,7 +488,7 @@ const MEASURED: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
         7.723,
         3.695,
     ),
-    ("kaykit_knight.glb", 0.996, 14.137, 0.1, 2.11, 9.279, 0.701),
+    ("kaykit_knight.glb", 0.999, 14.137, 0.1, 2.129, 9.388, 0.666),
     (
         "kenney_mini_female_a.glb",
         14.443,
@@ -658,7 +658,7 @@ const MEASURED_BANDAI: [(&str, f64, f64, f64, f64); 12] = [
     ("RobotExpressive.glb", 3.71, 17.06, 7.7, 2.44),
     ("gdquest_mannequiny.glb", 0.79, 3.18, 6.6, 3.49),
     ("godot_platformer_robot.glb", 3.23, 16.21, 11.6, 2.79),
-    ("kaykit_knight.glb", 4.17, 18.40, 15.4, 0.76),
+    ("kaykit_knight.glb", 4.66, 19.91, 2.7, 0.80),
     ("kenney_mini_female_a.glb", 8.62, 33.76, 93.2, 1.82),
     ("kenney_retro_characterMedium.glb", 1.44, 5.79, 5.1, 2.19),
     ("quaternius_modular_men_suit.glb", 0.98, 3.79, 6.8, 4.05),

@@ -1,8 +1,10 @@
 //! A bow deeper than a figure's head allows: a chibi's head, two fifths of
 //! its height, goes through the floor where a person's stops above it (a
-//! studio's deep bow). The library's upper body is turned back up about
-//! its pelvis by the least turn that keeps the head's mesh off the floor;
-//! the legs stay where the library puts them, and the arms turn with the
+//! studio's deep bow); a knight's cape hung from its chest goes under in
+//! a lean. The library's upper body is turned back up about its pelvis by
+//! the least turn that keeps the head's mesh and what the trunk carries
+//! off the floor (rather than the whole figure raised off its feet); the
+//! legs stay where the library puts them, and the arms turn with the
 //! trunk.
 
 use glam::{DQuat, DVec3};

@@ -15,7 +15,9 @@
 //! turn that keeps its hand off it); a joint the rig hangs elsewhere (feet from the root) is
 //! hung on its limb; nothing it carries low (a cape, a tail, a shin) goes
 //! under the floor, nor its head: a bow deeper than its head allows (a
-//! chibi's) is turned back up about the pelvis (`upright`).
+//! chibi's), a lean that would put what the trunk carries low under the
+//! floor (a knight's cape on its chest) is turned back up about the
+//! pelvis (`upright`).
 
 mod floor;
 mod rest;
@@ -155,7 +157,8 @@ pub struct Drive {
     /// skirt, a tail), each with its joint: none goes under the floor.
     low: Carried,
     /// The library's upper body turned back up where the figure's head
-    /// would go under the floor.
+    /// or what its trunk carries low (see `trunk_points`) would go under
+    /// the floor.
     upright: Upright,
     fig_roles: RoleMap,
     lib_roles: RoleMap,
@@ -230,11 +233,7 @@ impl Drive {
             }),
             one_bone,
             low: Carried::new(low_points(fig)),
-            upright: Upright::new(
-                lib,
-                lib_roles,
-                Carried::new(end_points(fig, fig.roles.get(Role::Head))),
-            ),
+            upright: Upright::new(lib, lib_roles, Carried::new(trunk_points(fig))),
             fig_roles: fig.roles.clone(),
             lib_roles: lib_roles.clone(),
             rest: fig
@@ -634,4 +633,28 @@ impl Drive {
             })
             .collect()
     }
+}
+
+/// The mesh points a bow or a lean may put under the floor that turning
+/// the trunk back up lifts: the head's, and what the trunk alone carries
+/// low (a cape on the chest); not what the pelvis or a limb carries.
+fn trunk_points(fig: &Figure) -> Vec<super::Point> {
+    let sk = &fig.skeleton;
+    let pelvis = fig.roles.get(Role::Pelvis);
+    let mut trunk = vec![false; sk.len()];
+    let mut j = Some(fig.roles.get(Role::Head));
+    while let Some(at) = j.filter(|&at| at != pelvis) {
+        trunk[at] = true;
+        j = sk.joints[at].parent;
+    }
+    let mut points = end_points(fig, fig.roles.get(Role::Head));
+    points.extend(low_points(fig).into_iter().filter(|p| {
+        (0..4).filter(|&k| p.weights[k] > 0.0).all(|k| {
+            trunk
+                .get(usize::from(p.joints[k]))
+                .copied()
+                .unwrap_or(false)
+        })
+    }));
+    points
 }
