@@ -98,10 +98,10 @@ pub(super) struct Settled {
 
 /// What a figure carries from one posture to the next (see
 /// [`Drive::pose_held`]): where each standing foot came down, off the
-/// library's (scaled).
+/// library's (scaled), and the library's foot's heading then.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Hold {
-    feet: [Option<DVec3>; 2],
+    feet: [Option<(DVec3, Option<DQuat>)>; 2],
 }
 
 /// A figure joint's library joint and turn (see `Drive::follow`).
@@ -323,9 +323,9 @@ impl Drive {
     /// As [`Self::pose`], for one of a sequence of postures (`hold`
     /// carried from each to the next): a foot that comes down stands
     /// where the figure's own leg, shaped as the library's, puts it, and
-    /// stays there, moving only as the library's foot moves, until it
-    /// rises again (see [`Self::offset`]). Alone, a posture's feet
-    /// stand where its legs put them.
+    /// stays there, moving and turning only as the library's foot does,
+    /// until it rises again (see [`Self::offset`]). Alone, a posture's
+    /// feet stand where its legs put them.
     #[must_use]
     pub fn pose_held(&self, fig: &Figure, lib: &WorldPose, hold: &mut Hold) -> Vec<DMat4> {
         let free = vec![None; fig.rest.len()];
@@ -494,12 +494,20 @@ impl Drive {
     /// with wider hips, hips behind its pelvis joint, a shorter shin for
     /// its thigh stands on legs shaped as the library's, not leaning to
     /// the library's feet). Held while the foot stands (in `hold`, from
-    /// when it came down), so that it stays planted as the hips move,
-    /// and let go as it rises [`HEADING_BLEND_M`]: the foot moves as the
-    /// library's does, however the two legs' shapes part. A one-bone
+    /// when it came down, with the foot's heading then), so that it stays
+    /// planted as the hips move, and let go as it rises
+    /// [`HEADING_BLEND_M`]: the foot moves as the library's does, however
+    /// the two legs' shapes part, and a foot pivoting on its ball (a
+    /// kick's standing foot) turns its place with it. A one-bone
     /// leg's: its hip's offset ([`Self::hip_wide`]), turned with the
     /// foot.
-    fn offset(&self, lib: &WorldPose, k: usize, w: &[DMat4], hold: &mut Option<DVec3>) -> DVec3 {
+    fn offset(
+        &self,
+        lib: &WorldPose,
+        k: usize,
+        w: &[DMat4],
+        hold: &mut Option<(DVec3, Option<DQuat>)>,
+    ) -> DVec3 {
         let foot = self.lib_roles.get(LIMBS[k].2);
         let up = ((lib.positions[foot].y - self.ankles.0) / HEADING_BLEND_M).clamp(0.0, 1.0);
         let Some(v) = self.shaped(lib, k) else {
@@ -507,12 +515,19 @@ impl Drive {
         };
         let hip = w[self.fig_roles.get(LIMBS[k].0)].w_axis.truncate();
         let live = (hip + v - self.scaled(lib, k)).with_y(0.0);
+        let own = self.own_heading(lib, k);
         if up >= 1.0 {
             *hold = None;
         } else if self.stands(lib, k) && hold.is_none() {
-            *hold = Some(live);
+            *hold = Some((live, own));
         }
-        hold.map_or(live, |h| h.lerp(live, up))
+        // A foot that turns as it stands (pivoting on its ball) turns
+        // its place with it.
+        let held = hold.map(|(c, then)| match (own, then) {
+            (Some(now), Some(then)) => now * then.inverse() * c,
+            _ => c,
+        });
+        held.map_or(live, |h| h.lerp(live, up))
     }
 
     /// How much higher than the library's (scaled) the pelvis stands so
@@ -588,14 +603,20 @@ impl Drive {
     fn heading(&self, lib: &WorldPose, k: usize) -> DQuat {
         let foot = self.lib_roles.get([Role::LeftFoot, Role::RightFoot][k]);
         let hips = facing(lib, &self.lib_roles);
-        let ahead = (lib.rotations[foot] * self.planted_inv[k]) * DVec3::Z;
-        if ahead.with_y(0.0).length() < 0.5 {
-            // Pointing nearly straight down or up: no heading of its own.
+        let Some(own) = self.own_heading(lib, k) else {
             return hips;
-        }
-        let own = DQuat::from_rotation_y(ahead.x.atan2(ahead.z));
+        };
         let up = ((lib.positions[foot].y - self.ankles.0) / HEADING_BLEND_M).clamp(0.0, 1.0);
         own.slerp(hips, up)
+    }
+
+    /// The library's foot `k`'s turn about the vertical from how it lies
+    /// planted facing +Z; none where it points nearly straight down or
+    /// up.
+    fn own_heading(&self, lib: &WorldPose, k: usize) -> Option<DQuat> {
+        let foot = self.lib_roles.get(LIMBS[k].2);
+        let ahead = (lib.rotations[foot] * self.planted_inv[k]) * DVec3::Z;
+        (ahead.with_y(0.0).length() >= 0.5).then(|| DQuat::from_rotation_y(ahead.x.atan2(ahead.z)))
     }
 
     /// Skinning matrices (rest pose to posed) for joint transforms `w`.
