@@ -438,6 +438,11 @@ fn a_buffer_linked_from_outside_the_folder_is_refused() {
 
 /// Every character in the shared folder (a file added there is checked
 /// too): a glTF by its content, whatever its name.
+/// `got` within 2 % of the measured `want`, and `abs` more.
+fn near(got: f64, want: f64, abs: f64) -> bool {
+    (got - want).abs() <= want * 0.02 + abs
+}
+
 fn shared_characters() -> Vec<PathBuf> {
     let dir = common::shared_dir().join("characters");
     let mut out: Vec<PathBuf> = std::fs::read_dir(&dir)
@@ -600,8 +605,7 @@ fn every_shared_character_plays_the_default_library() {
         match MEASURED.iter().find(|m| m.0 == file) {
             Some(&(_, mean, max, pen, dir, p95, float)) => {
                 // Near what docs/measurements.md gives, either way (a hundredth of
-                // a share, a tenth of a millimetre or degree, or 2 %).
-                let near = |got: f64, want: f64, abs: f64| (got - want).abs() <= want * 0.02 + abs;
+                // a share, a tenth of a millimetre or degree, and 2 %).
                 assert!(near(e.mean_pct, mean, 0.01), "{file}: {e:?}");
                 assert!(near(e.max_pct, max, 0.01), "{file}: {e:?}");
                 assert!(near(e.penetration_mm, pen, 0.1), "{file}: {e:?}");
@@ -681,7 +685,6 @@ fn every_shared_character_plays_a_library_of_other_capture() {
             Some(&(_, dir, p95, float, skate)) => {
                 // Near what docs/measurements.md gives (its figures to a
                 // hundredth or a tenth, 2 % either way).
-                let near = |got: f64, want: f64, abs: f64| (got - want).abs() <= want * 0.02 + abs;
                 assert!(near(e.dir_mean_deg, dir, 0.01), "{file}: {e:?}");
                 assert!(near(e.dir_p95_deg, p95, 0.01), "{file}: {e:?}");
                 assert!(near(e.float_mm, float, 0.1), "{file}: {e:?}");

@@ -28,19 +28,16 @@
 //! A table of one character is a table like any other: the same calls,
 //! the two rules above aside.
 
+use std::borrow::Cow;
 use std::collections::{BTreeMap, BTreeSet};
 
-use glam::DVec3;
+use glam::{DMat4, DVec3};
 
 mod contact;
 
 use super::controller::{Controller, Mode};
 use super::marks::{FingerMark, FingerUse, Marks};
 use super::rig::{Orbit, Rig};
-use std::borrow::Cow;
-
-use glam::DMat4;
-
 use crate::character::gltf::{Hold, Skin};
 use crate::character::roles::Role;
 use crate::character::skeleton::{Pose, WorldPose};

@@ -461,8 +461,7 @@ impl Drive {
             Some(v) => hip + v,
             None => hip + (l - lib.positions[self.lib_roles.get(a)]) * self.limb_scale[k],
         };
-        let up = ((l.y - self.ankles.0) / RAISED_BLEND_M).clamp(0.0, 1.0);
-        planted.lerp(raised, up)
+        planted.lerp(raised, self.risen(lib, k, RAISED_BLEND_M))
     }
 
     /// Where the library's ankle `k` is, scaled as the pelvis is.
@@ -508,8 +507,7 @@ impl Drive {
         w: &[DMat4],
         hold: &mut Option<(DVec3, Option<DQuat>)>,
     ) -> DVec3 {
-        let foot = self.lib_roles.get(LIMBS[k].2);
-        let up = ((lib.positions[foot].y - self.ankles.0) / HEADING_BLEND_M).clamp(0.0, 1.0);
+        let up = self.risen(lib, k, HEADING_BLEND_M);
         let Some(v) = self.shaped(lib, k) else {
             return self.heading(lib, k) * self.hip_wide[k];
         };
@@ -553,11 +551,10 @@ impl Drive {
         for (k, &(a, b, c)) in LIMBS.iter().enumerate().take(2) {
             let at = |r: Role| w[self.fig_roles.get(r)].w_axis.truncate();
             let hip = at(a);
-            let lengths = ((at(b) - hip).length(), (at(c) - at(b)).length());
             let length = if self.one_bone[k] {
                 (at(c) - hip).length()
             } else {
-                lengths.0 + lengths.1
+                (at(b) - hip).length() + (at(c) - at(b)).length()
             };
             let v = self.foot_goal(lib, k, hip, offsets[k]) - hip;
             let across = v.with_y(0.0).length().min(length);
@@ -568,7 +565,7 @@ impl Drive {
             } else if self.stands(lib, k) {
                 // (No higher than it reaches its place unlifted: placed
                 // higher, it may not need the lift.)
-                let shaped = v.y + lifted[k] + self.drop(lib, k, lengths);
+                let shaped = v.y + lifted[k] - self.shaped(lib, k).map_or(0.0, |s| s.y);
                 let (sum, n, most) = standing.unwrap_or((0.0, 0.0, f64::INFINITY));
                 standing = Some((sum + shaped.min(straight), n + 1.0, most.min(straight)));
             }
@@ -586,13 +583,12 @@ impl Drive {
         lib.positions[self.lib_roles.get(LIMBS[k].2)].y < self.ankles.0 + STANDING_M
     }
 
-    /// How far below its hip leg `k`'s foot is, its thigh and shin
-    /// (`lengths`) pointed as the library's.
-    fn drop(&self, lib: &WorldPose, k: usize, lengths: (f64, f64)) -> f64 {
-        let (a, b, c) = LIMBS[k];
-        let at = |r: Role| lib.positions[self.lib_roles.get(r)];
-        let (thigh, shin) = (at(b) - at(a), at(c) - at(b));
-        -(thigh.normalize_or_zero().y * lengths.0 + shin.normalize_or_zero().y * lengths.1)
+    /// How far the library's foot `k` has risen over its standing height,
+    /// as a share of `over` (library metres; 0 standing, 1 at `over` and
+    /// above).
+    fn risen(&self, lib: &WorldPose, k: usize, over: f64) -> f64 {
+        let foot = lib.positions[self.lib_roles.get(LIMBS[k].2)];
+        ((foot.y - self.ankles.0) / over).clamp(0.0, 1.0)
     }
 
     /// The turn about the vertical that carries foot `k`'s offset from the
@@ -601,13 +597,11 @@ impl Drive {
     /// planted as the hips swing; one raised by `HEADING_BLEND_M` or more
     /// with the hips, as the hip it hangs from does.
     fn heading(&self, lib: &WorldPose, k: usize) -> DQuat {
-        let foot = self.lib_roles.get([Role::LeftFoot, Role::RightFoot][k]);
         let hips = facing(lib, &self.lib_roles);
         let Some(own) = self.own_heading(lib, k) else {
             return hips;
         };
-        let up = ((lib.positions[foot].y - self.ankles.0) / HEADING_BLEND_M).clamp(0.0, 1.0);
-        own.slerp(hips, up)
+        own.slerp(hips, self.risen(lib, k, HEADING_BLEND_M))
     }
 
     /// The library's foot `k`'s turn about the vertical from how it lies
