@@ -29,6 +29,11 @@ const SIZES_TOLD_UNDER: f64 = 0.8;
 /// A take whose drag goes more than this far from the way its action's
 /// other takes go is told (degrees).
 const OTHER_WAY_DEG: f64 = 90.0;
+/// An action whose drag shows less than this share of its takes' path...
+const SHOWN_SHARE: f64 = 0.35;
+/// ...where its left-out drags start it less than this share of the time
+/// is told: it travels on far past what a drag can show of it.
+const SHOWN_TOLD_UNDER: f64 = 0.5;
 
 /// The whole report.
 #[derive(Clone, Debug, Serialize)]
@@ -209,6 +214,13 @@ fn action_row(
     }
     let (n, right) = views.values().fold((0, 0), |(n, r), v| (n + v.0, r + v.1));
     shape_advice(name, &a.templates, share(right, n), advice);
+    shown_advice(
+        name,
+        &a.templates,
+        share(right, n),
+        &c.recogniser.rule,
+        advice,
+    );
     let home = home_view(actions, ai, &c.recogniser, camera, &origin);
     home_advice(a, &home, drawable, advice);
     let views = view_reports(name, views, advice);
@@ -298,6 +310,49 @@ fn shape_advice(name: &str, paths: &[ClipPath], started: f64, advice: &mut Vec<S
                 }
             ));
         }
+    }
+}
+
+/// How long a clip's part path is from where it starts moving (m), and how
+/// much of that the first `horizon_s` of its movement goes.
+fn shown_of(p: &ClipPath, horizon_s: f64) -> Option<(f64, f64)> {
+    let moving = p.points.get(p.lead_in..)?;
+    let length = |pts: &[glam::DVec3]| -> f64 { pts.windows(2).map(|w| w[0].distance(w[1])).sum() };
+    let k = ((horizon_s / p.dt).ceil() as usize + 1).min(moving.len());
+    Some((length(moving), length(&moving[..k])))
+}
+
+/// Advice on action `name` whose takes go on far past what a drag shows
+/// of them (the first [`TemplateRule::horizon_s`] of movement: a walk of
+/// several metres, of which a drag shows two steps), where its left-out
+/// drags start it less than [`SHOWN_TOLD_UNDER`] of the time (`started`):
+/// in that much, actions that differ in pace or in where they go later
+/// (a walk, a run, a dash) are drawn alike.
+fn shown_advice(
+    name: &str,
+    paths: &[ClipPath],
+    started: f64,
+    rule: &TemplateRule,
+    advice: &mut Vec<String>,
+) {
+    let mut seen = std::collections::BTreeSet::new();
+    let mut takes: Vec<(f64, f64)> = paths
+        .iter()
+        .filter(|p| seen.insert(take_of(&p.clip)))
+        .filter_map(|p| shown_of(p, rule.horizon_s))
+        .filter(|(all, _)| *all > 0.0)
+        .collect();
+    if takes.is_empty() || started >= SHOWN_TOLD_UNDER {
+        return;
+    }
+    takes.sort_by(|a, b| (a.1 / a.0).total_cmp(&(b.1 / b.0)));
+    let (all, shown) = takes[takes.len() / 2];
+    if shown < SHOWN_SHARE * all {
+        advice.push(format!(
+            "`{name}`: a drag shows the first {:.1} s of its takes' movement, {shown:.2} m of {all:.2} m (half its takes show less), and left out in turn its drags start it {:.0}% of the time: in that much it is drawn like actions that differ from it in pace or later on; cut its takes to the part that tells it (its start), or let walking carry it (list its takes under [locomotion]: a finger dragged out of posing's reach walks)",
+            rule.horizon_s,
+            started * 100.0
+        ));
     }
 }
 
@@ -473,6 +528,41 @@ mod tests {
             lead_in: 0,
             peak_speed: 1.0,
         }
+    }
+
+    #[test]
+    fn a_take_that_goes_on_far_past_what_a_drag_shows_is_told() {
+        // Straight on at 1 m/s for 6 s: a drag shows 1.5 m of 6 m.
+        let walk = |clip: &str| ClipPath {
+            clip: clip.to_owned(),
+            points: (0..=180)
+                .map(|k| glam::DVec3::new(0.0, 0.9, f64::from(k) / 30.0))
+                .collect(),
+            dt: 1.0 / 30.0,
+            lead_in: 0,
+            peak_speed: 1.0,
+        };
+        let rule = TemplateRule::default();
+        let mut advice = Vec::new();
+        shown_advice(
+            "walk",
+            &[walk("a.bvh"), walk("b.bvh")],
+            0.2,
+            &rule,
+            &mut advice,
+        );
+        assert_eq!(advice.len(), 1, "{advice:?}");
+        assert!(
+            advice[0].contains("the first 1.5 s of its takes' movement, 1.50 m of 6.00 m"),
+            "{advice:?}"
+        );
+        // Started often enough, or shown whole: nothing to tell.
+        advice.clear();
+        shown_advice("walk", &[walk("a.bvh")], 0.6, &rule, &mut advice);
+        let mut punch = walk("p.bvh");
+        punch.points.truncate(40);
+        shown_advice("punch", &[punch], 0.1, &rule, &mut advice);
+        assert!(advice.is_empty(), "{advice:?}");
     }
 
     #[test]
