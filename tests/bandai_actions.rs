@@ -65,7 +65,18 @@ fn bandai_styles_left_out_and_what_library_check_says() {
     );
 
     // What a drag can start, from the library alone.
-    let check = json(&run(&["library", "check", &s(&lib), "--json"], &cache));
+    let explained = tmp.path().join("left-out.jsonl");
+    let check = json(&run(
+        &[
+            "library",
+            "check",
+            &s(&lib),
+            "--json",
+            "--explain",
+            &s(&explained),
+        ],
+        &cache,
+    ));
     let advice: Vec<String> = check["advice"]
         .as_array()
         .unwrap()
@@ -115,13 +126,46 @@ fn bandai_styles_left_out_and_what_library_check_says() {
             .any(|a| a.starts_with("`walk`: a drag shows the first 1.5 s of its takes' movement")),
         "{advice:#?}"
     );
-    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
     // Left out in turn (540 drags; the feminine bye-bye, whose hands
     // hardly move, is no action, nor are the pieces of a bow and a guide
     // take in which the part hardly moves, and bye-bye and slash, both
     // hands alike, have no mirror image): correct 0.187, wrong 0.043, slow
     // 0.007.
+    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
     assert_eq!(check["drags"], 540);
+    // Every left-out drag explained, deciding as the report counts them.
+    let drags: Vec<serde_json::Value> = std::fs::read_to_string(&explained)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let (slow, true_drags): (Vec<_>, Vec<_>) = drags.iter().partition(|d| d["slow"] == true);
+    assert_eq!(true_drags.len(), 540);
+    let share = |n: usize, of: usize| (n as f64 / of as f64 * 1000.0).round() / 1000.0;
+    let right = true_drags
+        .iter()
+        .filter(|d| d["started"] == d["action"])
+        .count();
+    let wrong = true_drags
+        .iter()
+        .filter(|d| !d["started"].is_null() && d["started"] != d["action"])
+        .count();
+    let slow_started = slow.iter().filter(|d| !d["started"].is_null()).count();
+    assert_eq!(share(right, 540), f(&check, "correct"), "{check}");
+    assert_eq!(share(wrong, 540), f(&check, "wrong_action"), "{check}");
+    assert_eq!(
+        share(slow_started, slow.len()),
+        f(&check, "false_trigger_slow"),
+        "{check}"
+    );
+    assert!(
+        true_drags.iter().all(|d| {
+            let points = d["points"].as_array().unwrap();
+            !points.is_empty()
+                && (d["started"].is_null() || points.last().unwrap()["held"] == "starts")
+        }),
+        "each drag explained up to where it started"
+    );
     assert!((f(&check, "correct") - 0.187).abs() < 0.03, "{check}");
     assert!(f(&check, "wrong_action") < 0.05, "{check}");
     assert!(f(&check, "false_trigger_slow") <= 0.01, "{check}");

@@ -15,9 +15,13 @@ use serde::Serialize;
 use crate::character::body::{Anchor, Placement};
 use crate::character::camera::Camera;
 use crate::character::library::Library;
-use crate::control::action::calibrate::{Calibration, SLOW_BUDGET, calibrate};
+use crate::control::action::calibrate::{
+    Calibration, SEED, SLOW_BUDGET, calibrate, left_out_tests,
+};
 use crate::control::action::model::{ActionModel, ClipPath};
 use crate::control::action::recogniser::{DragMatch, Recogniser, TemplateRule, Thresholds};
+use crate::control::action::trials::each_drag;
+use crate::tools::eval::actions::{TrialExplained, explain_drag};
 
 /// A drag from one view confused with another action this often is a pair
 /// the builder should hear about.
@@ -106,6 +110,33 @@ fn share(a: usize, b: usize) -> f64 {
 fn take_of(clip: &str) -> &str {
     let end = clip.find(['#', '~']).unwrap_or(clip.len());
     &clip[..end]
+}
+
+/// Every left-out drag of `lib`'s calibration, explained point by point
+/// with `recogniser` (the library's, calibrated), as `eval actions
+/// --explain` explains held-out ones: `file` names the clip left out.
+#[must_use]
+pub fn explain(
+    lib: &Library,
+    actions: &[ActionModel],
+    recogniser: &Recogniser,
+) -> Vec<TrialExplained> {
+    let (which, tests) = left_out_tests(lib, actions);
+    let mut out = Vec::new();
+    each_drag(&tests, SEED, &mut |d| {
+        let (ai, ci) = which[d.test];
+        let m = DragMatch::new(recogniser, actions, d.role, d.camera, d.at, Some((ai, ci)));
+        let (points, started) = explain_drag(m, actions, &recogniser.thresholds, d.trail);
+        out.push(TrialExplained {
+            action: actions[ai].def.name.clone(),
+            file: actions[ai].templates[ci].clip.clone(),
+            view_deg: d.angle_deg,
+            slow: d.slow,
+            started: started.map(|(a, _)| a),
+            points,
+        });
+    });
+    out
 }
 
 /// Check `lib`: calibrate its recogniser and report on the left-out drags.

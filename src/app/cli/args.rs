@@ -439,6 +439,10 @@ pub enum LibraryCommand {
         /// Print JSON instead of a table
         #[arg(long)]
         json: bool,
+        /// Write every left-out drag explained to this file, one JSON
+        /// object a line (as `eval actions --explain` does)
+        #[arg(long, value_name = "FILE.jsonl")]
+        explain: Option<PathBuf>,
     },
 }
 

@@ -84,12 +84,7 @@ pub(super) fn eval_actions(
             seed,
             &mut trials,
         );
-        let mut text = String::new();
-        for t in &trials {
-            text.push_str(&serde_json::to_string(t).map_err(|e| Failure::new(exit::FAILURE, e))?);
-            text.push('\n');
-        }
-        super::write_atomically(out, &text)?;
+        super::write_jsonl(out, &trials)?;
         tracing::info!(file = %out.display(), drags = trials.len(), "every drag explained");
         result
     } else if models_only {

@@ -323,8 +323,8 @@ fn run(command: Command, config: &Config, config_path: &Path) -> Result<(), Fail
                 },
         } => motion::library_init(&src, &out, force, copy_clips),
         Command::Library {
-            what: LibraryCommand::Check { dir, json },
-        } => motion::library_check(config, &dir, json),
+            what: LibraryCommand::Check { dir, json, explain },
+        } => motion::library_check(config, &dir, json, explain.as_deref()),
         Command::Eval {
             what:
                 EvalCommand::Walk {
@@ -477,6 +477,16 @@ fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
 
 /// Write `text` to `out` whole, over a regular file only
 /// ([`crate::output::replace_file`]).
+/// Write `items` to `out` as JSON lines, one object a line (atomically).
+fn write_jsonl<T: serde::Serialize>(out: &Path, items: &[T]) -> Result<(), Failure> {
+    let mut text = String::new();
+    for t in items {
+        text.push_str(&serde_json::to_string(t).map_err(|e| Failure::new(exit::FAILURE, e))?);
+        text.push('\n');
+    }
+    write_atomically(out, &text)
+}
+
 fn write_atomically(out: &Path, text: &str) -> Result<(), Failure> {
     crate::output::replace_file(out, text.as_bytes()).map_err(|e| {
         Failure::new(

@@ -351,6 +351,7 @@ pub(super) fn library_check(
     config: &crate::app::config::Config,
     dir: &Path,
     json: bool,
+    explain: Option<&Path>,
 ) -> Result<(), Failure> {
     use crate::character::library::Library;
     // The same folder gets the same answer here as under --library.
@@ -371,6 +372,15 @@ pub(super) fn library_check(
     // The kiosk's default view of a lone character, at 1280x720.
     let camera = crate::control::rig::Rig::new(1280.0, 720.0).camera();
     let report = crate::tools::libcheck::check(&lib, &actions, &camera);
+    if let Some(out) = explain {
+        let recogniser = crate::control::action::recogniser::Recogniser {
+            rule: crate::control::action::recogniser::TemplateRule::default(),
+            thresholds: report.thresholds,
+        };
+        let trials = crate::tools::libcheck::explain(&lib, &actions, &recogniser);
+        super::write_jsonl(out, &trials)?;
+        tracing::info!(file = %out.display(), drags = trials.len(), "every left-out drag explained");
+    }
     if json {
         return super::print_json(&report);
     }

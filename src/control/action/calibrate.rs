@@ -27,7 +27,7 @@ pub const SLOW_BUDGET: f64 = 0.02;
 
 /// The seed of the calibration's trials (fixed: a library calibrates the
 /// same way every time).
-const SEED: u64 = 1;
+pub const SEED: u64 = 1;
 
 const COSTS_M: [f64; 24] = [
     0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.10, 0.11, 0.12, 0.13, 0.14, 0.15, 0.16, 0.17,
@@ -240,17 +240,16 @@ impl Recorded {
     }
 }
 
-/// Choose the thresholds of `actions` (the library's models) by
-/// leave-one-clip-out.
+/// The drags calibration leaves out in turn, one per template whose clip
+/// the library holds: which (action, template) each is, and the dragged
+/// part and clip, in the same order.
+pub type LeftOut<'l> = (Vec<(usize, usize)>, Vec<(Role, &'l Clip)>);
+
+/// The drags calibration leaves out in turn (see [`LeftOut`]).
 #[must_use]
-pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> Calibration {
-    let recogniser = Recogniser {
-        rule,
-        thresholds: Thresholds::default(),
-    };
-    // Every template whose clip the library holds is a test.
-    let mut which: Vec<(usize, usize)> = Vec::new();
-    let mut tests: Vec<(Role, &Clip)> = Vec::new();
+pub fn left_out_tests<'l>(lib: &'l Library, actions: &[ActionModel]) -> LeftOut<'l> {
+    let mut which = Vec::new();
+    let mut tests = Vec::new();
     for (ai, a) in actions.iter().enumerate() {
         for (ci, t) in a.templates.iter().enumerate() {
             if let Some(clip) = lib.clips.get(&t.clip) {
@@ -259,6 +258,18 @@ pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> 
             }
         }
     }
+    (which, tests)
+}
+
+/// Choose the thresholds of `actions` (the library's models) by
+/// leave-one-clip-out.
+#[must_use]
+pub fn calibrate(lib: &Library, actions: &[ActionModel], rule: TemplateRule) -> Calibration {
+    let recogniser = Recogniser {
+        rule,
+        thresholds: Thresholds::default(),
+    };
+    let (which, tests) = left_out_tests(lib, actions);
     let mut recorded = Vec::new();
     each_drag(&tests, SEED, &mut |d| {
         let m = DragMatch::new(

@@ -17,7 +17,7 @@ use crate::character::camera::Camera;
 use crate::character::motion::Clip;
 use crate::character::roles::Role;
 use crate::control::action::model::{ActionModel, recognize};
-use crate::control::action::recogniser::{DragMatch, Explained, Held, Recogniser};
+use crate::control::action::recogniser::{DragMatch, Explained, Held, Recogniser, Thresholds};
 use crate::control::action::trail::{StartRule, TrailPoint};
 pub use crate::control::action::trials::Drag;
 use crate::control::action::trials::each_drag;
@@ -182,6 +182,32 @@ pub struct PointExplained {
     pub at: Explained,
 }
 
+/// Feed `trail` to `m` point by point, each point explained, until an
+/// action starts: the points explained, and what started after how many
+/// points.
+pub fn explain_drag(
+    mut m: DragMatch,
+    actions: &[ActionModel],
+    thresholds: &Thresholds,
+    trail: &[TrailPoint],
+) -> (Vec<PointExplained>, Option<(String, usize)>) {
+    let t0 = trail.first().map_or(0.0, |p| p.t);
+    let mut points = Vec::new();
+    let started = trail.iter().enumerate().find_map(|(k, p)| {
+        m.push(*p);
+        let at = m.explain(actions, thresholds);
+        let starts = at.held == Held::Starts;
+        points.push(PointExplained {
+            t: ((p.t - t0) * 1000.0).round() / 1000.0,
+            at,
+        });
+        let decided = m.decide(actions, thresholds);
+        debug_assert_eq!(starts, decided.is_some(), "explained as decided");
+        decided.map(|r| (actions[r.action].def.name.clone(), k + 1))
+    });
+    (points, started)
+}
+
 /// [`eval_templates`], each drag explained point by point into `trials`
 /// (`files` names each test).
 #[must_use]
@@ -198,21 +224,8 @@ pub fn eval_templates_explained(
         .collect();
     let tests_known: Vec<(String, &Clip)> = known.iter().map(|&i| tests[i].clone()).collect();
     let mut judge = |d: &Drag<'_>| {
-        let mut m = DragMatch::new(recogniser, actions, d.role, d.camera, d.at, None);
-        let t0 = d.trail.first().map_or(0.0, |p| p.t);
-        let mut points = Vec::new();
-        let started = d.trail.iter().enumerate().find_map(|(k, p)| {
-            m.push(*p);
-            let at = m.explain(actions, &recogniser.thresholds);
-            let starts = at.held == Held::Starts;
-            points.push(PointExplained {
-                t: ((p.t - t0) * 1000.0).round() / 1000.0,
-                at,
-            });
-            let decided = m.decide(actions, &recogniser.thresholds);
-            debug_assert_eq!(starts, decided.is_some(), "explained as decided");
-            decided.map(|r| (actions[r.action].def.name.clone(), k + 1))
-        });
+        let m = DragMatch::new(recogniser, actions, d.role, d.camera, d.at, None);
+        let (points, started) = explain_drag(m, actions, &recogniser.thresholds, d.trail);
         let test = known[d.test];
         trials.push(TrialExplained {
             action: tests[test].0.clone(),
