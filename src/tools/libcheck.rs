@@ -113,14 +113,18 @@ fn take_of(clip: &str) -> &str {
 }
 
 /// Every left-out drag of `lib`'s calibration, explained point by point
-/// with `recogniser` (the library's, calibrated), as `eval actions
-/// --explain` explains held-out ones: `file` names the clip left out.
+/// with the thresholds [`check`] calibrated, as `eval actions --explain`
+/// explains held-out ones: `file` names the clip left out.
 #[must_use]
 pub fn explain(
     lib: &Library,
     actions: &[ActionModel],
-    recogniser: &Recogniser,
+    thresholds: Thresholds,
 ) -> Vec<TrialExplained> {
+    let recogniser = &Recogniser {
+        rule: TemplateRule::default(),
+        thresholds,
+    };
     let (which, tests) = left_out_tests(lib, actions);
     let mut out = Vec::new();
     each_drag(&tests, SEED, &mut |d| {
@@ -244,14 +248,9 @@ fn action_row(
         ));
     }
     let (n, right) = views.values().fold((0, 0), |(n, r), v| (n + v.0, r + v.1));
-    shape_advice(name, &a.templates, share(right, n), advice);
-    shown_advice(
-        name,
-        &a.templates,
-        share(right, n),
-        &c.recogniser.rule,
-        advice,
-    );
+    let started = share(right, n);
+    shape_advice(name, &a.templates, started, advice);
+    shown_advice(name, &a.templates, started, &c.recogniser.rule, advice);
     let home = home_view(actions, ai, &c.recogniser, camera, &origin);
     home_advice(a, &home, drawable, advice);
     let views = view_reports(name, views, advice);
@@ -273,6 +272,13 @@ fn action_row(
     }
 }
 
+/// The first clip of each take among `paths` (cuts and mirror images of a
+/// take are one take).
+fn one_per_take(paths: &[ClipPath]) -> impl Iterator<Item = &ClipPath> {
+    let mut seen = std::collections::BTreeSet::new();
+    paths.iter().filter(move |p| seen.insert(take_of(&p.clip)))
+}
+
 /// How far a clip's part goes from where it starts moving (m), and which
 /// way (a unit vector in the character's frame) to the point it goes
 /// farthest.
@@ -291,10 +297,7 @@ fn shape_of(p: &ClipPath) -> Option<(f64, glam::DVec3)> {
 /// [`SIZES_TOLD_UNDER`] of the time (`started`), or one that goes another
 /// way than the others.
 fn shape_advice(name: &str, paths: &[ClipPath], started: f64, advice: &mut Vec<String>) {
-    let mut seen = std::collections::BTreeSet::new();
-    let takes: Vec<(&str, f64, glam::DVec3)> = paths
-        .iter()
-        .filter(|p| seen.insert(take_of(&p.clip)))
+    let takes: Vec<(&str, f64, glam::DVec3)> = one_per_take(paths)
         .filter_map(|p| shape_of(p).map(|(r, w)| (take_of(&p.clip), r, w)))
         .collect();
     if takes.len() < 2 {
@@ -366,10 +369,7 @@ fn shown_advice(
     rule: &TemplateRule,
     advice: &mut Vec<String>,
 ) {
-    let mut seen = std::collections::BTreeSet::new();
-    let mut takes: Vec<(f64, f64)> = paths
-        .iter()
-        .filter(|p| seen.insert(take_of(&p.clip)))
+    let mut takes: Vec<(f64, f64)> = one_per_take(paths)
         .filter_map(|p| shown_of(p, rule.horizon_s))
         .filter(|(all, _)| *all > 0.0)
         .collect();

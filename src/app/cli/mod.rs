@@ -475,8 +475,6 @@ fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
     writeln!(std::io::stdout(), "{json}").map_err(stdout_error)
 }
 
-/// Write `text` to `out` whole, over a regular file only
-/// ([`crate::output::replace_file`]).
 /// Write `items` to `out` as JSON lines, one object a line (atomically).
 fn write_jsonl<T: serde::Serialize>(out: &Path, items: &[T]) -> Result<(), Failure> {
     let mut text = String::new();
@@ -487,6 +485,8 @@ fn write_jsonl<T: serde::Serialize>(out: &Path, items: &[T]) -> Result<(), Failu
     write_atomically(out, &text)
 }
 
+/// Write `text` to `out` whole, over a regular file only
+/// ([`crate::output::replace_file`]).
 fn write_atomically(out: &Path, text: &str) -> Result<(), Failure> {
     crate::output::replace_file(out, text.as_bytes()).map_err(|e| {
         Failure::new(

@@ -373,11 +373,7 @@ pub(super) fn library_check(
     let camera = crate::control::rig::Rig::new(1280.0, 720.0).camera();
     let report = crate::tools::libcheck::check(&lib, &actions, &camera);
     if let Some(out) = explain {
-        let recogniser = crate::control::action::recogniser::Recogniser {
-            rule: crate::control::action::recogniser::TemplateRule::default(),
-            thresholds: report.thresholds,
-        };
-        let trials = crate::tools::libcheck::explain(&lib, &actions, &recogniser);
+        let trials = crate::tools::libcheck::explain(&lib, &actions, report.thresholds);
         super::write_jsonl(out, &trials)?;
         tracing::info!(file = %out.display(), drags = trials.len(), "every left-out drag explained");
     }
