@@ -97,6 +97,56 @@ fn every_family_of_random_paths_is_walked_by_the_default_library() {
 }
 
 #[test]
+fn a_drag_up_or_down_the_screen_walks_once_it_points_past_the_body() {
+    // Straight paths of 3 m at 1 m/s in 24 headings round the character.
+    // From the home view the floor is seen from low: a finger that goes up
+    // or down the screen moves the pelvis up or down (posing, a squat)
+    // until it points higher or lower than the library takes the pelvis;
+    // past that it walks. Before, the headings up and down the screen
+    // (-60, 120 and 135 degrees with the default library) started no walk
+    // and the character stood 3 m from where the finger lifted; the one
+    // down the screen started a squat, which now gives way to a walk once
+    // the finger goes lower than the body goes (docs/measurements.md,
+    // `marionette eval walk --paths`).
+    let ch = common::character();
+    let paths: Vec<WalkPath> = (0..24)
+        .map(|k| {
+            let a = f64::from(k * 15 - 180).to_radians();
+            WalkPath {
+                points: (0..=12)
+                    .map(|i| {
+                        let s = 0.25 * f64::from(i);
+                        [s * a.sin(), s * a.cos()]
+                    })
+                    .collect(),
+                speed_mps: 1.0,
+                pauses: Vec::new(),
+                family: "heading".to_owned(),
+            }
+        })
+        .collect();
+    let r = eval_walk(&ch, &paths, None);
+    for (k, w) in r.rows.iter().enumerate() {
+        eprintln!(
+            "{:4} deg: arrival {:5.1} cm, first step {:.2} s",
+            k as i32 * 15 - 180,
+            w.arrival_cm,
+            w.start_s
+        );
+    }
+    // Every heading arrives, the worst 17.7 cm from the end; no pop.
+    assert!((r.all.followed - 1.0).abs() < 1e-9, "{r:?}");
+    assert!(r.all.arrival_worst_cm <= 19.0, "{r:?}");
+    assert_eq!(r.all.pops, 0, "{r:?}");
+    // Down the screen the squat plays first: the first step comes 1.03 s
+    // after the finger left posing's reach over the floor (0.4 to 0.6 s
+    // near the screen's upright, 0.3 s at most across it).
+    assert!(r.all.start_worst_s <= 1.1, "{r:?}");
+    let late = r.rows.iter().filter(|w| w.start_s > 0.3).count();
+    assert!(late <= 4, "{late} headings step later than 0.3 s: {r:?}");
+}
+
+#[test]
 fn turn_backs_and_stops_on_other_seeds_arrive_where_the_finger_lifted() {
     // Paths of the families the table's seed does not show failing
     // (`marionette eval walk --family turn_back --count 20 --seed 1`, and

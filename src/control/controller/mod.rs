@@ -149,6 +149,19 @@ const MAX_TRAIL_S: f64 = 4.0;
 /// Longest tracking sub-step (s): explicit integration stays stable.
 pub const MAX_SUBSTEP: f64 = 0.004;
 
+/// The lowest and highest the library's postures take the pelvis over
+/// the floor (m).
+fn pelvis_range(ch: &Character) -> (f64, f64) {
+    let pelvis = ch.roles.get(Role::Pelvis);
+    ch.posing
+        .samples
+        .iter()
+        .filter_map(|s| s.aligned.get(pelvis).map(|p| p.y))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+            (lo.min(y), hi.max(y))
+        })
+}
+
 impl Controller {
     /// A character at rest at the origin facing +Z, at time `t`
     /// (seconds).
@@ -190,7 +203,7 @@ impl Controller {
             settings,
             motion: Motion {
                 mode: Mode::Posing,
-                lead: walk::Lead::new(pelvis_h),
+                lead: walk::Lead::new(pelvis_h, pelvis_range(&ch)),
                 layering: layer::Layering::default(),
                 events: Vec::new(),
             },

@@ -39,6 +39,9 @@ impl Controller {
             .filter(|c| !self.motion.layering.playing() || !upper(c.role))
             .collect();
         let moved = self.fingers.moved(|_| true);
+        if self.walk_past_action(camera, t) {
+            switched = true;
+        }
         match &mut self.motion.mode {
             Mode::Walk(_) => self.walk_step(camera, t, dt),
             Mode::Posing => {

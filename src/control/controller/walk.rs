@@ -22,16 +22,30 @@ use crate::screen::ScreenPoint;
 /// is out of posing's reach.
 pub const WALK_REACH_M: f64 = 0.35;
 
-/// ... for this long (s) before a walk starts. Only a finger gone across
-/// the screen walks so: one gone up or down it moves the pelvis up or
-/// down (posing, a jump, a squat), as the camera sees the floor from low;
-/// a walk towards the camera starts by the walk's own template. A finger
-/// that has led a walk and stopped walks on whichever way it goes.
+/// ... for this long (s) before a walk starts. A finger gone across the
+/// screen walks so; one gone up or down it moves the pelvis up or down
+/// (posing, a jump, a squat), as the camera sees the floor from low,
+/// until it goes higher or lower than the body takes the pelvis (see
+/// [`PAST_BODY_M`]); a walk towards the camera also starts by the walk's
+/// own template. A finger that has led a walk and stopped walks on
+/// whichever way it goes.
 const WALK_CONFIRM_S: f64 = 0.1;
+
+/// A finger up or down the screen that points this far (m) above the
+/// highest or below the lowest the library takes the pelvis (at the
+/// pelvis's place, seen from the camera) asks for more than posing can
+/// do: it walks the character away or towards the camera.
+const PAST_BODY_M: f64 = 0.1;
 
 /// A floor point that moves more than this (m) for a pixel up or down
 /// the screen is seen too obliquely (a camera looking level) to walk to.
 const MAX_M_PER_PX: f64 = 0.03;
+
+/// ... and for a finger that points past the body (see [`PAST_BODY_M`]),
+/// whose height is no longer in question, a floor point that moves more
+/// than this (m) for a pixel is too uncertain to walk to (two pixels of a
+/// finger's jitter, 20 cm of floor).
+const PAST_BODY_M_PER_PX: f64 = 0.1;
 
 /// What a walk started by the pelvis finger's reach is told as (not an
 /// action's name: no action template started it).
@@ -69,6 +83,9 @@ pub(super) struct Lead {
     /// The pelvis's standing height (m): the finger moves the pelvis in
     /// the level plane at this height.
     height: f64,
+    /// The lowest and highest the library takes the pelvis (m over the
+    /// floor).
+    body: (f64, f64),
     /// Since when the finger has been out of reach, and where it led
     /// there last (a floor point).
     beyond: Option<(f64, DVec3)>,
@@ -80,12 +97,53 @@ pub(super) struct Lead {
 }
 
 impl Lead {
-    /// No finger leading; the pelvis stands `height` over the floor.
-    pub fn new(height: f64) -> Self {
+    /// No finger leading; the pelvis stands `height` over the floor and
+    /// goes from `body.0` to `body.1` over it in the library.
+    pub fn new(height: f64, body: (f64, f64)) -> Self {
         Self {
             height,
+            body: (body.0.min(height), body.1.max(height)),
             ..Self::default()
         }
+    }
+
+    /// How high a finger at `at` points at the pelvis over floor point
+    /// `pelvis`, seen from `camera`: where its ray passes the upright
+    /// plane through the pelvis square to the view (m; none where the ray
+    /// does not go that way).
+    fn height_at(camera: &Camera, at: ScreenPoint, pelvis: DVec3) -> Option<f64> {
+        let ray = camera.ray(at);
+        let normal = camera.eye_vector().with_y(0.0).normalize_or_zero();
+        let into = ray.dir.dot(normal);
+        if normal == DVec3::ZERO || into < 1e-6 {
+            return None;
+        }
+        let s = (pelvis - ray.origin).dot(normal) / into;
+        Some(ray.origin.y + ray.dir.y * s)
+    }
+
+    /// Whether a finger at `at` points higher or lower than the body takes
+    /// the pelvis (by [`PAST_BODY_M`]), at the pelvis over floor point
+    /// `pelvis`, seen from `camera`.
+    fn past_body(&self, camera: &Camera, at: ScreenPoint, pelvis: DVec3) -> bool {
+        Self::height_at(camera, at, pelvis)
+            .is_some_and(|y| y < self.body.0 - PAST_BODY_M || y > self.body.1 + PAST_BODY_M)
+    }
+
+    /// Where to walk to, if the pelvis finger `finger` points lower than
+    /// the body takes the pelvis (by [`PAST_BODY_M`]) and out of posing's
+    /// reach over the floor: an action of the pelvis (a squat) it started
+    /// can go no lower, and the character walks towards the camera
+    /// instead.
+    pub fn below_body(&self, camera: &Camera, finger: Holding, pelvis: DVec3) -> Option<DVec3> {
+        let goal = self.goal(camera, finger.at);
+        let oblique =
+            (self.goal(camera, ScreenPoint::new(finger.at.x, finger.at.y + 1.0)) - goal).length();
+        ((goal - pelvis).length() > WALK_REACH_M
+            && oblique <= PAST_BODY_M_PER_PX
+            && Self::height_at(camera, finger.at, pelvis)
+                .is_some_and(|y| y < self.body.0 - PAST_BODY_M))
+        .then_some(goal)
     }
 
     /// The floor point a finger on the pelvis at `at` leads to.
@@ -122,9 +180,10 @@ impl Lead {
         // it goes (its drag began anew where it stopped: up the screen is
         // away from the camera, not a jump).
         let walked = self.finger == Some(f.id);
-        let across = (walked || (at.x - from.x).abs() >= (at.y - from.y).abs())
-            && (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - goal).length()
-                <= MAX_M_PER_PX;
+        let oblique = (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - goal).length();
+        let across = ((walked || (at.x - from.x).abs() >= (at.y - from.y).abs())
+            && oblique <= MAX_M_PER_PX)
+            || (self.past_body(camera, at, pelvis) && oblique <= PAST_BODY_M_PER_PX);
         if !across {
             self.beyond = None;
             return None;
@@ -201,6 +260,38 @@ impl Controller {
             .nearest_travelling()
             .unwrap_or_else(|| WALKING.to_owned());
         self.walk_to(goal, t, &label, true);
+        true
+    }
+
+    /// An action of the pelvis that its finger took lower than the body
+    /// goes (a squat dragged on down the screen) gives way to a walk
+    /// towards where the finger leads: the action is cancelled. Whether it
+    /// did.
+    pub(super) fn walk_past_action(&mut self, camera: &Camera, t: f64) -> bool {
+        let Mode::Action(player) = &self.motion.mode else {
+            return false;
+        };
+        let action = player.action();
+        if self.ch.gait.is_empty()
+            || self.ch.travels[action]
+            || self.ch.actions[action].def.primary != Role::Pelvis
+        {
+            return false;
+        }
+        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        let Some(goal) = self
+            .pelvis_finger()
+            .and_then(|f| self.motion.lead.below_body(camera, f, pelvis))
+        else {
+            return false;
+        };
+        let name = self.ch.actions[action].def.name.clone();
+        tracing::debug!(action = %name, "the pelvis finger went lower than the body goes: the action gives way to a walk");
+        self.motion.events.push(ActionEvent::Cancelled {
+            action: name,
+            time_s: t,
+        });
+        self.walk_to(goal, t, WALKING, true);
         true
     }
 
@@ -293,6 +384,9 @@ mod tests {
         }
     }
 
+    /// The lowest and highest a library takes the pelvis (m).
+    const BODY: (f64, f64) = (0.5, 1.0);
+
     fn finger(from: ScreenPoint, at: ScreenPoint) -> Option<Holding> {
         Some(Holding { id: 7, at, from })
     }
@@ -300,7 +394,7 @@ mod tests {
     #[test]
     fn a_finger_across_the_screen_out_of_reach_walks_once_it_stayed_there() {
         let cam = camera();
-        let mut lead = Lead::new(0.95);
+        let mut lead = Lead::new(0.95, BODY);
         let pelvis = DVec3::ZERO;
         let from = cam.project(DVec3::new(0.0, 0.95, 0.0)).unwrap();
         // Within reach: no walk.
@@ -332,11 +426,13 @@ mod tests {
     }
 
     #[test]
-    fn a_finger_gone_up_the_screen_moves_the_pelvis_and_walks_nowhere() {
+    fn a_finger_up_the_screen_walks_only_once_it_points_past_the_body() {
         let cam = camera();
-        let mut lead = Lead::new(0.95);
+        let mut lead = Lead::new(0.95, BODY);
         let from = cam.project(DVec3::new(0.0, 0.95, 0.0)).unwrap();
-        let up = ScreenPoint::new(from.x, from.y - 150.0);
+        // Up the screen to where the pelvis would stand 5 cm over the
+        // highest the body takes it: it moves the pelvis, however long.
+        let up = cam.project(DVec3::new(0.0, 1.05, 0.0)).unwrap();
         for k in 0..10 {
             let t = 0.05 * f64::from(k);
             assert_eq!(
@@ -344,12 +440,47 @@ mod tests {
                 None
             );
         }
+        // 15 cm over it: away from the camera, once it stayed 0.1 s.
+        let past = cam.project(DVec3::new(0.0, 1.15, 0.0)).unwrap();
+        assert_eq!(
+            lead.out_of_reach(&cam, finger(from, past), DVec3::ZERO, 1.0),
+            None
+        );
+        let goal = lead
+            .out_of_reach(&cam, finger(from, past), DVec3::ZERO, 1.1)
+            .expect("walks away");
+        assert!(goal.z < -WALK_REACH_M && goal.x.abs() < 1e-6, "{goal}");
+        assert!((goal - lead.goal(&cam, past)).length() < 1e-9);
+    }
+
+    #[test]
+    fn a_finger_down_the_screen_past_the_body_hands_its_squat_to_a_walk() {
+        let cam = camera();
+        let lead = Lead::new(0.95, BODY);
+        let held = |y: f64| {
+            let at = cam.project(DVec3::new(0.0, y, 0.0)).unwrap();
+            Holding {
+                id: 7,
+                at,
+                from: at,
+            }
+        };
+        // As low as the body goes, and 5 cm lower: the squat goes on.
+        assert_eq!(lead.below_body(&cam, held(0.5), DVec3::ZERO), None);
+        assert_eq!(lead.below_body(&cam, held(0.45), DVec3::ZERO), None);
+        // 15 cm lower: a walk towards the camera.
+        let goal = lead
+            .below_body(&cam, held(0.35), DVec3::ZERO)
+            .expect("walks towards the camera");
+        assert!(goal.z > WALK_REACH_M && goal.x.abs() < 1e-6, "{goal}");
+        // Higher than the body goes is no reason to leave a squat.
+        assert_eq!(lead.below_body(&cam, held(1.2), DVec3::ZERO), None);
     }
 
     #[test]
     fn a_finger_that_walked_walks_on_up_the_screen_and_to_where_it_lifted() {
         let cam = camera();
-        let mut lead = Lead::new(0.95);
+        let mut lead = Lead::new(0.95, BODY);
         let from = cam.project(DVec3::new(0.0, 0.95, 0.0)).unwrap();
         let away = cam.project(DVec3::new(0.1, 0.95, 1.0)).unwrap();
         assert!((away.y - from.y).abs() > (away.x - from.x).abs());
@@ -390,7 +521,7 @@ mod tests {
 
     #[test]
     fn a_walk_is_told_as_it_began_and_follows_its_finger() {
-        let mut lead = Lead::new(0.95);
+        let mut lead = Lead::new(0.95, BODY);
         lead.began("walk", Some(3));
         assert_eq!(lead.told(), "walk");
         assert_eq!(lead.finished(), "walk");
