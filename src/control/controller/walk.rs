@@ -122,12 +122,18 @@ impl Lead {
         Some(ray.origin.y + ray.dir.y * s)
     }
 
-    /// Whether a finger at `at` points higher or lower than the body takes
-    /// the pelvis (by [`PAST_BODY_M`]), at the pelvis over floor point
-    /// `pelvis`, seen from `camera`.
-    fn past_body(&self, camera: &Camera, at: ScreenPoint, pelvis: DVec3) -> bool {
-        Self::height_at(camera, at, pelvis)
-            .is_some_and(|y| y < self.body.0 - PAST_BODY_M || y > self.body.1 + PAST_BODY_M)
+    /// Whether a finger at `at` points higher (`Some(true)`) or lower
+    /// (`Some(false)`) than the body takes the pelvis, by [`PAST_BODY_M`],
+    /// at the pelvis over floor point `pelvis`, seen from `camera`.
+    fn past_body(&self, camera: &Camera, at: ScreenPoint, pelvis: DVec3) -> Option<bool> {
+        let y = Self::height_at(camera, at, pelvis)?;
+        (y < self.body.0 - PAST_BODY_M || y > self.body.1 + PAST_BODY_M).then_some(y > self.body.1)
+    }
+
+    /// How far the floor point under a finger at `at` moves for a pixel
+    /// down the screen (m).
+    fn oblique(&self, camera: &Camera, at: ScreenPoint) -> f64 {
+        (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - self.goal(camera, at)).length()
     }
 
     /// Where to walk to, if the pelvis finger `finger` points lower than
@@ -137,12 +143,9 @@ impl Lead {
     /// instead.
     pub fn below_body(&self, camera: &Camera, finger: Holding, pelvis: DVec3) -> Option<DVec3> {
         let goal = self.goal(camera, finger.at);
-        let oblique =
-            (self.goal(camera, ScreenPoint::new(finger.at.x, finger.at.y + 1.0)) - goal).length();
         ((goal - pelvis).length() > WALK_REACH_M
-            && oblique <= PAST_BODY_M_PER_PX
-            && Self::height_at(camera, finger.at, pelvis)
-                .is_some_and(|y| y < self.body.0 - PAST_BODY_M))
+            && self.oblique(camera, finger.at) <= PAST_BODY_M_PER_PX
+            && self.past_body(camera, finger.at, pelvis) == Some(false))
         .then_some(goal)
     }
 
@@ -180,10 +183,10 @@ impl Lead {
         // it goes (its drag began anew where it stopped: up the screen is
         // away from the camera, not a jump).
         let walked = self.finger == Some(f.id);
-        let oblique = (self.goal(camera, ScreenPoint::new(at.x, at.y + 1.0)) - goal).length();
+        let oblique = self.oblique(camera, at);
         let across = ((walked || (at.x - from.x).abs() >= (at.y - from.y).abs())
             && oblique <= MAX_M_PER_PX)
-            || (self.past_body(camera, at, pelvis) && oblique <= PAST_BODY_M_PER_PX);
+            || (self.past_body(camera, at, pelvis).is_some() && oblique <= PAST_BODY_M_PER_PX);
         if !across {
             self.beyond = None;
             return None;
