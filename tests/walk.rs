@@ -40,14 +40,15 @@ fn the_default_library_walks_along_random_curves() {
     assert!(r.all.followed >= 0.95, "{r:?}");
     // 1.0 followed, 11.7 cm from the end, 5.32 cm off the path, planted
     // feet 1.07 mm per frame (worst step 8.70 mm: the target's 15 mm), no
-    // pop, stepping 0.185 s after the finger left reach (0.267 at the
-    // slowest: the target's 0.3 s).
+    // pop, stepping 0.215 s after the finger left reach (0.3 at the
+    // slowest: the target's 0.3 s; a foot that posing moved before is no
+    // step).
     assert!(r.all.arrival_cm <= 12.2, "{r:?}");
     assert!(r.all.deviation_cm <= 5.8, "{r:?}");
     assert_eq!(r.all.pops, 0, "{r:?}");
     assert!(r.all.skate_mm <= 1.12, "{r:?}");
     assert!(r.all.skate_max_mm <= 9.2, "{r:?}");
-    assert!(r.all.start_s > 0.15 && r.all.start_s <= 0.2, "{r:?}");
+    assert!(r.all.start_s > 0.19 && r.all.start_s <= 0.23, "{r:?}");
     assert!(r.all.start_worst_s <= 0.3, "{r:?}");
 }
 
@@ -138,12 +139,12 @@ fn a_drag_up_or_down_the_screen_walks_once_it_points_past_the_body() {
     assert!((r.all.followed - 1.0).abs() < 1e-9, "{r:?}");
     assert!(r.all.arrival_worst_cm <= 19.0, "{r:?}");
     assert_eq!(r.all.pops, 0, "{r:?}");
-    // Down the screen the squat plays first: the first step comes 1.03 s
-    // after the finger left posing's reach over the floor (0.4 to 0.6 s
-    // near the screen's upright, 0.3 s at most across it).
-    assert!(r.all.start_worst_s <= 1.1, "{r:?}");
-    let late = r.rows.iter().filter(|w| w.start_s > 0.3).count();
-    assert!(late <= 4, "{late} headings step later than 0.3 s: {r:?}");
+    // Counted from the finger pointing past the body, the first step
+    // comes within 0.3 s but down the screen, where the squat it started
+    // plays first and is cancelled (0.57 s).
+    assert!(r.all.start_worst_s <= 0.6, "{r:?}");
+    let late = r.rows.iter().filter(|w| w.start_s > 0.3 + 1e-9).count();
+    assert!(late <= 1, "{late} headings step later than 0.3 s: {r:?}");
 }
 
 #[test]

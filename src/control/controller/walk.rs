@@ -173,9 +173,22 @@ impl Lead {
             let beyond = self.beyond.take();
             return self.finger.take().and(beyond).map(|(_, goal)| goal);
         };
+        let Some(goal) = self.beyond_reach(camera, f, pelvis) else {
+            self.beyond = None;
+            return None;
+        };
+        let since = self.beyond.map_or(t, |(since, _)| since);
+        self.beyond = Some((since, goal));
+        (t - since >= WALK_CONFIRM_S).then_some(goal)
+    }
+
+    /// The floor point the pelvis finger `f` leads to, if it is out of
+    /// posing's reach of the pelvis over `pelvis`: farther than
+    /// [`WALK_REACH_M`] over a floor seen steeply enough, and across the
+    /// screen or past the body (see [`PAST_BODY_M`]).
+    fn beyond_reach(&self, camera: &Camera, f: Holding, pelvis: DVec3) -> Option<DVec3> {
         let goal = self.goal(camera, f.at);
         if (goal - pelvis).length() <= WALK_REACH_M {
-            self.beyond = None;
             return None;
         }
         let (at, from) = (f.at, f.from);
@@ -187,13 +200,7 @@ impl Lead {
         let across = ((walked || (at.x - from.x).abs() >= (at.y - from.y).abs())
             && oblique <= MAX_M_PER_PX)
             || (self.past_body(camera, at, pelvis).is_some() && oblique <= PAST_BODY_M_PER_PX);
-        if !across {
-            self.beyond = None;
-            return None;
-        }
-        let since = self.beyond.map_or(t, |(since, _)| since);
-        self.beyond = Some((since, goal));
-        (t - since >= WALK_CONFIRM_S).then_some(goal)
+        across.then_some(goal)
     }
 
     /// A walk began, told as `label`, following the finger `finger`.
@@ -245,6 +252,18 @@ impl Controller {
     /// The finger holding the pelvis.
     fn pelvis_finger(&self) -> Option<Holding> {
         self.fingers.holding(Role::Pelvis)
+    }
+
+    /// Whether the finger holding the pelvis leads out of posing's reach
+    /// now, seen from `camera` (a walk starts once it has for
+    /// [`WALK_CONFIRM_S`]): farther over the floor than posing takes the
+    /// pelvis, across the screen or past the body.
+    #[must_use]
+    pub fn pelvis_finger_out_of_reach(&self, camera: &Camera) -> bool {
+        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        self.pelvis_finger()
+            .and_then(|f| self.motion.lead.beyond_reach(camera, f, pelvis))
+            .is_some()
     }
 
     /// Start a walk if the pelvis finger has been out of posing's reach

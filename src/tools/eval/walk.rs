@@ -309,12 +309,6 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
             let p = point_along(&pts, s);
             let phase = if s >= total { Phase::Up } else { Phase::Move };
             contacts.push(contact(1, phase, screen(&table, p)));
-            if watch.left_reach.is_none()
-                && (p - table.ctl().world().positions[pelvis_j].with_y(0.0)).length()
-                    > crate::control::controller::WALK_REACH_M
-            {
-                watch.left_reach = Some(t);
-            }
             // A stop: does the character stand by the finger before it
             // moves on?
             match (was_still, still) {
@@ -331,6 +325,18 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
             Some(ScreenFrame { t, contacts })
         };
         step(&mut table, frames.as_slice(), &mut k);
+        // The finger leaves posing's reach as the exhibit's rules have it
+        // (a drag up or down the screen poses the pelvis up or down until
+        // it points past the body), or a walk began before (by its
+        // template).
+        if watch.left_reach.is_none()
+            && (table
+                .ctl()
+                .pelvis_finger_out_of_reach(&table.rig().camera())
+                || matches!(table.ctl().mode(), Mode::Walk(_)))
+        {
+            watch.left(table.ctl(), t);
+        }
         if let Some(f) = second.as_mut() {
             f.measure(ch, table.ctl());
         }
@@ -406,6 +412,14 @@ impl<'a> Watch<'a> {
         }
     }
 
+    /// The finger left posing's reach at `t`: the first step is looked
+    /// for from here, the feet's places now the ones it leaves (posing
+    /// moves them too: a foot that posing shifted is no step).
+    fn left(&mut self, ctl: &Controller, t: f64) {
+        self.left_reach = Some(t);
+        self.feet_rest = self.feet.map(|f| ctl.world().positions[f]);
+    }
+
     /// The finger stands still at floor point `at`: whether the character
     /// stands by it.
     fn stopped(&mut self, ctl: &Controller, at: DVec3) {
@@ -471,6 +485,7 @@ impl<'a> Watch<'a> {
             self.recent.pop_front();
         }
         if self.first_step.is_none()
+            && self.left_reach.is_some()
             && self.feet.iter().zip(&self.feet_rest).any(|(f, r)| {
                 let p = w.positions[*f];
                 p.y > r.y + 0.02 || (p - *r).with_y(0.0).length() > 0.03
