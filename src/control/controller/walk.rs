@@ -14,7 +14,7 @@ use super::{Controller, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::control::action::timeline::ActionEvent;
-use crate::control::locomotion::walker::Walker;
+use crate::control::locomotion::walker::{FINGER_SMOOTH_S, Walker};
 use crate::input::touch::ContactId;
 use crate::screen::ScreenPoint;
 
@@ -94,6 +94,10 @@ pub(super) struct Lead {
     finger: Option<ContactId>,
     /// What the walk under way is told as.
     told: String,
+    /// The finger holding the pelvis while posing: which, where it led
+    /// last and when, and how fast it goes over the floor (m/s, smoothed
+    /// as a walk smooths its finger's).
+    pace: Option<(ContactId, f64, DVec3, f64)>,
 }
 
 impl Lead {
@@ -165,6 +169,16 @@ impl Lead {
         pelvis: DVec3,
         t: f64,
     ) -> Option<DVec3> {
+        // How fast the finger goes, for a walk it starts to set off at.
+        let led = finger.map(|f| (f.id, self.goal(camera, f.at)));
+        self.pace = led.map(|(id, p)| match self.pace {
+            Some((was, tq, q, v)) if was == id && t > tq + 1e-6 => {
+                let k = 1.0 - (-(t - tq) / FINGER_SMOOTH_S).exp();
+                (id, t, p, v + ((p - q).length() / (t - tq) - v) * k)
+            }
+            Some(same) if same.0 == id => same,
+            _ => (id, t, p, 0.0),
+        });
         let Some(f) = finger else {
             // Lifted. A finger that led a walk, stopped and went on out of
             // reach, lifted before the walk on began: the character walks
@@ -201,6 +215,12 @@ impl Lead {
             && oblique <= MAX_M_PER_PX)
             || (self.past_body(camera, at, pelvis).is_some() && oblique <= PAST_BODY_M_PER_PX);
         across.then_some(goal)
+    }
+
+    /// How fast the finger holding the pelvis goes over the floor (m/s;
+    /// 0 with none).
+    pub fn pace(&self) -> f64 {
+        self.pace.map_or(0.0, |p| p.3)
     }
 
     /// A walk began, told as `label`, following the finger `finger`.
@@ -340,8 +360,7 @@ impl Controller {
             &self.ch.lib.skeleton,
             &self.ch.roles,
             &self.target,
-            goal,
-            t,
+            (goal, t, self.motion.lead.pace()),
         );
         tracing::debug!(to_x = goal.x, to_z = goal.z, "walking");
         self.motion.events.push(ActionEvent::Started {

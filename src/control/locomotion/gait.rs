@@ -1,8 +1,9 @@
 //! The library's locomotion frames, ready for matching: each frame's
 //! posture with its facing removed, how its root moves to the next frame
 //! (in its own facing frame), and the features a walk is matched on: where
-//! its root goes over the next second, where its feet are and how they
-//! and the root move (in the manner of motion matching).
+//! its root goes over the next second and which way it faces 0.6 s on,
+//! where its feet are and how they and the root move (in the manner of
+//! motion matching).
 
 use glam::{DQuat, DVec3};
 
@@ -16,7 +17,11 @@ use crate::character::skeleton::{WorldPose, forward_kinematics};
 pub(crate) const FUTURE_S: [f64; 3] = [0.3, 0.6, 0.9];
 
 /// How many numbers describe a frame for matching.
-pub(crate) const FEATURES: usize = 18;
+pub(crate) const FEATURES: usize = 20;
+
+/// Seconds ahead at which the frame's facing is matched (the last two
+/// features: the sine and cosine of its turn from the facing now).
+pub(crate) const FACING_S: f64 = 0.6;
 
 /// A clip that travels less than this (m, root over the floor) is not
 /// locomotion: it is said so at load and left out.
@@ -121,7 +126,12 @@ impl Gait {
                 let next = (k + 1).min(n - 1);
                 let step = unyaw * (root[next] - root[k]);
                 speeds.push(step.length() / dt);
-                let features = features(&worlds, &root, feet, k, dt, unyaw);
+                let mut features = features(&worlds, &root, feet, k, dt, unyaw);
+                // Where the frame faces `FACING_S` on, from its facing now.
+                let later = ((k as f64 + FACING_S / dt).round() as usize).min(n - 1);
+                let turned = wrap(yaw[later] - yaw[k]);
+                features[18] = turned.sin();
+                features[19] = turned.cos();
                 let mut rotations = clip.frames[k].rotations.clone();
                 rotations[0] = (unyaw * worlds[k].rotations[0]).normalize();
                 let contacts = [0, 1].map(|i| {

@@ -1,7 +1,7 @@
 //! Walking along a finger's path: the character plays the library's
 //! locomotion frames, choosing every tenth of a second the frame whose
-//! next second best follows the path ahead (and whose feet continue the
-//! ones shown), crossfading to it; its root moves as the frames' roots
+//! next second best follows the path ahead, facing the way it goes (and
+//! whose feet continue the ones shown), crossfading to it; its root moves as the frames' roots
 //! do, turned towards a point a little ahead on the path. Near the path's
 //! end the frames chosen are those that slow down and stand: the walk
 //! ends there.
@@ -10,7 +10,7 @@ mod path;
 
 use glam::{DQuat, DVec3};
 
-use super::gait::{FEATURES, FUTURE_S, Gait, cost};
+use super::gait::{FACING_S, FEATURES, FUTURE_S, Gait, cost};
 use crate::character::body::{facing_yaw, wrap};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
@@ -20,6 +20,9 @@ pub use self::path::{path_length, point_along};
 /// A finger ahead of the walk is caught up with in this long (s): the
 /// walk goes at least as fast as that takes.
 const CATCH_UP_S: f64 = 1.0;
+
+/// The finger's speed over the floor is smoothed over about this long (s).
+pub const FINGER_SMOOTH_S: f64 = 0.3;
 
 /// How often a better frame is looked for (s).
 const SEARCH_S: f64 = 0.1;
@@ -89,6 +92,7 @@ const WEIGHTS: [f64; FEATURES] = [
     0.5, 0.5, 0.5, 0.5, 0.5, 0.5, // feet
     1.0, 1.0, 1.0, 1.0, // feet's motion
     0.5, 0.5, // root's motion
+    0.5, 0.5, // facing
 ];
 
 /// What is faded out of.
@@ -140,15 +144,16 @@ pub struct Walker {
 
 impl Walker {
     /// Start walking from posture `pose` towards `goal` (a floor point),
-    /// the finger there at time `t`.
+    /// the finger there at time `t` going `finger_speed` m/s over the
+    /// floor (as it went before the walk began: a walk behind a quick
+    /// finger sets off as fast as it goes, rather than from a stroll).
     #[must_use]
     pub fn start(
         gait: &Gait,
         sk: &Skeleton,
         roles: &RoleMap,
         pose: &Pose,
-        goal: DVec3,
-        t: f64,
+        (goal, t, finger_speed): (DVec3, f64, f64),
     ) -> Self {
         let w = forward_kinematics(sk, pose);
         let root = w.positions[0].with_y(0.0);
@@ -158,6 +163,7 @@ impl Walker {
         let unyaw = DQuat::from_rotation_y(-yaw);
         // The starting posture's features: its feet, nothing moving.
         let mut current = [0.0; FEATURES];
+        current[19] = 1.0;
         for (i, r) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let p = unyaw * (w.positions[roles.get(r)] - root);
             current[6 + 3 * i..9 + 3 * i].copy_from_slice(&[p.x, p.y, p.z]);
@@ -176,7 +182,7 @@ impl Walker {
             path: vec![root, goal.with_y(0.0)],
             seg: 0,
             leading: true,
-            finger_speed: 0.0,
+            finger_speed,
             last_finger: Some((goal.with_y(0.0), t)),
             still_s: 0.0,
             speed: gait.low_speed().max(0.3),
@@ -238,6 +244,18 @@ impl Walker {
             let l = unyaw * (p - self.root);
             q[2 * i] = l.x;
             q[2 * i + 1] = l.z;
+        }
+        // The facing asked for: the way the path goes where the walk will
+        // be (a library's walks back and sidesteps carry the body as far,
+        // turned away from where it goes and slower than its walks ahead;
+        // matched on places alone, a path that set off across the
+        // character's facing was walked backwards or sideways).
+        let d = (self.speed * FACING_S).max(0.1);
+        let way = unyaw * (self.along(d + 0.1) - self.along(d - 0.1)).with_y(0.0);
+        if way.length() > 0.05 {
+            let a = way.x.atan2(way.z);
+            q[18] = a.sin();
+            q[19] = a.cos();
         }
         q
     }
@@ -469,7 +487,7 @@ mod tests {
         let roles = lib.clips["walk_path.bvh"].roles.clone();
         let gait = Gait::build(&lib, &roles);
         let pose = lib.clips["walk_path.bvh"].frames[0].clone();
-        let mut w = Walker::start(&gait, &lib.skeleton, &roles, &pose, DVec3::X, 0.0);
+        let mut w = Walker::start(&gait, &lib.skeleton, &roles, &pose, (DVec3::X, 0.0, 0.0));
         // A finger that goes round and round for ten minutes, far faster
         // than the walk.
         let dt = 1.0 / 30.0;

@@ -4,7 +4,9 @@
 
 use glam::DVec3;
 
-use super::{KEPT_BEHIND, LOOK_AHEAD_M, MAX_PATH_POINTS, PATH_STEP_M, STEER_SLACK_M, Walker};
+use super::{
+    FINGER_SMOOTH_S, KEPT_BEHIND, LOOK_AHEAD_M, MAX_PATH_POINTS, PATH_STEP_M, STEER_SLACK_M, Walker,
+};
 
 impl Walker {
     /// The finger is at floor point `p` at time `t`.
@@ -14,7 +16,7 @@ impl Walker {
             let dt = t - tq;
             if dt > 1e-6 {
                 let v = (p - q).length() / dt;
-                let k = 1.0 - (-dt / 0.3).exp();
+                let k = 1.0 - (-dt / FINGER_SMOOTH_S).exp();
                 self.finger_speed += (v - self.finger_speed) * k;
                 if (p - q).length() < 0.005 {
                     self.still_s += dt;
