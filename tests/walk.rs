@@ -420,3 +420,34 @@ fn a_new_finger_on_the_pelvis_leads_the_walk_from_where_the_character_is() {
     let d = (end - second.with_y(0.0)).length();
     assert!(d < 0.45, "stands {d} m from where the second finger lifted");
 }
+
+#[test]
+fn a_finger_that_goes_on_a_little_from_a_stop_and_lifts_is_walked_to() {
+    // 1.2 m across at 0.8 m/s, a stop of 2 s at its end (the walk ends
+    // there), then on 30 or 35 cm and lifted: within posing's reach of the
+    // pelvis leaning after it, farther than a walk arrives from where the
+    // walk ended. The character stood 28.1 and 33.1 cm from where the
+    // finger lifted; it walks there now (12.6 and 11.7 cm).
+    let ch = common::character();
+    let path = |on: f64| {
+        let mut points: Vec<[f64; 2]> = (0..=12).map(|i| [0.1 * f64::from(i), 0.0]).collect();
+        let n = (on / 0.05).round() as i32;
+        points.extend((1..=n).map(|k| [1.2 + 0.05 * f64::from(k), 0.0]));
+        WalkPath {
+            points,
+            speed_mps: 0.8,
+            pauses: vec![[1.2, 2.0]],
+            family: format!("on {on} m"),
+        }
+    };
+    let r = eval_walk(&ch, &[path(0.30), path(0.35)], None);
+    for w in &r.rows {
+        eprintln!(
+            "{}: arrival {:.1} cm, stood {:?}",
+            w.family, w.arrival_cm, w.stood
+        );
+        assert!(w.arrival_cm <= 14.0, "{w:?}");
+        assert_eq!(w.stood, Some(1.0), "{w:?}");
+    }
+    assert_eq!(r.all.pops, 0, "{r:?}");
+}

@@ -14,7 +14,7 @@ use super::{Controller, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::control::action::timeline::ActionEvent;
-use crate::control::locomotion::walker::{FINGER_SMOOTH_S, Walker};
+use crate::control::locomotion::walker::{ARRIVE_M, FINGER_SMOOTH_S, Walker};
 use crate::input::touch::ContactId;
 use crate::screen::ScreenPoint;
 
@@ -94,6 +94,10 @@ pub(super) struct Lead {
     finger: Option<ContactId>,
     /// What the walk under way is told as.
     told: String,
+    /// The finger holding the pelvis as it was last seen (where it lifts).
+    last: Option<Holding>,
+    /// Where the last walk ended (the pelvis over the floor).
+    stood: Option<DVec3>,
     /// The finger holding the pelvis while posing: which, where it led
     /// last and when, and how fast it goes over the floor (m/s, smoothed
     /// as a walk smooths its finger's).
@@ -182,11 +186,26 @@ impl Lead {
         let Some(f) = finger else {
             // Lifted. A finger that led a walk, stopped and went on out of
             // reach, lifted before the walk on began: the character walks
-            // to where it lifted all the same. The next finger has walked
+            // to where it lifted all the same; so too where it lifted
+            // farther than a walk arrives from where its walk ended, though
+            // within posing's reach of the pelvis leaning after it (posing
+            // no longer holds the pelvis there once it lifts: a finger that
+            // went on 30 to 35 cm from a stop left the character standing
+            // 28 to 33 cm from where it lifted). The next finger has walked
             // nowhere yet.
             let beyond = self.beyond.take();
-            return self.finger.take().and(beyond).map(|(_, goal)| goal);
+            let last = self.last.take();
+            let walked = self.finger.take();
+            return walked.and_then(|id| {
+                beyond.map(|(_, goal)| goal).or_else(|| {
+                    let stood = self.stood?;
+                    last.filter(|l| l.id == id)
+                        .map(|l| self.goal(camera, l.at))
+                        .filter(|goal| (*goal - stood).length() > ARRIVE_M)
+                })
+            });
         };
+        self.last = Some(f);
         let Some(goal) = self.beyond_reach(camera, f, pelvis) else {
             self.beyond = None;
             return None;
@@ -227,6 +246,8 @@ impl Lead {
     pub fn began(&mut self, label: &str, finger: Option<ContactId>) {
         label.clone_into(&mut self.told);
         self.beyond = None;
+        self.last = None;
+        self.stood = None;
         self.finger = finger;
     }
 
@@ -253,8 +274,10 @@ impl Lead {
         &self.told
     }
 
-    /// The walk is over: what it was told as.
-    pub fn finished(&mut self) -> String {
+    /// The walk is over, the pelvis over floor point `at`: what it was
+    /// told as.
+    pub fn finished(&mut self, at: DVec3) -> String {
+        self.stood = Some(at);
         std::mem::take(&mut self.told)
     }
 }
@@ -386,8 +409,9 @@ impl Controller {
         self.target = walker.step(&self.ch.gait, &self.ch.lib.skeleton, dt);
         if walker.done() {
             tracing::debug!("the walk is over: posing");
+            let at = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
             self.motion.events.push(ActionEvent::Finished {
-                action: self.motion.lead.finished(),
+                action: self.motion.lead.finished(at),
                 time_s: t,
             });
             self.motion.mode = Mode::Posing;
@@ -528,7 +552,7 @@ mod tests {
         // Finger 7 led a walk that ended; it goes on up the screen, a
         // metre away: it walks on there.
         lead.began("walking", Some(7));
-        lead.finished();
+        lead.finished(DVec3::ZERO);
         assert_eq!(
             lead.out_of_reach(&cam, finger(from, away), DVec3::ZERO, 0.0),
             None
@@ -540,7 +564,7 @@ mod tests {
         // It lifts out of reach before the walk on began: the character
         // walks to where it lifted, once.
         lead.began("walking", Some(7));
-        lead.finished();
+        lead.finished(DVec3::ZERO);
         assert_eq!(
             lead.out_of_reach(&cam, finger(from, away), DVec3::ZERO, 1.0),
             None
@@ -565,7 +589,7 @@ mod tests {
         let mut lead = Lead::new(0.95, BODY);
         lead.began("walk", Some(3));
         assert_eq!(lead.told(), "walk");
-        assert_eq!(lead.finished(), "walk");
+        assert_eq!(lead.finished(DVec3::ZERO), "walk");
         assert_eq!(lead.told(), "");
     }
 }
