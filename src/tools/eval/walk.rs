@@ -328,14 +328,17 @@ fn walk_one(ch: &Arc<Character>, path: &WalkPath, layer: Option<usize>) -> WalkR
         // The finger leaves posing's reach as the exhibit's rules have it
         // (a drag up or down the screen poses the pelvis up or down until
         // it points past the body), or a walk began before (by its
-        // template).
-        if watch.left_reach.is_none()
-            && (table
-                .ctl()
-                .pelvis_finger_out_of_reach(&table.rig().camera())
-                || matches!(table.ctl().mode(), Mode::Walk(_)))
-        {
+        // template); a finger back within reach before the character
+        // stepped (a zig-zag's first leg turning back towards the body)
+        // leaves it anew.
+        let out = table
+            .ctl()
+            .pelvis_finger_out_of_reach(&table.rig().camera())
+            || matches!(table.ctl().mode(), Mode::Walk(_));
+        if watch.left_reach.is_none() && out {
             watch.left(table.ctl(), t);
+        } else if !out && watch.first_step.is_none() {
+            watch.left_reach = None;
         }
         if let Some(f) = second.as_mut() {
             f.measure(ch, table.ctl());
