@@ -14,7 +14,7 @@ use super::{Controller, Mode};
 use crate::character::camera::Camera;
 use crate::character::roles::Role;
 use crate::control::action::timeline::ActionEvent;
-use crate::control::locomotion::walker::{ARRIVE_M, FINGER_SMOOTH_S, Walker};
+use crate::control::locomotion::walker::{ARRIVE_M, Walker, smoothed_speed};
 use crate::input::touch::ContactId;
 use crate::screen::ScreenPoint;
 
@@ -177,8 +177,7 @@ impl Lead {
         let led = finger.map(|f| (f.id, self.goal(camera, f.at)));
         self.pace = led.map(|(id, p)| match self.pace {
             Some((was, tq, q, v)) if was == id && t > tq + 1e-6 => {
-                let k = 1.0 - (-(t - tq) / FINGER_SMOOTH_S).exp();
-                (id, t, p, v + ((p - q).length() / (t - tq) - v) * k)
+                (id, t, p, smoothed_speed(v, (p - q).length(), t - tq))
             }
             Some(same) if same.0 == id => same,
             _ => (id, t, p, 0.0),
@@ -292,6 +291,11 @@ impl Controller {
         self.ch.travels[action].then(|| self.ch.actions[action].def.name.clone())
     }
 
+    /// The floor point under the pelvis as shown.
+    fn pelvis_floor(&self) -> DVec3 {
+        self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0)
+    }
+
     /// The finger holding the pelvis.
     fn pelvis_finger(&self) -> Option<Holding> {
         self.fingers.holding(Role::Pelvis)
@@ -303,7 +307,7 @@ impl Controller {
     /// pelvis, across the screen or past the body.
     #[must_use]
     pub fn pelvis_finger_out_of_reach(&self, camera: &Camera) -> bool {
-        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        let pelvis = self.pelvis_floor();
         self.pelvis_finger()
             .and_then(|f| self.motion.lead.beyond_reach(camera, f, pelvis))
             .is_some()
@@ -315,7 +319,7 @@ impl Controller {
         if self.ch.gait.is_empty() {
             return false;
         }
-        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        let pelvis = self.pelvis_floor();
         let finger = self.pelvis_finger();
         let Some(goal) = self.motion.lead.out_of_reach(camera, finger, pelvis, t) else {
             return false;
@@ -343,7 +347,7 @@ impl Controller {
         {
             return false;
         }
-        let pelvis = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+        let pelvis = self.pelvis_floor();
         let Some(goal) = self
             .pelvis_finger()
             .and_then(|f| self.motion.lead.below_body(camera, f, pelvis))
@@ -409,7 +413,7 @@ impl Controller {
         self.target = walker.step(&self.ch.gait, &self.ch.lib.skeleton, dt);
         if walker.done() {
             tracing::debug!("the walk is over: posing");
-            let at = self.shown.world().positions[self.ch.roles.get(Role::Pelvis)].with_y(0.0);
+            let at = self.pelvis_floor();
             self.motion.events.push(ActionEvent::Finished {
                 action: self.motion.lead.finished(at),
                 time_s: t,

@@ -19,9 +19,11 @@ pub(crate) const FUTURE_S: [f64; 3] = [0.3, 0.6, 0.9];
 /// How many numbers describe a frame for matching.
 pub(crate) const FEATURES: usize = 20;
 
-/// Seconds ahead at which the frame's facing is matched (the last two
-/// features: the sine and cosine of its turn from the facing now).
+/// Seconds ahead at which the frame's facing is matched...
 pub(crate) const FACING_S: f64 = 0.6;
+/// ...by the features from this one on: the sine and cosine of its turn
+/// from the facing now (the last two).
+pub(crate) const FACING: usize = 18;
 
 /// A clip that travels less than this (m, root over the floor) is not
 /// locomotion: it is said so at load and left out.
@@ -130,8 +132,8 @@ impl Gait {
                 // Where the frame faces `FACING_S` on, from its facing now.
                 let later = ((k as f64 + FACING_S / dt).round() as usize).min(n - 1);
                 let turned = wrap(yaw[later] - yaw[k]);
-                features[18] = turned.sin();
-                features[19] = turned.cos();
+                features[FACING] = turned.sin();
+                features[FACING + 1] = turned.cos();
                 let mut rotations = clip.frames[k].rotations.clone();
                 rotations[0] = (unyaw * worlds[k].rotations[0]).normalize();
                 let contacts = [0, 1].map(|i| {

@@ -1,8 +1,9 @@
 //! Walking along a finger's path: the character plays the library's
 //! locomotion frames, choosing every tenth of a second the frame whose
 //! next second best follows the path ahead, facing the way it goes (and
-//! whose feet continue the ones shown), crossfading to it; its root moves as the frames' roots
-//! do, turned towards a point a little ahead on the path. Near the path's
+//! whose feet continue the ones shown), crossfading to it; its root moves
+//! as the frames' roots do, turned towards a point a little ahead on the
+//! path. Near the path's
 //! end the frames chosen are those that slow down and stand: the walk
 //! ends there.
 
@@ -10,7 +11,7 @@ mod path;
 
 use glam::{DQuat, DVec3};
 
-use super::gait::{FACING_S, FEATURES, FUTURE_S, Gait, cost};
+use super::gait::{FACING, FACING_S, FEATURES, FUTURE_S, Gait, cost};
 use crate::character::body::{facing_yaw, wrap};
 use crate::character::roles::{Role, RoleMap};
 use crate::character::skeleton::{Pose, Skeleton, forward_kinematics};
@@ -22,7 +23,15 @@ pub use self::path::{path_length, point_along};
 const CATCH_UP_S: f64 = 1.0;
 
 /// The finger's speed over the floor is smoothed over about this long (s).
-pub const FINGER_SMOOTH_S: f64 = 0.3;
+const FINGER_SMOOTH_S: f64 = 0.3;
+
+/// A finger's smoothed speed over the floor (m/s), `was` before, once it
+/// moved `moved_m` in `dt` seconds.
+#[must_use]
+pub fn smoothed_speed(was: f64, moved_m: f64, dt: f64) -> f64 {
+    let k = 1.0 - (-dt / FINGER_SMOOTH_S).exp();
+    was + (moved_m / dt - was) * k
+}
 
 /// How often a better frame is looked for (s).
 const SEARCH_S: f64 = 0.1;
@@ -163,7 +172,7 @@ impl Walker {
         let unyaw = DQuat::from_rotation_y(-yaw);
         // The starting posture's features: its feet, nothing moving.
         let mut current = [0.0; FEATURES];
-        current[19] = 1.0;
+        current[FACING + 1] = 1.0;
         for (i, r) in [Role::LeftFoot, Role::RightFoot].into_iter().enumerate() {
             let p = unyaw * (w.positions[roles.get(r)] - root);
             current[6 + 3 * i..9 + 3 * i].copy_from_slice(&[p.x, p.y, p.z]);
@@ -254,8 +263,8 @@ impl Walker {
         let way = unyaw * (self.along(d + 0.1) - self.along(d - 0.1)).with_y(0.0);
         if way.length() > 0.05 {
             let a = way.x.atan2(way.z);
-            q[18] = a.sin();
-            q[19] = a.cos();
+            q[FACING] = a.sin();
+            q[FACING + 1] = a.cos();
         }
         q
     }

@@ -5,7 +5,7 @@
 use glam::DVec3;
 
 use super::{
-    FINGER_SMOOTH_S, KEPT_BEHIND, LOOK_AHEAD_M, MAX_PATH_POINTS, PATH_STEP_M, STEER_SLACK_M, Walker,
+    KEPT_BEHIND, LOOK_AHEAD_M, MAX_PATH_POINTS, PATH_STEP_M, STEER_SLACK_M, Walker, smoothed_speed,
 };
 
 impl Walker {
@@ -15,9 +15,7 @@ impl Walker {
         if let Some((q, tq)) = self.last_finger {
             let dt = t - tq;
             if dt > 1e-6 {
-                let v = (p - q).length() / dt;
-                let k = 1.0 - (-dt / FINGER_SMOOTH_S).exp();
-                self.finger_speed += (v - self.finger_speed) * k;
+                self.finger_speed = smoothed_speed(self.finger_speed, (p - q).length(), dt);
                 if (p - q).length() < 0.005 {
                     self.still_s += dt;
                 } else {
