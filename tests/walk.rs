@@ -38,15 +38,15 @@ fn the_default_library_walks_along_random_curves() {
     // The figures of docs/measurements.md (`marionette eval walk`, seed 1, 20 paths).
     assert_eq!(r.all.paths, 20);
     assert!(r.all.followed >= 0.95, "{r:?}");
-    // 1.0 followed, 10.3 cm from the end, 5.97 cm off the path, planted
-    // feet 1.18 mm per frame (worst step 8.70 mm: the target's 15 mm), no
+    // 1.0 followed, 10.1 cm from the end, 5.85 cm off the path, planted
+    // feet 1.17 mm per frame (worst step 8.70 mm: the target's 15 mm), no
     // pop, stepping 0.215 s after the finger left reach (0.3 at the
     // slowest: the target's 0.3 s; a foot that posing moved before is no
     // step).
-    assert!(r.all.arrival_cm <= 10.8, "{r:?}");
-    assert!(r.all.deviation_cm <= 6.2, "{r:?}");
+    assert!(r.all.arrival_cm <= 10.6, "{r:?}");
+    assert!(r.all.deviation_cm <= 6.1, "{r:?}");
     assert_eq!(r.all.pops, 0, "{r:?}");
-    assert!(r.all.skate_mm <= 1.22, "{r:?}");
+    assert!(r.all.skate_mm <= 1.21, "{r:?}");
     assert!(r.all.skate_max_mm <= 9.2, "{r:?}");
     assert!(r.all.start_s > 0.19 && r.all.start_s <= 0.23, "{r:?}");
     assert!(r.all.start_worst_s <= 0.3, "{r:?}");
@@ -63,13 +63,13 @@ fn every_family_of_random_paths_is_walked_by_the_default_library() {
     assert_eq!(r.all.pops, 0, "{r:?}");
     let row = |f: &str| r.families.iter().find(|x| x.family == f).unwrap();
     for (family, arrival, worst, start) in [
-        ("curve", 12.0, 14.2, 0.23),
-        ("turn_back", 10.8, 15.8, 0.27),
-        ("loop", 5.5, 8.9, 0.27),
-        ("zig_zag", 9.5, 12.0, 0.27),
-        ("stop_and_go", 10.9, 16.1, 0.27),
-        ("slow", 7.9, 11.8, 0.23),
-        ("fast", 10.3, 11.8, 0.27),
+        ("curve", 10.9, 14.2, 0.23),
+        ("turn_back", 9.7, 15.8, 0.27),
+        ("loop", 5.6, 8.9, 0.27),
+        ("zig_zag", 8.9, 11.2, 0.27),
+        ("stop_and_go", 10.1, 14.7, 0.27),
+        ("slow", 7.2, 10.1, 0.23),
+        ("fast", 10.5, 12.0, 0.27),
     ] {
         let f = row(family);
         eprintln!("{f:?}");
@@ -135,9 +135,9 @@ fn a_drag_up_or_down_the_screen_walks_once_it_points_past_the_body() {
             w.start_s
         );
     }
-    // Every heading arrives, the worst 20.5 cm from the end; no pop.
+    // Every heading arrives, the worst 19.5 cm from the end; no pop.
     assert!((r.all.followed - 1.0).abs() < 1e-9, "{r:?}");
-    assert!(r.all.arrival_worst_cm <= 21.5, "{r:?}");
+    assert!(r.all.arrival_worst_cm <= 20.5, "{r:?}");
     assert_eq!(r.all.pops, 0, "{r:?}");
     // Counted from the finger pointing past the body, the first step
     // comes within 0.3 s but down the screen, where the squat it started
@@ -156,9 +156,9 @@ fn turn_backs_and_stops_on_other_seeds_arrive_where_the_finger_lifted() {
     // (85 cm from the end); a finger that walked, stopped and went on up
     // the screen, or lifted before the walk on began, left the character
     // standing at the stop (147 and 50 cm). Now every path is followed and
-    // the worst arrives 21.2 and 16.9 cm from the end (the target's 25).
+    // the worst arrives 21.2 and 15.5 cm from the end (the target's 25).
     let ch = common::character();
-    for (family, seed, worst) in [("turn_back", 1, 21.2), ("stop_and_go", 2, 16.9)] {
+    for (family, seed, worst) in [("turn_back", 1, 21.2), ("stop_and_go", 2, 15.5)] {
         let r = eval_walk(&ch, &random_paths(seed, 20, &[family]), None);
         eprintln!(
             "{family} seed {seed}: followed {} arrival {} cm worst {} cm",
@@ -178,15 +178,15 @@ fn the_default_library_follows_turn_backs_loops_and_zig_zags() {
     let ch = common::character();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/walk-families");
     for (file, arrival) in [
-        ("turn_back_slow", 7.7),
-        ("turn_back_mid", 10.9),
-        ("turn_back_fast", 10.8),
-        ("loop_slow", 14.0),
-        ("loop_mid", 8.3),
+        ("turn_back_slow", 6.8),
+        ("turn_back_mid", 10.5),
+        ("turn_back_fast", 10.1),
+        ("loop_slow", 14.7),
+        ("loop_mid", 6.3),
         ("loop_fast", 6.8),
         ("zigzag_slow", 7.6),
         ("zigzag_mid", 9.6),
-        ("zigzag_fast", 14.2),
+        ("zigzag_fast", 13.3),
     ] {
         let paths =
             marionette::tools::eval::walk::read_paths(&dir.join(format!("{file}.json"))).unwrap();

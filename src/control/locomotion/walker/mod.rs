@@ -57,6 +57,12 @@ const MAX_TURN: f64 = 2.0;
 /// have come to rest.
 pub(crate) const ARRIVE_M: f64 = 0.25;
 
+/// The root slower than this (m/s) is coming to rest...
+const STILL_MPS: f64 = 0.15;
+/// ...and, still coming closer to the path's end, has come to rest once
+/// it has been that slow this long (s: the last step of a stop).
+const SETTLE_S: f64 = 0.2;
+
 /// Path segments kept behind the character before they are dropped.
 const KEPT_BEHIND: usize = 32;
 
@@ -148,6 +154,10 @@ pub struct Walker {
     walked_s: f64,
     /// How far the root has gone over the floor (m).
     travelled_m: f64,
+    /// How long the root has gone slower than [`STILL_MPS`] (s), and how
+    /// far from the path's end it was a frame before (m).
+    slow_s: f64,
+    was_remaining: f64,
     done: bool,
 }
 
@@ -201,6 +211,8 @@ impl Walker {
             dropped_m: 0.0,
             walked_s: 0.0,
             travelled_m: 0.0,
+            slow_s: 0.0,
+            was_remaining: f64::INFINITY,
             done: false,
         };
         let query = walker.query(&current);
@@ -329,7 +341,23 @@ impl Walker {
         self.pos = advance(gait, self.pos, dt);
         self.blend_on(gait, dt);
         let speed_now = step.length() / dt.max(1e-6);
-        if finger_done && remaining < ARRIVE_M && speed_now < 0.15 && self.from.is_none() {
+        if speed_now < STILL_MPS {
+            self.slow_s += dt;
+        } else {
+            self.slow_s = 0.0;
+        }
+        // A lifted finger's walk still coming closer to the end as it
+        // slows is let finish its last step (ended at the first slow
+        // frame, walks stood 15 to 20 cm short); one under a finger that
+        // stopped stands at once, as does one no longer coming closer.
+        let closing = remaining < self.was_remaining - 1e-4;
+        self.was_remaining = remaining;
+        if finger_done
+            && remaining < ARRIVE_M
+            && speed_now < STILL_MPS
+            && (self.slow_s > SETTLE_S || !closing || self.leading)
+            && self.from.is_none()
+        {
             tracing::debug!(
                 remaining_m = remaining,
                 from_end_m = (*self.path.last().unwrap_or(&self.root) - self.root).length(),
@@ -358,6 +386,16 @@ impl Walker {
                 let same = gait.frames[best].clip == frame(self.pos).clip
                     && (best as f64 - self.pos).abs() * clip.frame_time < SAME_S;
                 if at_end || (!same && c < now - HYSTERESIS) {
+                    let cl = &gait.clips[gait.frames[best].clip];
+                    tracing::trace!(
+                        clip = %cl.name,
+                        at_s = (best - cl.first) as f64 * cl.frame_time,
+                        cost = c,
+                        was = now,
+                        walked_s = self.walked_s,
+                        speed = self.speed,
+                        "the walk changes frame"
+                    );
                     self.from = Some((Source::Frame(self.pos), 0.0));
                     self.pos = best as f64;
                 }
