@@ -451,3 +451,52 @@ fn a_finger_that_goes_on_a_little_from_a_stop_and_lifts_is_walked_to() {
     }
     assert_eq!(r.all.pops, 0, "{r:?}");
 }
+
+#[test]
+fn a_walk_carried_past_an_end_it_ended_by_walks_back_to_it() {
+    // A fast turn-back (1.8 m/s): 1.16 m out, a U-turn of 8 cm radius and
+    // 0.8 m back beside the way out. The walk, behind its finger, ended
+    // by the end as it passed it on the way out, and its frames carried it
+    // on: ended where the root was every frame, the character stood 43.2
+    // cm from where the finger lifted (the only path of 8 seeds x 84 not
+    // followed, `marionette eval walk --count 84 --seed 5`). Now the walk
+    // goes back to that end: 11.7 cm (docs/measurements.md).
+    let ch = common::character();
+    let points = vec![
+        [0.0, 0.0],
+        [0.082, 0.05],
+        [0.164, 0.1],
+        [0.247, 0.151],
+        [0.329, 0.201],
+        [0.411, 0.251],
+        [0.493, 0.301],
+        [0.576, 0.352],
+        [0.658, 0.402],
+        [0.74, 0.452],
+        [0.822, 0.502],
+        [0.905, 0.552],
+        [0.987, 0.603],
+        [1.006, 0.681],
+        [0.928, 0.699],
+        [0.853, 0.653],
+        [0.777, 0.608],
+        [0.702, 0.562],
+        [0.627, 0.516],
+        [0.552, 0.47],
+        [0.476, 0.424],
+        [0.401, 0.378],
+        [0.326, 0.332],
+    ];
+    let path = WalkPath {
+        points,
+        speed_mps: 1.8,
+        pauses: Vec::new(),
+        family: "turn_back".to_owned(),
+    };
+    let r = eval_walk(&ch, &[path], None);
+    let w = &r.rows[0];
+    eprintln!("arrival {:.1} cm", w.arrival_cm);
+    assert!(w.followed, "{w:?}");
+    assert!(w.arrival_cm <= 12.5, "{w:?}");
+    assert_eq!(r.all.pops, 0, "{r:?}");
+}

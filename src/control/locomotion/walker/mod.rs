@@ -158,6 +158,9 @@ pub struct Walker {
     /// far from the path's end it was a frame before (m).
     slow_s: f64,
     was_remaining: f64,
+    /// The path's end, while the walk ends short of it (beside or behind
+    /// it, within the arrival distance).
+    ended_short: Option<DVec3>,
     done: bool,
 }
 
@@ -213,6 +216,7 @@ impl Walker {
             travelled_m: 0.0,
             slow_s: 0.0,
             was_remaining: f64::INFINITY,
+            ended_short: None,
             done: false,
         };
         let query = walker.query(&current);
@@ -306,7 +310,25 @@ impl Walker {
         // be on the way back of a turn it cut, the end still far).
         let to_end = DQuat::from_rotation_y(-self.yaw)
             * (*self.path.last().unwrap_or(&self.root) - self.root).with_y(0.0);
-        if finger_done
+        if let Some(end) = self
+            .ended_short
+            .filter(|e| (*e - self.root).with_y(0.0).length() > ARRIVE_M)
+        {
+            // Ended short of an end beside or behind, the walk carried on
+            // past it (a library whose takes never stop slows only as its
+            // crossfades allow; ended where the root was each frame, a
+            // fast turn-back stood 43 cm from where the finger lifted): the
+            // end is walked back to.
+            tracing::debug!(
+                from_end_m = (end - self.root).with_y(0.0).length(),
+                "the walk went on past an end it ended by: it walks back to it"
+            );
+            self.ended_short = None;
+            self.path.truncate(self.seg + 1);
+            self.path.push(self.root);
+            self.path.push(end);
+            remaining = self.remaining();
+        } else if finger_done
             && remaining < STRIDE_M
             && to_end.length() < ARRIVE_M
             && self.travelled_m >= STRIDE_M
@@ -324,6 +346,9 @@ impl Walker {
                 bearing_deg = wrap(to_end.x.atan2(to_end.z)).to_degrees(),
                 "the path's end is beside or behind, within the arrival distance: the walk ends here"
             );
+            if self.ended_short.is_none() {
+                self.ended_short = self.path.last().copied();
+            }
             let end = self.root;
             self.path.truncate(self.seg + 1);
             self.path.push(end);

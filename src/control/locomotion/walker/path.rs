@@ -20,6 +20,8 @@ impl Walker {
                     self.still_s += dt;
                 } else {
                     self.still_s = 0.0;
+                    // The finger goes on: the path's end is its again.
+                    self.ended_short = None;
                 }
             }
         }
@@ -52,6 +54,7 @@ impl Walker {
     /// towards `p`.
     pub fn lead_anew(&mut self, p: DVec3, t: f64) {
         self.path = vec![self.root, p.with_y(0.0)];
+        self.ended_short = None;
         self.seg = 0;
         self.dropped_m = 0.0;
         self.leading = true;
