@@ -3,9 +3,8 @@
 //! next second best follows the path ahead, facing the way it goes (and
 //! whose feet continue the ones shown), crossfading to it; its root moves
 //! as the frames' roots do, turned towards a point a little ahead on the
-//! path. Near the path's
-//! end the frames chosen are those that slow down and stand: the walk
-//! ends there.
+//! path. Near the path's end the frames chosen are those that slow down
+//! and stand: the walk ends there.
 
 mod path;
 
@@ -310,22 +309,22 @@ impl Walker {
         // be on the way back of a turn it cut, the end still far).
         let to_end = DQuat::from_rotation_y(-self.yaw)
             * (*self.path.last().unwrap_or(&self.root) - self.root).with_y(0.0);
-        if let Some(end) = self
+        let past_end = self
             .ended_short
-            .filter(|e| (*e - self.root).with_y(0.0).length() > ARRIVE_M)
-        {
+            .map(|e| (e, (e - self.root).with_y(0.0).length()))
+            .filter(|(_, from_end)| *from_end > ARRIVE_M);
+        if let Some((end, from_end_m)) = past_end {
             // Ended short of an end beside or behind, the walk carried on
             // past it (a library whose takes never stop slows only as its
             // crossfades allow; ended where the root was each frame, a
             // fast turn-back stood 43 cm from where the finger lifted): the
             // end is walked back to.
             tracing::debug!(
-                from_end_m = (end - self.root).with_y(0.0).length(),
+                from_end_m,
                 "the walk went on past an end it ended by: it walks back to it"
             );
             self.ended_short = None;
-            self.path.truncate(self.seg + 1);
-            self.path.push(self.root);
+            self.cut_path_here();
             self.path.push(end);
             remaining = self.remaining();
         } else if finger_done
@@ -349,9 +348,7 @@ impl Walker {
             if self.ended_short.is_none() {
                 self.ended_short = self.path.last().copied();
             }
-            let end = self.root;
-            self.path.truncate(self.seg + 1);
-            self.path.push(end);
+            self.cut_path_here();
             remaining = 0.0;
         }
         let steer = if remaining > ARRIVE_M && to.length() > 0.05 {
@@ -392,6 +389,13 @@ impl Walker {
         }
         self.give_up(remaining, dt);
         self.pose(gait, sk)
+    }
+
+    /// The path ends where the character is: what lay ahead of its
+    /// segment is dropped.
+    fn cut_path_here(&mut self) {
+        self.path.truncate(self.seg + 1);
+        self.path.push(self.root);
     }
 
     /// Every [`SEARCH_S`], or at a clip's end, the frame that best
